@@ -1,0 +1,432 @@
+/*
+ * Sluice plugin ABI.
+ *
+ * This is the only header a plugin needs. A plugin is a shared object that
+ * exports one function, sluice_plugin_entry(), returning a static
+ * sluice_library descriptor. The descriptor lists one or more components
+ * (a kernel, an equation of state, a pair force, an integrator, a writer, ...).
+ * Plugins never link against the core: every service of the core is reached
+ * through the sluice_api table handed to each component's create().
+ *
+ * Compatibility rules (see docs/plugin-abi.md):
+ *  - SLUICE_ABI_MAJOR changes when anything existing changes; the core refuses
+ *    a plugin with another major version.
+ *  - SLUICE_ABI_MINOR grows when members are appended at the end of
+ *    sluice_api or sluice_component; the core refuses a plugin built for a
+ *    newer minor than its own, and accepts older ones (members the plugin does
+ *    not know about read as absent).
+ *  - The build signature (size of sluice_real, of sluice_index, supported
+ *    dimensions) must match the core exactly.
+ *
+ * Units are SI throughout: m, s, kg, Pa.
+ */
+#ifndef SLUICE_PLUGIN_H
+#define SLUICE_PLUGIN_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "sluice/config.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SLUICE_ABI_MAJOR 1
+#define SLUICE_ABI_MINOR 0
+#define SLUICE_PLUGIN_MAGIC 0x534c4349u /* "SLCI" */
+
+#if defined(__GNUC__)
+#define SLUICE_EXPORT __attribute__((visibility("default")))
+#define SLUICE_PRINTF(f, a) __attribute__((format(printf, f, a)))
+#else
+#define SLUICE_EXPORT
+#define SLUICE_PRINTF(f, a)
+#endif
+
+/* sluice_real is double unless the core was configured otherwise; it is part
+ * of the build signature. */
+typedef SLUICE_REAL_TYPE sluice_real;
+/* Index of a particle in the current (sorted) particle order. */
+typedef uint32_t sluice_index;
+/* Global, permanent particle identity (survives sorting, restarts). */
+typedef uint64_t sluice_id;
+
+enum { SLUICE_OK = 0, SLUICE_ERROR = -1 };
+
+/* ---------------------------------------------------------------- kinds -- */
+
+/* Every particle has a kind, owned by the core. Masks are (1u << kind). */
+enum sluice_kind {
+    SLUICE_KIND_FLUID = 0, /* moves with the flow, integrated */
+    SLUICE_KIND_WALL = 1,  /* wall particle (dynamic boundary), fixed or prescribed motion */
+    SLUICE_KIND_COUNT = 2
+};
+#define SLUICE_KIND_MASK(k) (1u << (k))
+#define SLUICE_KINDS_ALL ((1u << SLUICE_KIND_COUNT) - 1u)
+
+/* Supported spatial dimensions, as a mask. */
+#define SLUICE_DIMS_2 (1u << 2)
+#define SLUICE_DIMS_3 (1u << 3)
+#define SLUICE_DIMS_ALL (SLUICE_DIMS_2 | SLUICE_DIMS_3)
+
+/* --------------------------------------------------------------- fields -- */
+
+typedef enum sluice_type {
+    SLUICE_TYPE_REAL = 1, /* sluice_real */
+    SLUICE_TYPE_INT32 = 2,
+    SLUICE_TYPE_UINT8 = 3,
+    SLUICE_TYPE_ID = 4 /* sluice_id */
+} sluice_type;
+
+/* A field declaration's access, as seen by the component that declares it. */
+enum sluice_access {
+    SLUICE_READ = 1u << 0,           /* reads the value of particle i */
+    SLUICE_READ_NEIGHBOUR = 1u << 1, /* pair term: reads values at neighbours j
+                                        (gathered into the batch by the core) */
+    SLUICE_WRITE = 1u << 2,          /* sets the field (one writer per field) */
+    SLUICE_ACCUMULATE = 1u << 3      /* adds to the field; the core zeroes it before
+                                        every evaluation; several may accumulate */
+};
+
+/* Field flags, merged over all declarations of a field. */
+enum sluice_field_flags {
+    SLUICE_FIELD_OUTPUT = 1u << 0, /* written by output writers */
+    SLUICE_FIELD_RESTART = 1u << 1 /* part of the state a restart needs */
+};
+
+/* Use as `components` for a vector with one component per dimension. */
+#define SLUICE_COMPONENTS_DIM 0
+
+typedef struct sluice_field_spec {
+    const char *name;    /* physics name: "density", "pressure", "acceleration" */
+    sluice_type type;
+    uint32_t components; /* 1 for scalars, SLUICE_COMPONENTS_DIM for vectors */
+    const char *units;   /* SI, e.g. "kg m^-3" */
+    uint32_t access;     /* sluice_access bits */
+    uint32_t flags;      /* sluice_field_flags bits */
+    const char *rate_of; /* if this field is the time derivative of another field
+                            (integrated by the integrator), that field's name */
+    uint32_t kinds;      /* with rate_of: the particle kinds that are integrated */
+    const char *doc;
+} sluice_field_spec;
+
+/* A resolved field: filled by api->field(). `column` is the index of its first
+ * component in sluice_view.columns; component c is column + c. */
+typedef struct sluice_field {
+    int32_t column;
+    uint32_t components;
+    sluice_type type;
+} sluice_field;
+
+/* ----------------------------------------------------------- parameters -- */
+
+typedef enum sluice_param_type {
+    SLUICE_PARAM_REAL = 1,       /* sluice_real */
+    SLUICE_PARAM_INT = 2,        /* int64_t */
+    SLUICE_PARAM_BOOL = 3,       /* int (0 or 1) */
+    SLUICE_PARAM_STRING = 4,     /* const char * (owned by the core) */
+    SLUICE_PARAM_ENUM = 5,       /* int: index into `choices` */
+    SLUICE_PARAM_VECTOR = 6,     /* sluice_real[3]; `length` components are read */
+    SLUICE_PARAM_REAL_LIST = 7,  /* sluice_real_list of scalars */
+    SLUICE_PARAM_POINT_LIST = 8  /* sluice_real_list of points (3 reals each) */
+} sluice_param_type;
+
+enum sluice_param_flags {
+    SLUICE_PARAM_HAS_MIN = 1u << 0,
+    SLUICE_PARAM_HAS_MAX = 1u << 1,
+    SLUICE_PARAM_MIN_EXCLUSIVE = 1u << 2,
+    SLUICE_PARAM_MAX_EXCLUSIVE = 1u << 3,
+    SLUICE_PARAM_OPTIONAL = 1u << 4 /* no default, may be absent (then zeroed) */
+};
+
+/* Use as `length` of a SLUICE_PARAM_VECTOR for one component per dimension. */
+#define SLUICE_LENGTH_DIM 0
+
+typedef struct sluice_real_list {
+    const sluice_real *values; /* REAL_LIST: count values; POINT_LIST: 3 * count */
+    uint32_t count;
+} sluice_real_list;
+
+typedef struct sluice_param_spec {
+    const char *name;
+    sluice_param_type type;
+    size_t offset;             /* offsetof() in the component's config struct */
+    const char *default_value; /* YAML text; NULL means required (unless OPTIONAL) */
+    double min, max;           /* used with SLUICE_PARAM_HAS_MIN / HAS_MAX */
+    uint32_t flags;
+    const char *unit;          /* SI unit, "1" for dimensionless */
+    const char *doc;
+    const char *choices;       /* ENUM: "first|second|third" */
+    uint32_t length;           /* VECTOR: component count, or SLUICE_LENGTH_DIM */
+} sluice_param_spec;
+
+/* ------------------------------------------------------------ the view -- */
+
+/* The particle state as seen by callbacks. Valid until the core reorders
+ * particles (inside api->evaluate) or changes their number; fetch it again with
+ * api->view() after those. */
+typedef struct sluice_view {
+    sluice_index count;        /* particles */
+    uint32_t dimensions;       /* 2 or 3 */
+    void *const *columns;      /* base pointer of every field column */
+    const sluice_real *position[3]; /* [2] is NULL in 2D */
+    const uint8_t *kind;
+    const sluice_id *id;
+    sluice_real smoothing_length; /* h, m */
+    sluice_real spacing;          /* initial particle spacing dx, m */
+    double time;                  /* s, at the start of the current step */
+    double dt;                    /* s, current step (0 before the first) */
+    int64_t step;
+} sluice_view;
+
+static inline sluice_real *sluice_real_column(const sluice_view *v, sluice_field f, uint32_t c)
+{
+    return (sluice_real *)v->columns[f.column + (int32_t)c];
+}
+
+/* ----------------------------------------------------------- pair batch -- */
+
+/* A batch of pairs (i, j) within the kernel support, built by the core for a
+ * set of target particles i. Every pair term of a pass receives the same
+ * batch; the core calls a term only with targets of the kinds it declared.
+ * Pairs of target t are pair_begin[t] .. pair_begin[t + 1] - 1. i != j. */
+typedef struct sluice_pair_batch {
+    sluice_index target_count;
+    const sluice_index *target;     /* particle index i of each target */
+    const sluice_index *pair_begin; /* target_count + 1 offsets into the pair arrays */
+    sluice_index pair_count;
+    const sluice_index *neighbour;  /* particle index j of each pair */
+    const uint8_t *neighbour_kind;  /* kind of j */
+    uint32_t neighbour_kinds;       /* kinds that may appear as j in this batch */
+    const sluice_real *offset[3];   /* r_ij = r_i - r_j (periodic image applied); [2] NULL in 2D */
+    const sluice_real *distance;    /* |r_ij|, > 0 */
+    const sluice_real *kernel;      /* W(r_ij), or NULL unless requested
+                                       (SLUICE_COMPONENT_NEEDS_KERNEL) */
+    const sluice_real *kernel_gradient; /* F_ij = (dW/dr) / r: grad_i W_ij = r_ij F_ij */
+    const sluice_real *const *gathered; /* per column: value at j of every pair, for
+                                           columns declared SLUICE_READ_NEIGHBOUR by
+                                           a term of the pass; NULL otherwise */
+    sluice_real kernel_self;        /* W(0) */
+} sluice_pair_batch;
+
+/* -------------------------------------------------------- host services -- */
+
+typedef struct sluice_host sluice_host;
+
+typedef struct sluice_rate {
+    sluice_field state; /* the integrated field (e.g. density) */
+    sluice_field rate;  /* its time derivative (e.g. density_rate) */
+    uint32_t kinds;     /* particle kinds integrated */
+    const char *state_name, *rate_name;
+} sluice_rate;
+
+typedef struct sluice_wall {
+    const char *scheme; /* wall component that handles this wall */
+    const char *name;   /* optional user name, or "" */
+    uint32_t dimensions;
+    /* 2D: segment_count segments, vertex pairs in `points` (x, y, 0 per point),
+     * with the fluid on the left of each segment (counter-clockwise around the
+     * fluid). 3D: triangles, three points each, fluid on the side of
+     * (b - a) x (c - a). */
+    uint32_t element_count;
+    const sluice_real *points; /* 3 reals per point; 2 points (2D) or 3 (3D) per element */
+    const sluice_real *normals; /* unit normal into the fluid, 3 reals per element */
+} sluice_wall;
+
+/* One row of a time series. */
+typedef struct sluice_table sluice_table;
+
+typedef struct sluice_plugin_info {
+    const char *component;
+    const char *library;
+    const char *version;
+    const char *path;
+} sluice_plugin_info;
+
+typedef void (*sluice_range_fn)(void *context, const sluice_view *view, sluice_index begin,
+                                sluice_index end);
+
+/* The table of core services. Grows only at its end; `size` tells how much of
+ * it this core provides. Every function taking a host must be called from the
+ * thread that called the component, except those marked "thread-safe". */
+typedef struct sluice_api {
+    uint32_t size;
+    uint16_t abi_major, abi_minor;
+
+    /* -- 1.0: diagnostics. Messages are prefixed with the component name. */
+    void (*error)(sluice_host *host, const char *format, ...) SLUICE_PRINTF(2, 3); /* thread-safe */
+    void (*warning)(sluice_host *host, const char *format, ...) SLUICE_PRINTF(2, 3);
+    void (*info)(sluice_host *host, const char *format, ...) SLUICE_PRINTF(2, 3);
+
+    /* -- 1.0: fields and constants.
+     * declare_field: only in create() or bind(). field: from bind() on; a field
+     * no component declared is an error. */
+    int (*declare_field)(sluice_host *host, const sluice_field_spec *spec);
+    int (*field)(sluice_host *host, const char *name, sluice_field *out);
+    /* Named constants (smoothing_length, spacing, rest_density, dimensions,
+     * gravity, speed_of_sound, ...). publish: in create(); get: from bind() on.
+     * get returns the number of values, or 0 when nobody published it. */
+    int (*publish_constant)(sluice_host *host, const char *name, const sluice_real *values,
+                            uint32_t count, const char *unit);
+    uint32_t (*constant)(sluice_host *host, const char *name, sluice_real *values,
+                         uint32_t max_count);
+    uint32_t (*rate_count)(sluice_host *host);
+    int (*rate)(sluice_host *host, uint32_t index, sluice_rate *out);
+
+    /* -- 1.0: particles and geometry. */
+    const sluice_view *(*view)(sluice_host *host);
+    /* Add `count` particles of `kind` at positions (3 reals each); mass,
+     * density (rest density) and id are set by the core, other fields are zero.
+     * Only in bind() or initialise(). Returns the index of the first one. */
+    int (*add_particles)(sluice_host *host, uint8_t kind, const sluice_real *positions,
+                         sluice_index count, sluice_index *first);
+    uint32_t (*wall_count)(sluice_host *host);
+    const sluice_wall *(*wall)(sluice_host *host, uint32_t index);
+    /* Lattice points (spacing dx, aligned with the fluid lattice) behind a wall,
+     * at a distance in (0, thickness] from it on the side away from the fluid.
+     * The array (3 reals per point) is freed with api->release(). */
+    int (*wall_layer_points)(sluice_host *host, uint32_t wall_index, sluice_real thickness,
+                             sluice_real **points, sluice_index *count);
+    void (*release)(void *memory);
+
+    /* -- 1.0: running. */
+    /* Integrators: evaluate every rate at the current state (updating the
+     * neighbour search first when needed). */
+    int (*evaluate)(sluice_host *host);
+    /* Integrators: the step size after an evaluation: the minimum of every
+     * component's limit, clamped to the end time and requested times. */
+    double (*time_step)(sluice_host *host);
+    /* Run fn over [0, count) in parallel chunks. */
+    void (*parallel_for)(sluice_host *host, sluice_index count, sluice_range_fn fn, void *context);
+    /* Ask the core to end a step exactly at time t (outputs, gauges). */
+    void (*request_time)(sluice_host *host, double t);
+
+    /* -- 1.0: output. */
+    /* Path of `name` inside the run's output directory. */
+    int (*output_path)(sluice_host *host, const char *name, char *buffer, size_t size);
+    /* The fully resolved scene (every default filled in), YAML text. */
+    const char *(*resolved_scene)(sluice_host *host);
+    uint32_t (*plugin_count)(sluice_host *host);
+    int (*plugin)(sluice_host *host, uint32_t index, sluice_plugin_info *out);
+    /* Field table for writers. */
+    uint32_t (*field_count)(sluice_host *host);
+    int (*field_info)(sluice_host *host, uint32_t index, sluice_field_spec *spec,
+                      sluice_field *field);
+    /* Time series in the output directory: a CSV file with a header line;
+     * rows are written whole. */
+    sluice_table *(*table_open)(sluice_host *host, const char *file_name, const char *header);
+    int (*table_row)(sluice_table *table, const double *values, uint32_t count);
+    /* Write `size` bytes to `path` atomically (temporary file, then rename). */
+    int (*write_file_atomic)(sluice_host *host, const char *path, const void *data, size_t size);
+} sluice_api;
+
+/* ----------------------------------------------------------- components -- */
+
+enum sluice_component_flags {
+    SLUICE_COMPONENT_NEEDS_KERNEL = 1u << 0, /* pair term reads batch->kernel */
+    SLUICE_COMPONENT_WALL_SCHEME = 1u << 1   /* handles the scene's walls (api->wall) */
+};
+
+enum sluice_finish_status { SLUICE_FINISH_COMPLETE = 0, SLUICE_FINISH_FAILED = 1 };
+
+typedef struct sluice_component {
+    const char *name;    /* unique name used in scene files */
+    const char *summary; /* one line */
+    const char *reference; /* where the equations come from */
+    uint32_t dimensions; /* SLUICE_DIMS_* mask */
+    uint32_t flags;      /* sluice_component_flags */
+
+    const sluice_param_spec *params;
+    uint32_t param_count;
+    size_t config_size;  /* the core fills a zeroed struct of this size */
+
+    const sluice_field_spec *fields;
+    uint32_t field_count;
+
+    /* Pair terms: kinds of the targets i and of the neighbours j. */
+    uint32_t target_kinds;
+    uint32_t neighbour_kinds;
+    /* Particle terms: kinds the callback is meant for (informative; the callback
+     * receives every particle and filters itself). */
+    uint32_t particle_kinds;
+
+    /* Lifecycle. Return SLUICE_OK or SLUICE_ERROR (after api->error()). */
+    int (*create)(const sluice_api *api, sluice_host *host, const void *config, void **state);
+    void (*destroy)(void *state);
+    int (*bind)(void *state, sluice_host *host);       /* all components exist */
+    int (*initialise)(void *state, sluice_host *host); /* all particles exist */
+
+    /* Evaluation of rates (ordered by the core from declared reads/writes). */
+    void (*particle)(void *state, const sluice_view *view, sluice_index begin, sluice_index end);
+    void (*pair)(void *state, const sluice_view *view, const sluice_pair_batch *batch);
+
+    /* Kernel: W and F = (dW/dr)/r for n distances (w may be NULL). */
+    void (*kernel)(void *state, sluice_index n, const sluice_real *r, sluice_real *w,
+                   sluice_real *f);
+
+    /* Equation of state inverse, used for the hydrostatic initial state. */
+    void (*density_from_pressure)(void *state, sluice_index n, const sluice_real *pressure,
+                                  sluice_real *density);
+
+    /* Integrator: advance the state by one step (uses api->evaluate/time_step). */
+    int (*advance)(void *state, sluice_host *host);
+
+    /* Largest stable step this component allows, over particles [begin, end). */
+    sluice_real (*time_step_limit)(void *state, const sluice_view *view, sluice_index begin,
+                                   sluice_index end);
+
+    /* Once per step, before the integrator (inlets, prescribed motion). */
+    int (*before_step)(void *state, sluice_host *host);
+    /* Once per step, after the integrator (clamps, gauges, writers). */
+    int (*after_step)(void *state, sluice_host *host);
+    /* At the end of a run, complete or failed (final output, close files). */
+    int (*finish)(void *state, sluice_host *host, int status);
+} sluice_component;
+
+/* Build signature: must equal the core's. */
+typedef struct sluice_signature {
+    uint32_t real_size;  /* sizeof(sluice_real) */
+    uint32_t index_size; /* sizeof(sluice_index) */
+    uint32_t dimensions; /* SLUICE_DIMS_* the library supports */
+} sluice_signature;
+
+/* The descriptor returned by sluice_plugin_entry(). The first six members keep
+ * their layout in every ABI version so that the core can read and report any
+ * plugin's versions. */
+typedef struct sluice_library {
+    uint32_t magic; /* SLUICE_PLUGIN_MAGIC */
+    uint16_t abi_major, abi_minor;
+    sluice_signature signature;
+    const char *name;    /* library name */
+    const char *version; /* library version, e.g. "1.0.0" */
+    const char *description;
+    uint32_t component_count;
+    const sluice_component *components;
+} sluice_library;
+
+#define SLUICE_SIGNATURE_INIT(dims) {sizeof(sluice_real), sizeof(sluice_index), (dims)}
+#define SLUICE_ENTRY_SYMBOL "sluice_plugin_entry"
+
+/* The one symbol every plugin exports. */
+typedef const sluice_library *(*sluice_entry_fn)(void);
+SLUICE_EXPORT const sluice_library *sluice_plugin_entry(void);
+
+/* Handy declaration of a library with its components. */
+#define SLUICE_DEFINE_LIBRARY(lib_name, lib_version, lib_description, dims, component_array)    \
+    static const sluice_library sluice_library_descriptor_ = {                                  \
+        SLUICE_PLUGIN_MAGIC, SLUICE_ABI_MAJOR, SLUICE_ABI_MINOR, SLUICE_SIGNATURE_INIT(dims),   \
+        (lib_name), (lib_version), (lib_description),                                           \
+        (uint32_t)(sizeof(component_array) / sizeof((component_array)[0])), (component_array)}; \
+    SLUICE_EXPORT const sluice_library *sluice_plugin_entry(void)                               \
+    {                                                                                           \
+        return &sluice_library_descriptor_;                                                     \
+    }
+
+#define SLUICE_COUNT(array) ((uint32_t)(sizeof(array) / sizeof((array)[0])))
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,115 @@
+/* Scene geometry: fluid regions filled on a lattice, and walls described once
+ * (segments in 2D, triangles in 3D) for every wall scheme. Pure functions, no
+ * global state. Points are always 3 reals (z = 0 in 2D). */
+#ifndef SLUICE_GEOMETRY_H
+#define SLUICE_GEOMETRY_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "sluice/plugin.h"
+
+/* A growable list of points (3 reals each). */
+typedef struct sluice_points {
+    sluice_real *xyz;
+    size_t count, capacity;
+} sluice_points;
+
+int sluice_points_push(sluice_points *points, const sluice_real p[3]); /* 0 or -1 on OOM */
+void sluice_points_free(sluice_points *points);
+
+/* -------------------------------------------------------------- regions -- */
+
+typedef enum sluice_region_shape {
+    SLUICE_REGION_BOX = 0,     /* 2D/3D: min <= x < max */
+    SLUICE_REGION_POLYGON = 1, /* 2D: closed polygon (either orientation) */
+    SLUICE_REGION_PRISM = 2    /* 3D: polygon in x-y extruded over z in [zmin, zmax) */
+} sluice_region_shape;
+
+typedef struct sluice_region {
+    sluice_region_shape shape;
+    sluice_real min[3], max[3]; /* BOX; PRISM uses min[2], max[2] for z */
+    const sluice_real *polygon; /* POLYGON/PRISM: vertex_count vertices, 2 reals each (x, y) */
+    uint32_t vertex_count;
+} sluice_region;
+
+/* Axis-aligned bounding box of a region (3D box; z = 0 in 2D). */
+void sluice_region_bounds(const sluice_region *region, uint32_t dimensions, sluice_real min[3],
+                          sluice_real max[3]);
+int sluice_region_contains(const sluice_region *region, uint32_t dimensions, const sluice_real p[3]);
+
+/* Appends the lattice points lattice_origin + (k + 1/2) dx (per axis) that lie
+ * inside the region. Returns 0 or -1 on OOM. */
+int sluice_region_fill(const sluice_region *region, uint32_t dimensions, sluice_real spacing,
+                       const sluice_real lattice_origin[3], sluice_points *out);
+
+/* 2D point in polygon (even-odd rule); polygon is n vertices (x, y). */
+int sluice_point_in_polygon(const sluice_real *polygon, uint32_t n, sluice_real x, sluice_real y);
+
+/* ---------------------------------------------------------------- walls -- */
+
+/* Internal wall: the same layout as the public sluice_wall (points, normals)
+ * plus pseudo-normals for a correct inside/outside sign at shared vertices
+ * and edges. Build with sluice_wall_build_*(). */
+typedef struct sluice_wall_geometry {
+    uint32_t dimensions;
+    uint32_t element_count;
+    sluice_real *points;  /* 2D: 2 points per segment; 3D: 3 per triangle (3 reals per point) */
+    sluice_real *normals; /* unit normal into the fluid, per element */
+    /* Per element end/vertex: pseudo-normal (3 reals) and whether the vertex is
+     * an open end (belongs to one element only, 2D). 2D: 2 per element;
+     * 3D: 3 vertex pseudo-normals then 3 edge pseudo-normals per element. */
+    sluice_real *vertex_normals;
+    uint8_t *open_vertex;
+    sluice_real *edge_normals; /* 3D only */
+    uint8_t *open_edge;        /* 3D only: edge used by one triangle only */
+} sluice_wall_geometry;
+
+/* 2D polyline through n vertices (x, y); the fluid is on the left of each
+ * segment a->b (normal = (-(by - ay), bx - ax) / length). closed != 0 joins
+ * the last vertex to the first. Returns 0, or -1 (OOM or fewer than 2 distinct
+ * vertices / zero-length segments: *reason is set). */
+int sluice_wall_build_polyline(sluice_wall_geometry *wall, const sluice_real *xy, uint32_t n,
+                               int closed, const char **reason);
+/* 3D triangles: vertices (3 reals each) and faces (3 indices each), fluid on
+ * the side of (b - a) x (c - a). */
+int sluice_wall_build_triangles(sluice_wall_geometry *wall, const sluice_real *vertices,
+                                uint32_t vertex_count, const uint32_t *faces,
+                                uint32_t face_count, const char **reason);
+/* An open-top tank with the fluid inside: 2D three segments (left, bottom,
+ * right), 3D five rectangles (bottom and four sides) as triangles. */
+int sluice_wall_build_tank(sluice_wall_geometry *wall, uint32_t dimensions,
+                           const sluice_real min[3], const sluice_real max[3],
+                           const char **reason);
+/* A solid box with the fluid outside (2D closed rectangle, 3D six faces). */
+int sluice_wall_build_box(sluice_wall_geometry *wall, uint32_t dimensions,
+                          const sluice_real min[3], const sluice_real max[3],
+                          const char **reason);
+void sluice_wall_geometry_free(sluice_wall_geometry *wall);
+
+/* Closest point on a segment / triangle to p (3D arithmetic; 2D uses z = 0).
+ * Return the distance; *feature tells which feature is closest:
+ * segment: 0 interior, 1 vertex a, 2 vertex b;
+ * triangle: 0 face, 1..3 vertex a/b/c, 4..6 edge ab/bc/ca. */
+sluice_real sluice_segment_closest(const sluice_real p[3], const sluice_real a[3],
+                                   const sluice_real b[3], sluice_real closest[3], int *feature);
+sluice_real sluice_triangle_closest(const sluice_real p[3], const sluice_real a[3],
+                                    const sluice_real b[3], const sluice_real c[3],
+                                    sluice_real closest[3], int *feature);
+
+/* Signed distance from p to the wall: > 0 on the fluid side, < 0 behind it,
+ * using the pseudo-normal of the closest feature. *beyond_end is set to 1
+ * when the closest feature is an open end (2D vertex used by one segment, 3D
+ * boundary edge or its vertices) and p lies outside the wall's extent there,
+ * so "behind" has no meaning; 0 otherwise. element (may be NULL) receives the
+ * index of the closest element. */
+sluice_real sluice_wall_signed_distance(const sluice_wall_geometry *wall, const sluice_real p[3],
+                                        int *beyond_end, uint32_t *element);
+
+/* Appends the lattice points (origin + (k + 1/2) dx) with
+ * -thickness <= signed distance <= 0 and not beyond an open end. */
+int sluice_wall_layer_points(const sluice_wall_geometry *wall, sluice_real spacing,
+                             const sluice_real lattice_origin[3], sluice_real thickness,
+                             sluice_points *out);
+
+#endif

@@ -1,0 +1,213 @@
+/* The sluice command line: run, check, inspect. */
+#define _GNU_SOURCE
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "build_config.h"
+#include "diag.h"
+#include "sim.h"
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "usage:\n"
+            "  sluice run SCENE.yaml --out DIR [--set key=value ...] [--threads N]\n"
+            "             [--progress | --no-progress] [--quiet]\n"
+            "  sluice check SCENE.yaml [--set key=value ...]\n"
+            "  sluice inspect [PLUGIN] [--markdown]\n"
+            "  sluice version\n"
+            "\n"
+            "--set overrides any scene key by its dotted path, e.g. --set time.end=0.2 or\n"
+            "--set plugins.tait.speed_of_sound=60. Plugins are searched in the scene's\n"
+            "plugin_path, SLUICE_PLUGIN_PATH, then next to the program.\n"
+            "Exit status: 0 success, 2 bad input, 3 the run went unstable, 4 other failure.\n");
+}
+
+typedef struct arguments {
+    const char *scene, *out, *plugin;
+    const char **sets;
+    size_t set_count;
+    int threads, progress, quiet, markdown;
+} arguments;
+
+static int parse(int argc, char **argv, int first, arguments *a, int allow_out)
+{
+    a->sets = calloc((size_t)argc + 1, sizeof *a->sets);
+    if (!a->sets) {
+        fprintf(stderr, "sluice: error: out of memory\n");
+        return -1;
+    }
+    a->progress = -1;
+    for (int i = first; i < argc; i++) {
+        const char *arg = argv[i];
+        if (strcmp(arg, "--set") == 0 || strcmp(arg, "-s") == 0) {
+            if (i + 1 >= argc) {
+                fprintf(stderr, "sluice: error: --set needs an argument key=value\n");
+                return -1;
+            }
+            a->sets[a->set_count++] = argv[++i];
+        } else if (strncmp(arg, "--set=", 6) == 0) {
+            a->sets[a->set_count++] = arg + 6;
+        } else if (allow_out && (strcmp(arg, "--out") == 0 || strcmp(arg, "-o") == 0)) {
+            if (i + 1 >= argc) {
+                fprintf(stderr, "sluice: error: --out needs a directory\n");
+                return -1;
+            }
+            a->out = argv[++i];
+        } else if (allow_out && strncmp(arg, "--out=", 6) == 0) {
+            a->out = arg + 6;
+        } else if (strcmp(arg, "--threads") == 0 || strcmp(arg, "-j") == 0) {
+            char *end = NULL;
+            if (i + 1 >= argc || (a->threads = (int)strtol(argv[i + 1], &end, 10), *end) ||
+                a->threads < 1) {
+                fprintf(stderr, "sluice: error: --threads needs a positive integer\n");
+                return -1;
+            }
+            i++;
+        } else if (allow_out && strcmp(arg, "--progress") == 0) {
+            a->progress = 1;
+        } else if (allow_out && strcmp(arg, "--no-progress") == 0) {
+            a->progress = 0;
+        } else if (strcmp(arg, "--quiet") == 0 || strcmp(arg, "-q") == 0) {
+            a->quiet = 1;
+        } else if (arg[0] == '-' && arg[1]) {
+            fprintf(stderr, "sluice: error: unknown option '%s'\n", arg);
+            return -1;
+        } else if (!a->scene) {
+            a->scene = arg;
+        } else {
+            fprintf(stderr, "sluice: error: unexpected argument '%s'\n", arg);
+            return -1;
+        }
+    }
+    if (!a->scene) {
+        fprintf(stderr, "sluice: error: no scene file given\n");
+        return -1;
+    }
+    return 0;
+}
+
+static sluice_sim *load(const arguments *a, int check_only)
+{
+    sluice_diag *diag = sluice_diag_create();
+    if (!diag) {
+        fprintf(stderr, "sluice: error: out of memory\n");
+        return NULL;
+    }
+    sluice_load_options options = {a->sets, a->set_count, a->threads, check_only};
+    sluice_sim *sim = sluice_sim_load(a->scene, &options, diag);
+    sluice_diag_print(diag, stderr);
+    sluice_diag_destroy(diag);
+    return sim;
+}
+
+static int command_run(int argc, char **argv)
+{
+    arguments a;
+    memset(&a, 0, sizeof a);
+    if (parse(argc, argv, 2, &a, 1) != 0) {
+        free(a.sets);
+        usage(stderr);
+        return 2;
+    }
+    if (!a.out) {
+        fprintf(stderr, "sluice: error: 'sluice run' needs --out DIR\n");
+        free(a.sets);
+        return 2;
+    }
+    sluice_sim *sim = load(&a, 0);
+    free(a.sets);
+    if (!sim)
+        return 2;
+    sluice_run_options options = {a.out, a.progress >= 0 ? a.progress : isatty(STDERR_FILENO),
+                                  a.quiet};
+    int status = sluice_sim_run(sim, &options);
+    const sluice_view *v = sluice_sim_view(sim);
+    if (status == SLUICE_RUN_COMPLETE) {
+        if (!a.quiet)
+            fprintf(stderr, "sluice: completed %lld steps, %.6g s simulated, %u particles; output "
+                            "in %s\n",
+                    (long long)sluice_sim_steps(sim), sluice_sim_time(sim), v->count, a.out);
+    } else {
+        fprintf(stderr, "sluice: error: %s\n", sluice_sim_failure(sim));
+        if (status == SLUICE_RUN_UNSTABLE)
+            fprintf(stderr,
+                    "sluice: the run was stopped; every output written before step %lld is kept "
+                    "in %s\n",
+                    (long long)sluice_sim_steps(sim), a.out);
+    }
+    sluice_sim_free(sim);
+    return status;
+}
+
+static int command_check(int argc, char **argv)
+{
+    arguments a;
+    memset(&a, 0, sizeof a);
+    if (parse(argc, argv, 2, &a, 0) != 0) {
+        free(a.sets);
+        usage(stderr);
+        return 2;
+    }
+    sluice_sim *sim = load(&a, 1);
+    free(a.sets);
+    if (!sim)
+        return 2;
+    const sluice_view *v = sluice_sim_view(sim);
+    sluice_index fluid = 0;
+    for (sluice_index i = 0; i < v->count; i++)
+        fluid += v->kind[i] == SLUICE_KIND_FLUID;
+    printf("%s: valid %uD scene, %u particles (%u fluid, %u wall), end time %g s\n", a.scene,
+           v->dimensions, v->count, fluid, v->count - fluid, sluice_sim_end_time(sim));
+    sluice_sim_free(sim);
+    return 0;
+}
+
+static int command_inspect(int argc, char **argv)
+{
+    const char *plugin = NULL;
+    int markdown = 0;
+    for (int i = 2; i < argc; i++) {
+        if (strcmp(argv[i], "--markdown") == 0)
+            markdown = 1;
+        else if (argv[i][0] == '-') {
+            fprintf(stderr, "sluice: error: unknown option '%s'\n", argv[i]);
+            return 2;
+        } else if (!plugin)
+            plugin = argv[i];
+        else {
+            fprintf(stderr, "sluice: error: unexpected argument '%s'\n", argv[i]);
+            return 2;
+        }
+    }
+    return sluice_inspect(stdout, plugin, markdown) == 0 ? 0 : 2;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    const char *command = argv[1];
+    if (strcmp(command, "run") == 0)
+        return command_run(argc, argv);
+    if (strcmp(command, "check") == 0)
+        return command_check(argc, argv);
+    if (strcmp(command, "inspect") == 0)
+        return command_inspect(argc, argv);
+    if (strcmp(command, "version") == 0 || strcmp(command, "--version") == 0) {
+        printf("sluice %s (plugin ABI %d.%d)\n", SLUICE_VERSION, SLUICE_ABI_MAJOR,
+               SLUICE_ABI_MINOR);
+        return 0;
+    }
+    if (strcmp(command, "help") == 0 || strcmp(command, "--help") == 0 || strcmp(command, "-h") == 0) {
+        usage(stdout);
+        return 0;
+    }
+    fprintf(stderr, "sluice: error: unknown command '%s'\n", command);
+    usage(stderr);
+    return 2;
+}

@@ -1,0 +1,387 @@
+#include "neighbours.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_CELLS ((size_t)1 << 30)
+
+int sluice_grid_init(sluice_grid *grid, uint32_t dimensions, const double lo[3], const double hi[3],
+                     const int periodic[3], sluice_real support, sluice_real skin,
+                     const char **reason)
+{
+    memset(grid, 0, sizeof *grid);
+    grid->dimensions = dimensions;
+    grid->support = support;
+    grid->skin = skin;
+    double cutoff = (double)support + (double)skin;
+    size_t count = 1;
+    for (int d = 0; d < 3; d++) {
+        if ((uint32_t)d >= dimensions) {
+            grid->cells[d] = 1;
+            grid->cell_size[d] = 1.0;
+            grid->inverse_cell_size[d] = 1.0;
+            continue;
+        }
+        grid->lo[d] = lo[d];
+        grid->hi[d] = hi[d];
+        grid->length[d] = hi[d] - lo[d];
+        grid->periodic[d] = periodic[d];
+        if (!(grid->length[d] > 0)) {
+            *reason = "the domain has zero or negative size";
+            return -1;
+        }
+        double n = periodic[d] ? floor(grid->length[d] / cutoff) : ceil(grid->length[d] / cutoff);
+        if (n < 1)
+            n = 1;
+        if (periodic[d] && n < 3) {
+            *reason = "a periodic direction must be at least 3 times the kernel support plus the "
+                      "neighbour skin long";
+            return -1;
+        }
+        if (n > (double)MAX_CELLS) {
+            *reason = "the domain is too large for the cell grid (more than 2^30 cells)";
+            return -1;
+        }
+        grid->cells[d] = (int64_t)n;
+        grid->cell_size[d] = periodic[d] ? grid->length[d] / n : cutoff;
+        grid->inverse_cell_size[d] = 1.0 / grid->cell_size[d];
+        count *= (size_t)n;
+        if (count > MAX_CELLS) {
+            *reason = "the domain is too large for the cell grid (more than 2^30 cells)";
+            return -1;
+        }
+    }
+    grid->cell_count = count;
+    grid->cell_start = calloc(count + 1, sizeof *grid->cell_start);
+    grid->threads = omp_get_max_threads();
+    grid->thread_counts = calloc((size_t)grid->threads + 1, sizeof *grid->thread_counts);
+    if (!grid->cell_start || !grid->thread_counts) {
+        *reason = "out of memory";
+        sluice_grid_free(grid);
+        return -1;
+    }
+    return 0;
+}
+
+void sluice_grid_free(sluice_grid *grid)
+{
+    free(grid->cell_start);
+    free(grid->order);
+    free(grid->cell_of);
+    for (int d = 0; d < 3; d++)
+        free(grid->built[d]);
+    free(grid->list_begin);
+    free(grid->list);
+    free(grid->thread_counts);
+    memset(grid, 0, sizeof *grid);
+}
+
+static inline double minimum_image(double dx, double length)
+{
+    return dx - length * nearbyint(dx / length);
+}
+
+int sluice_grid_needs_rebuild(const sluice_grid *grid, const sluice_view *view)
+{
+    if (!grid->valid || grid->count != view->count)
+        return 1;
+    double limit = 0.25 * (double)grid->skin * (double)grid->skin;
+    double worst = 0;
+    const uint32_t dims = grid->dimensions;
+    sluice_index n = view->count;
+#pragma omp parallel for schedule(static) reduction(max : worst)
+    for (sluice_index i = 0; i < n; i++) {
+        double s = 0;
+        for (uint32_t d = 0; d < dims; d++) {
+            double dx = (double)view->position[d][i] - (double)grid->built[d][i];
+            if (grid->periodic[d])
+                dx = minimum_image(dx, grid->length[d]);
+            s += dx * dx;
+        }
+        if (!(s <= limit)) /* also catches NaN */
+            worst = s == s ? (s > worst ? s : worst) : INFINITY;
+    }
+    return worst > limit;
+}
+
+static int ensure_capacity(sluice_grid *grid, sluice_index n)
+{
+    if (n <= grid->capacity && grid->list_begin)
+        return 0;
+    sluice_index cap = grid->capacity ? grid->capacity : 1024;
+    while (cap < n)
+        cap = cap > UINT32_MAX / 2 ? n : cap * 2;
+    sluice_index *order = malloc((size_t)cap * sizeof *order);
+    uint32_t *cell_of = malloc((size_t)cap * sizeof *cell_of);
+    sluice_index *begin = malloc(((size_t)cap + 1) * sizeof *begin);
+    sluice_real *built[3] = {NULL, NULL, NULL};
+    int ok = order && cell_of && begin;
+    for (uint32_t d = 0; d < grid->dimensions && ok; d++) {
+        built[d] = malloc((size_t)cap * sizeof *built[d]);
+        ok = built[d] != NULL;
+    }
+    if (!ok) {
+        free(order);
+        free(cell_of);
+        free(begin);
+        for (int d = 0; d < 3; d++)
+            free(built[d]);
+        return -1;
+    }
+    free(grid->order);
+    free(grid->cell_of);
+    free(grid->list_begin);
+    grid->order = order;
+    grid->cell_of = cell_of;
+    grid->list_begin = begin;
+    for (int d = 0; d < 3; d++) {
+        free(grid->built[d]);
+        grid->built[d] = built[d];
+    }
+    grid->capacity = cap;
+    return 0;
+}
+
+void sluice_grid_wrap(const sluice_grid *grid, sluice_real *position[3], sluice_index count)
+{
+    for (uint32_t d = 0; d < grid->dimensions; d++) {
+        if (!grid->periodic[d])
+            continue;
+        sluice_real *x = position[d];
+        const double lo = grid->lo[d], length = grid->length[d];
+#pragma omp parallel for schedule(static)
+        for (sluice_index i = 0; i < count; i++) {
+            double v = (double)x[i];
+            if (v < lo || v >= lo + length) {
+                v -= length * floor((v - lo) / length);
+                if (v >= lo + length) /* rounding */
+                    v = lo;
+                x[i] = (sluice_real)v;
+            }
+        }
+    }
+}
+
+/* Cell coordinate of x along d, or -1 outside a non-periodic side. */
+static inline int64_t cell_coordinate(const sluice_grid *grid, int d, double x)
+{
+    if (grid->periodic[d])
+        x -= grid->length[d] * floor((x - grid->lo[d]) / grid->length[d]);
+    else if (!(x >= grid->lo[d] && x < grid->hi[d]))
+        return -1;
+    int64_t c = (int64_t)floor((x - grid->lo[d]) * grid->inverse_cell_size[d]);
+    if (c < 0)
+        c = 0;
+    if (c >= grid->cells[d])
+        c = grid->cells[d] - 1;
+    return c;
+}
+
+/* Visits the candidate neighbours of particle i (sorted order) within the list
+ * cutoff; with `out` NULL only counts them. Inlined into both passes. */
+static inline sluice_index visit(const sluice_grid *grid, sluice_real *const pos[3], sluice_index i,
+                                 double cutoff2, sluice_index *out)
+{
+    const uint32_t dims = grid->dimensions;
+    const uint32_t cell = grid->cell_of[i];
+    int64_t c[3];
+    c[0] = (int64_t)(cell % (uint32_t)grid->cells[0]);
+    c[1] = (int64_t)((cell / (uint32_t)grid->cells[0]) % (uint32_t)grid->cells[1]);
+    c[2] = (int64_t)(cell / ((uint32_t)grid->cells[0] * (uint32_t)grid->cells[1]));
+    const double xi = (double)pos[0][i], yi = (double)pos[1][i];
+    const double zi = dims == 3 ? (double)pos[2][i] : 0.0;
+    const int any_periodic = grid->periodic[0] || grid->periodic[1] || grid->periodic[2];
+    sluice_index found = 0;
+    const int64_t zr = dims == 3 ? 1 : 0;
+    for (int64_t dz = -zr; dz <= zr; dz++) {
+        int64_t cz = c[2] + dz;
+        if (dims == 3) {
+            if (cz < 0 || cz >= grid->cells[2]) {
+                if (!grid->periodic[2])
+                    continue;
+                cz = (cz + grid->cells[2]) % grid->cells[2];
+            }
+        }
+        for (int64_t dy = -1; dy <= 1; dy++) {
+            int64_t cy = c[1] + dy;
+            if (cy < 0 || cy >= grid->cells[1]) {
+                if (!grid->periodic[1])
+                    continue;
+                cy = (cy + grid->cells[1]) % grid->cells[1];
+            }
+            const size_t row = ((size_t)cz * (size_t)grid->cells[1] + (size_t)cy) *
+                               (size_t)grid->cells[0];
+            /* x cells as up to three ranges (one when they are contiguous) */
+            int64_t xs[3];
+            int nx = 0;
+            if (!grid->periodic[0]) {
+                int64_t x0 = c[0] > 0 ? c[0] - 1 : 0;
+                int64_t x1 = c[0] + 1 < grid->cells[0] ? c[0] + 1 : grid->cells[0] - 1;
+                /* the three x cells are contiguous in memory: one range */
+                sluice_index a = grid->cell_start[row + (size_t)x0];
+                sluice_index b = grid->cell_start[row + (size_t)x1 + 1];
+                for (sluice_index j = a; j < b; j++) {
+                    double dx = xi - (double)pos[0][j];
+                    double dyv = yi - (double)pos[1][j];
+                    double dzv = dims == 3 ? zi - (double)pos[2][j] : 0.0;
+                    if (any_periodic) {
+                        if (grid->periodic[1])
+                            dyv = minimum_image(dyv, grid->length[1]);
+                        if (dims == 3 && grid->periodic[2])
+                            dzv = minimum_image(dzv, grid->length[2]);
+                    }
+                    double r2 = dx * dx + dyv * dyv + dzv * dzv;
+                    if (r2 < cutoff2 && j != i) {
+                        if (out)
+                            out[found] = j;
+                        found++;
+                    }
+                }
+                continue;
+            }
+            for (int k = -1; k <= 1; k++)
+                xs[nx++] = (c[0] + k + grid->cells[0]) % grid->cells[0];
+            for (int k = 0; k < nx; k++) {
+                sluice_index a = grid->cell_start[row + (size_t)xs[k]];
+                sluice_index b = grid->cell_start[row + (size_t)xs[k] + 1];
+                for (sluice_index j = a; j < b; j++) {
+                    double dx = minimum_image(xi - (double)pos[0][j], grid->length[0]);
+                    double dyv = yi - (double)pos[1][j];
+                    double dzv = dims == 3 ? zi - (double)pos[2][j] : 0.0;
+                    if (grid->periodic[1])
+                        dyv = minimum_image(dyv, grid->length[1]);
+                    if (dims == 3 && grid->periodic[2])
+                        dzv = minimum_image(dzv, grid->length[2]);
+                    double r2 = dx * dx + dyv * dyv + dzv * dzv;
+                    if (r2 < cutoff2 && j != i) {
+                        if (out)
+                            out[found] = j;
+                        found++;
+                    }
+                }
+            }
+        }
+    }
+    return found;
+}
+
+int sluice_grid_build(sluice_grid *grid, sluice_particles *particles, uint32_t position_column,
+                      sluice_index *bad)
+{
+    const sluice_index n = particles->count;
+    const uint32_t dims = grid->dimensions;
+    if (ensure_capacity(grid, n) != 0)
+        return -1;
+    sluice_real *pos[3] = {NULL, NULL, NULL};
+    for (uint32_t d = 0; d < dims; d++)
+        pos[d] = particles->columns[position_column + d];
+    if (dims == 2)
+        pos[2] = pos[1]; /* never read in 2D; keeps pointers valid */
+
+    /* 1. cell of every particle */
+    sluice_index first_bad = n;
+    uint32_t *cell_of = grid->cell_of;
+#pragma omp parallel for schedule(static) reduction(min : first_bad)
+    for (sluice_index i = 0; i < n; i++) {
+        int64_t c[3] = {0, 0, 0};
+        int ok = 1;
+        for (uint32_t d = 0; d < dims; d++) {
+            double x = (double)pos[d][i];
+            if (!isfinite(x)) {
+                ok = 0;
+                break;
+            }
+            c[d] = cell_coordinate(grid, (int)d, x);
+            if (c[d] < 0) {
+                ok = 0;
+                break;
+            }
+        }
+        if (!ok) {
+            if (i < first_bad)
+                first_bad = i;
+            cell_of[i] = 0;
+            continue;
+        }
+        cell_of[i] = (uint32_t)((c[2] * grid->cells[1] + c[1]) * grid->cells[0] + c[0]);
+    }
+    if (first_bad < n) {
+        *bad = first_bad;
+        grid->valid = 0;
+        return -2;
+    }
+
+    /* 2. stable counting sort by cell */
+    sluice_index *start = grid->cell_start;
+    memset(start, 0, (grid->cell_count + 1) * sizeof *start);
+    for (sluice_index i = 0; i < n; i++)
+        start[cell_of[i] + 1]++;
+    for (size_t c = 0; c < grid->cell_count; c++)
+        start[c + 1] += start[c];
+    for (sluice_index i = 0; i < n; i++) {
+        uint32_t c = cell_of[i];
+        grid->order[start[c]++] = i;
+    }
+    /* restore start (it was advanced to the end of each cell) */
+    for (size_t c = grid->cell_count; c > 0; c--)
+        start[c] = start[c - 1];
+    start[0] = 0;
+    if (sluice_particles_permute(particles, grid->order) != 0)
+        return -1;
+    for (uint32_t d = 0; d < dims; d++)
+        pos[d] = particles->columns[position_column + d];
+    if (dims == 2)
+        pos[2] = pos[1];
+    for (size_t c = 0; c < grid->cell_count; c++)
+        for (sluice_index i = start[c]; i < start[c + 1]; i++)
+            cell_of[i] = (uint32_t)c;
+
+    /* 3. positions at this build */
+    for (uint32_t d = 0; d < dims; d++)
+        memcpy(grid->built[d], pos[d], (size_t)n * sizeof(sluice_real));
+
+    /* 4. Verlet list: count, prefix sum, fill */
+    const double cutoff = (double)grid->support + (double)grid->skin;
+    const double cutoff2 = cutoff * cutoff;
+    sluice_index *begin = grid->list_begin;
+#pragma omp parallel for schedule(dynamic, 256)
+    for (sluice_index i = 0; i < n; i++)
+        begin[i + 1] = visit(grid, pos, i, cutoff2, NULL);
+    begin[0] = 0;
+    size_t total = 0;
+    for (sluice_index i = 0; i < n; i++) {
+        total += begin[i + 1];
+        if (total > UINT32_MAX)
+            return -1;
+        begin[i + 1] = (sluice_index)total;
+    }
+    if (total > grid->list_capacity || !grid->list) {
+        size_t cap = total + total / 4 + 64;
+        sluice_index *list = malloc(cap * sizeof *list);
+        if (!list)
+            return -1;
+        free(grid->list);
+        grid->list = list;
+        grid->list_capacity = cap;
+    }
+    sluice_index *list = grid->list;
+#pragma omp parallel for schedule(dynamic, 256)
+    for (sluice_index i = 0; i < n; i++)
+        (void)visit(grid, pos, i, cutoff2, list + begin[i]);
+
+    grid->count = n;
+    grid->valid = 1;
+    grid->rebuilds++;
+    return 0;
+}
+
+size_t sluice_grid_bytes(const sluice_grid *grid)
+{
+    size_t b = (grid->cell_count + 1) * sizeof(sluice_index);
+    b += (size_t)grid->capacity * (sizeof(sluice_index) + sizeof(uint32_t) + sizeof(sluice_index));
+    b += (size_t)grid->capacity * grid->dimensions * sizeof(sluice_real);
+    b += grid->list_capacity * sizeof(sluice_index);
+    return b;
+}

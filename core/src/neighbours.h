@@ -1,0 +1,70 @@
+/* Neighbour search: a cell-linked grid (cell size >= support + skin) that
+ * sorts particles by cell, and a Verlet list of every pair within
+ * support + skin, rebuilt only when some particle has moved more than skin/2
+ * since the last build. Each evaluation turns the list into pair batches (see
+ * pairs.h). */
+#ifndef SLUICE_NEIGHBOURS_H
+#define SLUICE_NEIGHBOURS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "particles.h"
+#include "sluice/plugin.h"
+
+typedef struct sluice_grid {
+    uint32_t dimensions;
+    int periodic[3];
+    double lo[3], hi[3], length[3];
+    double cell_size[3], inverse_cell_size[3];
+    int64_t cells[3];
+    size_t cell_count;
+    sluice_real support; /* kernel support radius (2h) */
+    sluice_real skin;    /* extra radius of the list, m */
+
+    /* State of the last build (particles in sorted order). */
+    int valid;
+    sluice_index count;
+    sluice_index *cell_start; /* cell_count + 1 */
+    sluice_index *order;      /* capacity: permutation scratch */
+    uint32_t *cell_of;        /* capacity */
+    sluice_real *built[3];    /* positions at the last build */
+    sluice_index capacity;
+
+    /* Verlet list: neighbours of particle i are list[list_begin[i] .. list_begin[i+1]) */
+    sluice_index *list_begin; /* capacity + 1 */
+    sluice_index *list;
+    size_t list_capacity;
+    int threads;
+    size_t *thread_counts;    /* scratch */
+
+    /* Figures for benchmarks. */
+    uint64_t rebuilds;
+} sluice_grid;
+
+/* Sets up the grid over the box [lo, hi). Returns 0, or -1 with *reason set
+ * (a periodic direction shorter than 3 cells, a domain too large to index). */
+int sluice_grid_init(sluice_grid *grid, uint32_t dimensions, const double lo[3], const double hi[3],
+                     const int periodic[3], sluice_real support, sluice_real skin,
+                     const char **reason);
+void sluice_grid_free(sluice_grid *grid);
+
+/* 1 when the list must be rebuilt before the next evaluation: never built,
+ * particle count changed, or some particle moved more than skin/2. */
+int sluice_grid_needs_rebuild(const sluice_grid *grid, const sluice_view *view);
+
+/* Sorts the particles by cell (permuting every column of `particles`), then
+ * rebuilds the cell index and the Verlet list. position_column: the first of
+ * the position columns. Returns 0; -1 on OOM; -2 when a particle lies outside
+ * a non-periodic side of the domain or is not finite (its index, in the order
+ * before sorting, goes to *bad). */
+int sluice_grid_build(sluice_grid *grid, sluice_particles *particles, uint32_t position_column,
+                      sluice_index *bad);
+
+/* Wraps coordinates of periodic directions into [lo, hi). */
+void sluice_grid_wrap(const sluice_grid *grid, sluice_real *position[3], sluice_index count);
+
+/* Bytes held by the grid and the list (memory figures). */
+size_t sluice_grid_bytes(const sluice_grid *grid);
+
+#endif

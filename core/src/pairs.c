@@ -1,0 +1,264 @@
+#include "pairs.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define TARGET_CHUNK 32
+
+static void *aligned_array(size_t count, size_t size)
+{
+    size_t bytes = (count * size + 63) / 64 * 64;
+    return aligned_alloc(64, bytes ? bytes : 64);
+}
+
+static void workspace_free(sluice_pair_workspace *w)
+{
+    free(w->target);
+    free(w->pair_begin);
+    free(w->neighbour);
+    free(w->neighbour_kind);
+    for (int d = 0; d < 3; d++)
+        free(w->offset[d]);
+    free(w->distance);
+    free(w->kernel);
+    free(w->gradient);
+    free(w->gathered_storage);
+    free(w->gathered);
+    w->target = w->pair_begin = w->neighbour = NULL;
+    w->neighbour_kind = NULL;
+    w->offset[0] = w->offset[1] = w->offset[2] = NULL;
+    w->distance = w->kernel = w->gradient = w->gathered_storage = NULL;
+    w->gathered = NULL;
+    w->pair_capacity = w->target_capacity = 0;
+}
+
+/* (Re)allocates a workspace for `pairs` pairs and `slots` gathered columns. */
+static int workspace_reserve(sluice_pair_workspace *w, sluice_index pairs, uint32_t slots)
+{
+    if (w->pair_capacity >= pairs && w->gathered_slots >= slots && w->gathered)
+        return 0;
+    sluice_index cap = w->pair_capacity > pairs ? w->pair_capacity : pairs;
+    uint32_t s = w->gathered_slots > slots ? w->gathered_slots : slots;
+    uint32_t columns = w->column_count;
+    uint64_t p = w->pairs, b = w->batches;
+    workspace_free(w);
+    w->column_count = columns;
+    w->pairs = p;
+    w->batches = b;
+    sluice_index targets = (cap > TARGET_CHUNK ? cap : TARGET_CHUNK) + 1;
+    w->target = aligned_array(targets, sizeof(sluice_index));
+    w->pair_begin = aligned_array(targets + 1, sizeof(sluice_index));
+    w->neighbour = aligned_array(cap, sizeof(sluice_index));
+    w->neighbour_kind = aligned_array(cap, 1);
+    for (int d = 0; d < 3; d++)
+        w->offset[d] = aligned_array(cap, sizeof(sluice_real));
+    w->distance = aligned_array(cap, sizeof(sluice_real));
+    w->kernel = aligned_array(cap, sizeof(sluice_real));
+    w->gradient = aligned_array(cap, sizeof(sluice_real));
+    w->gathered_storage = aligned_array((size_t)cap * (s ? s : 1), sizeof(sluice_real));
+    w->gathered = calloc(columns ? columns : 1, sizeof *w->gathered);
+    if (!w->target || !w->pair_begin || !w->neighbour || !w->neighbour_kind || !w->offset[0] ||
+        !w->offset[1] || !w->offset[2] || !w->distance || !w->kernel || !w->gradient ||
+        !w->gathered_storage || !w->gathered) {
+        workspace_free(w);
+        return -1;
+    }
+    w->pair_capacity = cap;
+    w->target_capacity = targets;
+    w->gathered_slots = s;
+    return 0;
+}
+
+int sluice_pair_engine_init(sluice_pair_engine *engine, int thread_count, sluice_index batch_pairs,
+                            uint32_t column_count)
+{
+    memset(engine, 0, sizeof *engine);
+    engine->thread_count = thread_count > 0 ? thread_count : 1;
+    engine->batch_pairs = batch_pairs ? batch_pairs : 1024;
+    engine->workspaces = calloc((size_t)engine->thread_count, sizeof *engine->workspaces);
+    if (!engine->workspaces)
+        return -1;
+    for (int t = 0; t < engine->thread_count; t++)
+        engine->workspaces[t].column_count = column_count;
+    return 0;
+}
+
+void sluice_pair_engine_free(sluice_pair_engine *engine)
+{
+    if (engine->workspaces)
+        for (int t = 0; t < engine->thread_count; t++)
+            workspace_free(&engine->workspaces[t]);
+    free(engine->workspaces);
+    memset(engine, 0, sizeof *engine);
+}
+
+uint64_t sluice_pair_engine_pairs(const sluice_pair_engine *engine)
+{
+    uint64_t n = 0;
+    for (int t = 0; t < engine->thread_count; t++)
+        n += engine->workspaces[t].pairs;
+    return n;
+}
+
+size_t sluice_pair_engine_bytes(const sluice_pair_engine *engine)
+{
+    size_t b = 0;
+    for (int t = 0; t < engine->thread_count; t++) {
+        const sluice_pair_workspace *w = &engine->workspaces[t];
+        b += (size_t)w->pair_capacity * (2 * sizeof(sluice_index) + 1 + 6 * sizeof(sluice_real) +
+                                         w->gathered_slots * sizeof(sluice_real));
+    }
+    return b;
+}
+
+/* Completes the batch in w (targets of kind `kind`) and hands it to the terms. */
+static void flush(sluice_pair_engine *engine, const sluice_pair_pass *pass,
+                  const sluice_view *view, sluice_pair_workspace *w, sluice_index targets,
+                  sluice_index pairs, uint32_t kind)
+{
+    if (targets == 0)
+        return;
+    sluice_real *restrict r = w->distance;
+#pragma omp simd
+    for (sluice_index p = 0; p < pairs; p++)
+        r[p] = sqrt(r[p]);
+    engine->kernel->kernel(engine->kernel_state, pairs, r, pass->needs_kernel ? w->kernel : NULL,
+                           w->gradient);
+    const sluice_index *restrict nb = w->neighbour;
+    for (uint32_t g = 0; g < pass->gathered_count; g++) {
+        uint32_t column = pass->gathered_columns[g];
+        const sluice_real *restrict src = view->columns[column];
+        sluice_real *restrict dst = w->gathered_storage + (size_t)g * w->pair_capacity;
+#pragma omp simd
+        for (sluice_index p = 0; p < pairs; p++)
+            dst[p] = src[nb[p]];
+        w->gathered[column] = dst;
+    }
+    sluice_pair_batch batch;
+    batch.target_count = targets;
+    batch.target = w->target;
+    batch.pair_begin = w->pair_begin;
+    batch.pair_count = pairs;
+    batch.neighbour = w->neighbour;
+    batch.neighbour_kind = w->neighbour_kind;
+    batch.neighbour_kinds = pass->neighbour_mask[kind];
+    batch.offset[0] = w->offset[0];
+    batch.offset[1] = w->offset[1];
+    batch.offset[2] = view->dimensions == 3 ? w->offset[2] : NULL;
+    batch.distance = r;
+    batch.kernel = pass->needs_kernel ? w->kernel : NULL;
+    batch.kernel_gradient = w->gradient;
+    batch.gathered = w->gathered;
+    batch.kernel_self = engine->kernel_self;
+    for (uint32_t t = 0; t < pass->term_count; t++) {
+        const sluice_pair_term *term = &pass->terms[t];
+        if (term->target_kinds & SLUICE_KIND_MASK(kind))
+            term->component->pair(term->state, view, &batch);
+    }
+    w->pairs += pairs;
+    w->batches++;
+}
+
+static inline double minimum_image(double dx, double length)
+{
+    return dx - length * nearbyint(dx / length);
+}
+
+int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pass,
+                         const sluice_grid *grid, const sluice_view *view)
+{
+    const sluice_index n = view->count;
+    const uint32_t dims = view->dimensions;
+    const double support2 = (double)grid->support * (double)grid->support;
+    const int periodic = grid->periodic[0] || grid->periodic[1] || grid->periodic[2];
+    const sluice_index chunks = (n + TARGET_CHUNK - 1) / TARGET_CHUNK;
+    int failed = 0;
+
+#pragma omp parallel num_threads(engine->thread_count) reduction(| : failed)
+    {
+        int tid = omp_get_thread_num();
+        sluice_pair_workspace *w = &engine->workspaces[tid];
+        if (workspace_reserve(w, engine->batch_pairs, pass->gathered_count) != 0)
+            failed = 1;
+        for (uint32_t c = 0; c < w->column_count && !failed; c++)
+            w->gathered[c] = NULL;
+        const sluice_real *x = view->position[0], *y = view->position[1];
+        const sluice_real *z = dims == 3 ? view->position[2] : view->position[1];
+        const uint8_t *kind = view->kind;
+        const sluice_index *list = grid->list, *begin = grid->list_begin;
+
+#pragma omp for schedule(dynamic, 4)
+        for (sluice_index chunk = 0; chunk < chunks; chunk++) {
+            if (failed)
+                continue;
+            const sluice_index a = chunk * TARGET_CHUNK;
+            const sluice_index b = a + TARGET_CHUNK < n ? a + TARGET_CHUNK : n;
+            for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
+                const uint32_t mask = pass->neighbour_mask[k];
+                if (!mask)
+                    continue;
+                sluice_index t = 0, np = 0;
+                for (sluice_index i = a; i < b; i++) {
+                    if (kind[i] != k)
+                        continue;
+                    const sluice_index m0 = begin[i], m1 = begin[i + 1];
+                    const sluice_index candidates = m1 - m0;
+                    if (np + candidates > w->pair_capacity && t > 0) {
+                        w->pair_begin[t] = np;
+                        flush(engine, pass, view, w, t, np, k);
+                        t = 0;
+                        np = 0;
+                    }
+                    if (candidates > w->pair_capacity) {
+                        if (workspace_reserve(w, candidates, pass->gathered_count) != 0) {
+                            failed = 1;
+                            break;
+                        }
+                        for (uint32_t c = 0; c < w->column_count; c++)
+                            w->gathered[c] = NULL;
+                    }
+                    w->target[t] = i;
+                    w->pair_begin[t] = np;
+                    const double xi = (double)x[i], yi = (double)y[i];
+                    const double zi = dims == 3 ? (double)z[i] : 0.0;
+                    sluice_index *restrict nb = w->neighbour;
+                    uint8_t *restrict nk = w->neighbour_kind;
+                    sluice_real *restrict ox = w->offset[0], *restrict oy = w->offset[1],
+                                          *restrict oz = w->offset[2];
+                    sluice_real *restrict r2 = w->distance;
+                    for (sluice_index m = m0; m < m1; m++) {
+                        const sluice_index j = list[m];
+                        double dx = xi - (double)x[j];
+                        double dy = yi - (double)y[j];
+                        double dz = dims == 3 ? zi - (double)z[j] : 0.0;
+                        if (periodic) {
+                            if (grid->periodic[0])
+                                dx = minimum_image(dx, grid->length[0]);
+                            if (grid->periodic[1])
+                                dy = minimum_image(dy, grid->length[1]);
+                            if (dims == 3 && grid->periodic[2])
+                                dz = minimum_image(dz, grid->length[2]);
+                        }
+                        const double s = dx * dx + dy * dy + dz * dz;
+                        const uint8_t kj = kind[j];
+                        nb[np] = j;
+                        nk[np] = kj;
+                        ox[np] = (sluice_real)dx;
+                        oy[np] = (sluice_real)dy;
+                        oz[np] = (sluice_real)dz;
+                        r2[np] = (sluice_real)s;
+                        np += (sluice_index)((s < support2) & ((mask >> kj) & 1u));
+                    }
+                    t++;
+                }
+                if (failed)
+                    break;
+                w->pair_begin[t] = np;
+                flush(engine, pass, view, w, t, np, k);
+            }
+        }
+    }
+    return failed ? -1 : 0;
+}

@@ -1,0 +1,62 @@
+/* Pair passes: the core turns the Verlet list into batches of pairs within
+ * the kernel support (a few hundred pairs sharing r_ij, |r_ij|, W, F and the
+ * neighbour values of every gathered column) and calls each loaded pair term
+ * once per batch: no function call per pair. Batches hold targets of one
+ * kind; each target is handled by one thread, so terms only write to their
+ * targets and need no atomics, and results do not depend on the thread count. */
+#ifndef SLUICE_PAIRS_H
+#define SLUICE_PAIRS_H
+
+#include "neighbours.h"
+#include "sluice/plugin.h"
+
+typedef struct sluice_pair_term {
+    const sluice_component *component;
+    void *state;
+    uint32_t target_kinds, neighbour_kinds;
+} sluice_pair_term;
+
+typedef struct sluice_pair_pass {
+    uint32_t term_count;
+    sluice_pair_term *terms;
+    uint32_t neighbour_mask[SLUICE_KIND_COUNT]; /* per target kind; 0: kind is not a target */
+    uint32_t gathered_count;
+    uint32_t *gathered_columns; /* REAL columns gathered at j */
+    int needs_kernel;
+} sluice_pair_pass;
+
+typedef struct sluice_pair_workspace {
+    sluice_index pair_capacity, target_capacity;
+    sluice_index *target, *pair_begin, *neighbour;
+    uint8_t *neighbour_kind;
+    sluice_real *offset[3], *distance, *kernel, *gradient;
+    sluice_real *gathered_storage;
+    uint32_t gathered_slots;
+    const sluice_real **gathered; /* column_count pointers */
+    uint32_t column_count;
+    /* statistics */
+    uint64_t pairs, batches;
+} sluice_pair_workspace;
+
+typedef struct sluice_pair_engine {
+    const sluice_component *kernel;
+    void *kernel_state;
+    sluice_real kernel_self;
+    sluice_index batch_pairs; /* target batch size in pairs */
+    int thread_count;
+    sluice_pair_workspace *workspaces;
+} sluice_pair_engine;
+
+int sluice_pair_engine_init(sluice_pair_engine *engine, int thread_count, sluice_index batch_pairs,
+                            uint32_t column_count);
+void sluice_pair_engine_free(sluice_pair_engine *engine);
+
+/* Runs one pass over every particle. Returns 0, or -1 on OOM. */
+int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pass,
+                         const sluice_grid *grid, const sluice_view *view);
+
+/* Pairs handed to terms since the engine was created (all threads). */
+uint64_t sluice_pair_engine_pairs(const sluice_pair_engine *engine);
+size_t sluice_pair_engine_bytes(const sluice_pair_engine *engine);
+
+#endif

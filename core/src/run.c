@@ -1,0 +1,513 @@
+/* Running a simulation: the time loop, the stability watchdog, outputs that
+ * are never left half-written, run.json and the progress line. */
+#define _GNU_SOURCE
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "build_config.h"
+#include "sim_internal.h"
+
+/* ------------------------------------------------------------------ I/O -- */
+
+int sluice_write_file_atomic(const char *path, const void *data, size_t size, char *error,
+                             size_t error_size)
+{
+    size_t n = strlen(path) + 32;
+    char *tmp = malloc(n);
+    if (!tmp) {
+        snprintf(error, error_size, "out of memory writing '%s'", path);
+        return -1;
+    }
+    snprintf(tmp, n, "%s.tmp.%ld", path, (long)getpid());
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) {
+        snprintf(error, error_size, "cannot write '%s': %s", path, strerror(errno));
+        free(tmp);
+        return -1;
+    }
+    const char *p = data;
+    size_t left = size;
+    while (left > 0) {
+        ssize_t w = write(fd, p, left);
+        if (w < 0) {
+            if (errno == EINTR)
+                continue;
+            snprintf(error, error_size, "cannot write '%s': %s", path, strerror(errno));
+            close(fd);
+            unlink(tmp);
+            free(tmp);
+            return -1;
+        }
+        p += w;
+        left -= (size_t)w;
+    }
+    if (close(fd) != 0) {
+        snprintf(error, error_size, "cannot write '%s': %s", path, strerror(errno));
+        unlink(tmp);
+        free(tmp);
+        return -1;
+    }
+    if (rename(tmp, path) != 0) {
+        snprintf(error, error_size, "cannot write '%s': %s", path, strerror(errno));
+        unlink(tmp);
+        free(tmp);
+        return -1;
+    }
+    free(tmp);
+    return 0;
+}
+
+static int write_all(int fd, const char *data, size_t size)
+{
+    while (size > 0) {
+        ssize_t w = write(fd, data, size);
+        if (w < 0) {
+            if (errno == EINTR)
+                continue;
+            return -1;
+        }
+        data += w;
+        size -= (size_t)w;
+    }
+    return 0;
+}
+
+/* Appends one complete line (one write call) to a table, creating the file
+ * with its header first. */
+int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t length)
+{
+    if (table->fd < 0) {
+        size_t n = strlen(table->sim->output_directory) + strlen(table->path) + 2;
+        char *full = malloc(n);
+        if (!full) {
+            table->failed = 1;
+            return SLUICE_ERROR;
+        }
+        snprintf(full, n, "%s/%s", table->sim->output_directory, table->path);
+        free(table->path);
+        table->path = full;
+        table->fd = open(table->path, O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
+        if (table->fd < 0) {
+            table->failed = 1;
+            sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path, strerror(errno));
+            return SLUICE_ERROR;
+        }
+        size_t hl = strlen(table->header);
+        char *header = malloc(hl + 2);
+        if (!header) {
+            table->failed = 1;
+            return SLUICE_ERROR;
+        }
+        memcpy(header, table->header, hl);
+        header[hl] = '\n';
+        int rc = write_all(table->fd, header, hl + 1);
+        free(header);
+        if (rc != 0) {
+            table->failed = 1;
+            sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path, strerror(errno));
+            return SLUICE_ERROR;
+        }
+    }
+    if (write_all(table->fd, line, length) != 0) {
+        table->failed = 1;
+        sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path, strerror(errno));
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
+static int make_directory(const char *path, char *error, size_t size)
+{
+    char *copy = strdup(path);
+    if (!copy) {
+        snprintf(error, size, "out of memory");
+        return -1;
+    }
+    for (char *p = copy + 1; *p; p++) {
+        if (*p != '/')
+            continue;
+        *p = '\0';
+        if (mkdir(copy, 0755) != 0 && errno != EEXIST) {
+            snprintf(error, size, "cannot create output directory '%s': %s", copy,
+                     strerror(errno));
+            free(copy);
+            return -1;
+        }
+        *p = '/';
+    }
+    if (mkdir(copy, 0755) != 0 && errno != EEXIST) {
+        snprintf(error, size, "cannot create output directory '%s': %s", copy, strerror(errno));
+        free(copy);
+        return -1;
+    }
+    free(copy);
+    struct stat st;
+    if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode)) {
+        snprintf(error, size, "output path '%s' is not a directory", path);
+        return -1;
+    }
+    if (access(path, W_OK) != 0) {
+        snprintf(error, size, "cannot write to output directory '%s': %s", path, strerror(errno));
+        return -1;
+    }
+    return 0;
+}
+
+/* ------------------------------------------------------------- watchdog -- */
+
+/* Checks the state after a step: non-finite values in integrated fields,
+ * density outside the band, particles outside the domain, collapsed time
+ * step. Returns 0 when healthy, else fills sim->failure. */
+static int watchdog(sluice_sim *sim)
+{
+    const sluice_view *v = &sim->view;
+    const sluice_scene *scene = &sim->scene;
+    const sluice_index n = v->count;
+    if (sim->dt_limit < scene->watchdog.min_time_step || !(sim->dt_limit > 0)) {
+        sluice_sim_fail(sim,
+                        "step %lld, t = %.9g s: the time step collapsed to %.3g s, below "
+                        "watchdog.min_time_step = %.3g s (the flow has gone unstable: velocities "
+                        "or accelerations have grown without bound)",
+                        (long long)sim->step, sim->time, sim->dt_limit,
+                        (double)scene->watchdog.min_time_step);
+        return -1;
+    }
+    /* state fields: position and every integrated field */
+    uint32_t fields = 0;
+    const sluice_field_entry *checked[64];
+    for (uint32_t f = 0; f < sim->field_count && fields < 64; f++) {
+        const sluice_field_entry *e = &sim->fields[f];
+        if (e->type != SLUICE_TYPE_REAL)
+            continue;
+        int state = strcmp(e->name, "position") == 0;
+        for (uint32_t r = 0; r < sim->rate_count; r++)
+            state |= strcmp(sim->rates[r].state_name, e->name) == 0 ||
+                     strcmp(sim->rates[r].rate_name, e->name) == 0;
+        if (state)
+            checked[fields++] = e;
+    }
+    const double rho0 = (double)sim->rest_density, band = (double)scene->watchdog.density_band;
+    const sluice_real *density =
+        sim->density.column >= 0 ? (const sluice_real *)v->columns[sim->density.column] : NULL;
+    sluice_index first = n;
+    int what = 0; /* 1 non-finite, 2 density band, 3 outside domain */
+    const sluice_field_entry *bad_field = NULL;
+    uint32_t bad_component = 0;
+    for (uint32_t k = 0; k < fields; k++) {
+        const sluice_field_entry *e = checked[k];
+        for (uint32_t c = 0; c < e->components; c++) {
+            const sluice_real *x = v->columns[e->column + (int32_t)c];
+            sluice_index found = n;
+#pragma omp parallel for schedule(static) reduction(min : found)
+            for (sluice_index i = 0; i < n; i++)
+                if (!isfinite(x[i]) && i < found)
+                    found = i;
+            if (found < first) {
+                first = found;
+                what = 1;
+                bad_field = e;
+                bad_component = c;
+            }
+        }
+    }
+    if (!what && density) {
+        sluice_index found = n;
+#pragma omp parallel for schedule(static) reduction(min : found)
+        for (sluice_index i = 0; i < n; i++) {
+            double r = (double)density[i] / rho0 - 1.0;
+            if (!(fabs(r) <= band) && i < found)
+                found = i;
+        }
+        if (found < n) {
+            first = found;
+            what = 2;
+        }
+    }
+    if (!what) {
+        for (uint32_t d = 0; d < v->dimensions; d++) {
+            if (scene->domain.periodic[d])
+                continue;
+            const sluice_real *x = v->position[d];
+            const double lo = (double)scene->domain.min[d], hi = (double)scene->domain.max[d];
+            sluice_index found = n;
+#pragma omp parallel for schedule(static) reduction(min : found)
+            for (sluice_index i = 0; i < n; i++)
+                if (!((double)x[i] >= lo && (double)x[i] < hi) && i < found)
+                    found = i;
+            if (found < first) {
+                first = found;
+                what = 3;
+                bad_component = d;
+            }
+        }
+    }
+    if (!what)
+        return 0;
+    char who[256], writers[512];
+    const sluice_index i = first;
+    if (v->dimensions == 3)
+        snprintf(who, sizeof who, "particle id %llu (%s, index %u) at (%.6g, %.6g, %.6g) m",
+                 (unsigned long long)v->id[i], v->kind[i] == SLUICE_KIND_FLUID ? "fluid" : "wall",
+                 i, (double)v->position[0][i], (double)v->position[1][i], (double)v->position[2][i]);
+    else
+        snprintf(who, sizeof who, "particle id %llu (%s, index %u) at (%.6g, %.6g) m",
+                 (unsigned long long)v->id[i], v->kind[i] == SLUICE_KIND_FLUID ? "fluid" : "wall",
+                 i, (double)v->position[0][i], (double)v->position[1][i]);
+    if (what == 1) {
+        const sluice_real *x = v->columns[bad_field->column + (int32_t)bad_component];
+        char comp[16] = "";
+        if (bad_field->components > 1)
+            snprintf(comp, sizeof comp, "[%u]", bad_component);
+        sluice_sim_fail(sim,
+                        "step %lld, t = %.9g s: %s: field '%s'%s = %g is not finite (written by "
+                        "%s; integrated by '%s')",
+                        (long long)sim->step, sim->time, who, bad_field->name, comp, (double)x[i],
+                        sluice_field_writers(sim, bad_field, writers, sizeof writers),
+                        sim->instances[sim->integrator].name);
+    } else if (what == 2) {
+        const sluice_field_entry *e = NULL;
+        for (uint32_t f = 0; f < sim->field_count; f++)
+            if (strcmp(sim->fields[f].name, "density") == 0)
+                e = &sim->fields[f];
+        sluice_sim_fail(sim,
+                        "step %lld, t = %.9g s: %s: field 'density' = %.6g kg m^-3 is outside the "
+                        "band [%.6g, %.6g] = rest density x (1 -/+ watchdog.density_band) (written "
+                        "by %s; integrated by '%s')",
+                        (long long)sim->step, sim->time, who, (double)density[i],
+                        rho0 * (1 - band), rho0 * (1 + band),
+                        e ? sluice_field_writers(sim, e, writers, sizeof writers) : "?",
+                        sim->instances[sim->integrator].name);
+    } else {
+        sluice_sim_fail(sim,
+                        "step %lld, t = %.9g s: %s left the domain along %c (domain.min/max = "
+                        "%g/%g m; field 'position', integrated by '%s')",
+                        (long long)sim->step, sim->time, who, "xyz"[bad_component],
+                        (double)scene->domain.min[bad_component],
+                        (double)scene->domain.max[bad_component],
+                        sim->instances[sim->integrator].name);
+    }
+    return -1;
+}
+
+/* ------------------------------------------------------------ the loop -- */
+
+static int call_hooks(sluice_sim *sim, int after)
+{
+    for (uint32_t k = 0; k < sim->instance_count; k++) {
+        sluice_instance *in = &sim->instances[k];
+        int (*hook)(void *, sluice_host *) =
+            after ? in->component->after_step : in->component->before_step;
+        if (!hook)
+            continue;
+        if (hook(in->state, &in->host) != SLUICE_OK) {
+            sluice_sim_fail(sim, "plugin '%s' failed in its %s hook at step %lld, t = %.9g s",
+                            in->name, after ? "after-step" : "before-step", (long long)sim->step,
+                            sim->time);
+            return -1;
+        }
+        if (sim->failure[0])
+            return -1;
+    }
+    return 0;
+}
+
+int sluice_sim_begin(sluice_sim *sim, const char *output_directory)
+{
+    if (output_directory) {
+        char error[1024];
+        if (make_directory(output_directory, error, sizeof error) != 0) {
+            sluice_sim_fail(sim, "%s", error);
+            return SLUICE_RUN_FAILED;
+        }
+        sim->output_directory = strdup(output_directory);
+        if (!sim->output_directory)
+            return SLUICE_RUN_FAILED;
+        char path[4096];
+        snprintf(path, sizeof path, "%s/scene.resolved.yaml", output_directory);
+        if (sluice_write_file_atomic(path, sim->resolved_scene, strlen(sim->resolved_scene), error,
+                                     sizeof error) != 0) {
+            sluice_sim_fail(sim, "%s", error);
+            return SLUICE_RUN_FAILED;
+        }
+    }
+    sim->wall_start = sluice_wall_clock();
+    sluice_sim_refresh_view(sim);
+    if (call_hooks(sim, 1) != 0)
+        return SLUICE_RUN_FAILED;
+    return SLUICE_RUN_COMPLETE;
+}
+
+int sluice_sim_step(sluice_sim *sim)
+{
+    if (call_hooks(sim, 0) != 0)
+        return SLUICE_RUN_FAILED;
+    sluice_instance *integrator = &sim->instances[sim->integrator];
+    sim->dt = 0;
+    if (integrator->component->advance(integrator->state, &integrator->host) != SLUICE_OK) {
+        if (!sim->failure[0])
+            sluice_sim_fail(sim, "integrator '%s' failed at step %lld, t = %.9g s", integrator->name,
+                            (long long)sim->step, sim->time);
+        /* a particle leaving the domain during an evaluation is instability */
+        return strstr(sim->failure, "outside the domain") ? SLUICE_RUN_UNSTABLE : SLUICE_RUN_FAILED;
+    }
+    if (!(sim->dt > 0)) {
+        sluice_sim_fail(sim, "integrator '%s' did not take a step at t = %.9g s (time step %g s)",
+                        integrator->name, sim->time, sim->dt);
+        return SLUICE_RUN_UNSTABLE;
+    }
+    sim->time += sim->dt;
+    if (fabs(sim->time - sim->end) <= 1e-12 * (sim->end > 1 ? sim->end : 1))
+        sim->time = sim->end;
+    sim->step++;
+    sluice_grid_wrap(&sim->grid, (sluice_real **)sim->view.position, sim->particles.count);
+    sluice_sim_refresh_view(sim);
+    sim->particle_steps += sim->particles.count;
+    if (sim->step % sim->scene.watchdog.every == 0 && watchdog(sim) != 0)
+        return SLUICE_RUN_UNSTABLE;
+    if (call_hooks(sim, 1) != 0)
+        return SLUICE_RUN_FAILED;
+    return SLUICE_RUN_COMPLETE;
+}
+
+static void json_string(FILE *f, const char *s)
+{
+    fputc('"', f);
+    for (; s && *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\')
+            fprintf(f, "\\%c", c);
+        else if (c < 0x20)
+            fprintf(f, "\\u%04x", c);
+        else
+            fputc(c, f);
+    }
+    fputc('"', f);
+}
+
+static int write_run_json(sluice_sim *sim, int status)
+{
+    char *text = NULL;
+    size_t size = 0;
+    FILE *f = open_memstream(&text, &size);
+    if (!f)
+        return -1;
+    const char *names[] = {"complete", "?", "input_error", "unstable", "failed"};
+    double rate = sim->wall_seconds > 0 ? (double)sim->particle_steps / sim->wall_seconds : 0;
+    fprintf(f, "{\n  \"status\": \"%s\",\n", status >= 0 && status <= 4 ? names[status] : "failed");
+    fprintf(f, "  \"scene\": ");
+    json_string(f, sim->scene.path);
+    fprintf(f, ",\n  \"sluice_version\": \"%s\",\n", SLUICE_VERSION);
+    fprintf(f, "  \"dimensions\": %u,\n", sim->scene.dimensions);
+    fprintf(f, "  \"particles_initial\": %u,\n", sim->particles_initial);
+    fprintf(f, "  \"particles_final\": %u,\n", sim->particles.count);
+    fprintf(f, "  \"steps\": %lld,\n", (long long)sim->step);
+    fprintf(f, "  \"simulated_time\": %.12g,\n", sim->time);
+    fprintf(f, "  \"end_time\": %.12g,\n", sim->end);
+    fprintf(f, "  \"wall_seconds\": %.6f,\n", sim->wall_seconds);
+    fprintf(f, "  \"particle_steps\": %llu,\n", (unsigned long long)sim->particle_steps);
+    fprintf(f, "  \"particle_steps_per_second\": %.6g,\n", rate);
+    fprintf(f, "  \"pair_interactions\": %llu,\n",
+            (unsigned long long)sluice_pair_engine_pairs(&sim->engine));
+    fprintf(f, "  \"neighbour_list_rebuilds\": %llu,\n", (unsigned long long)sim->grid.rebuilds);
+    fprintf(f, "  \"threads\": %d,\n", sim->threads);
+    fprintf(f, "  \"smoothing_length\": %.9g,\n", (double)sim->smoothing_length);
+    fprintf(f, "  \"spacing\": %.9g,\n", (double)sim->spacing);
+    fprintf(f, "  \"failure\": ");
+    json_string(f, sim->failure);
+    fprintf(f, ",\n  \"plugins\": [");
+    for (uint32_t k = 0; k < sim->instance_count; k++) {
+        const sluice_instance *in = &sim->instances[k];
+        fprintf(f, "%s\n    {\"component\": ", k ? "," : "");
+        json_string(f, in->name);
+        fprintf(f, ", \"library\": ");
+        json_string(f, in->library->name);
+        fprintf(f, ", \"version\": ");
+        json_string(f, in->library->version);
+        fprintf(f, ", \"path\": ");
+        json_string(f, in->path);
+        fprintf(f, "}");
+    }
+    fprintf(f, "\n  ]\n}\n");
+    if (fclose(f) != 0) {
+        free(text);
+        return -1;
+    }
+    char path[4096], error[1024];
+    snprintf(path, sizeof path, "%s/run.json", sim->output_directory);
+    int rc = sluice_write_file_atomic(path, text, size, error, sizeof error);
+    if (rc != 0)
+        fprintf(stderr, "sluice: error: %s\n", error);
+    free(text);
+    return rc;
+}
+
+int sluice_sim_end(sluice_sim *sim, int status)
+{
+    sim->wall_seconds = sluice_wall_clock() - sim->wall_start;
+    int finish_status = status == SLUICE_RUN_COMPLETE ? SLUICE_FINISH_COMPLETE : SLUICE_FINISH_FAILED;
+    for (uint32_t k = 0; k < sim->instance_count; k++) {
+        sluice_instance *in = &sim->instances[k];
+        if (in->component->finish && in->component->finish(in->state, &in->host, finish_status) != SLUICE_OK) {
+            sluice_sim_fail(sim, "plugin '%s' failed to finish its output", in->name);
+            if (status == SLUICE_RUN_COMPLETE)
+                status = SLUICE_RUN_FAILED;
+        }
+    }
+    for (size_t t = 0; t < sim->table_count; t++)
+        if (sim->tables[t]->fd >= 0) {
+            close(sim->tables[t]->fd);
+            sim->tables[t]->fd = -1;
+        }
+    if (sim->output_directory && write_run_json(sim, status) != 0 && status == SLUICE_RUN_COMPLETE)
+        status = SLUICE_RUN_FAILED;
+    return status;
+}
+
+static void progress_line(sluice_sim *sim, int final)
+{
+    double now = sluice_wall_clock();
+    if (!final && now - sim->last_progress < 0.5)
+        return;
+    sim->last_progress = now;
+    double elapsed = now - sim->wall_start;
+    double rate = elapsed > 0 ? (double)sim->step / elapsed : 0;
+    double eta = sim->time > 0 ? elapsed * (sim->end - sim->time) / sim->time : 0;
+    int h = (int)(eta / 3600), m = (int)(fmod(eta, 3600) / 60), s = (int)fmod(eta, 60);
+    fprintf(stderr,
+            "\r  t %.4f / %.4f s   step %lld   dt %.2e s   %u particles   %.0f steps/s   ETA "
+            "%d:%02d:%02d  ",
+            sim->time, sim->end, (long long)sim->step, sim->dt, sim->particles.count, rate, h, m, s);
+    if (final)
+        fputc('\n', stderr);
+    fflush(stderr);
+}
+
+int sluice_sim_run(sluice_sim *sim, const sluice_run_options *options)
+{
+    sim->progress = options->progress;
+    sim->quiet = options->quiet;
+    int status = sluice_sim_begin(sim, options->output_directory);
+    if (status != SLUICE_RUN_COMPLETE) {
+        if (!sim->output_directory)
+            return status; /* nothing was written */
+        return sluice_sim_end(sim, status);
+    }
+    const double end = sim->end;
+    while (sim->time < end - 1e-12 * (end > 1 ? end : 1)) {
+        status = sluice_sim_step(sim);
+        if (status != SLUICE_RUN_COMPLETE)
+            break;
+        if (sim->progress)
+            progress_line(sim, 0);
+    }
+    if (sim->progress)
+        progress_line(sim, 1);
+    return sluice_sim_end(sim, status);
+}

@@ -1,0 +1,89 @@
+/* The scene file: the core's own sections (dimensions, particles, time,
+ * domain, geometry, initial state, neighbour search, watchdog, plugin list),
+ * validated against parameter tables like every plugin's parameters. */
+#ifndef SLUICE_SCENE_H
+#define SLUICE_SCENE_H
+
+#include "arena.h"
+#include "diag.h"
+#include "geometry.h"
+#include "sluice/plugin.h"
+#include "yaml_tree.h"
+
+typedef enum sluice_initial_density {
+    SLUICE_INITIAL_HYDROSTATIC = 0,
+    SLUICE_INITIAL_REST = 1
+} sluice_initial_density;
+
+typedef struct sluice_scene_fluid {
+    sluice_region region;
+    sluice_real velocity[3];
+    int has_surface;
+    sluice_real surface; /* free-surface level along the vertical (last) axis */
+    const sluice_node *node;
+} sluice_scene_fluid;
+
+typedef struct sluice_scene_wall {
+    sluice_wall_geometry geometry;
+    const char *scheme; /* NULL: the only loaded wall scheme */
+    const char *name;
+    const sluice_node *node;
+} sluice_scene_wall;
+
+typedef struct sluice_scene_plugin {
+    const char *name;
+    sluice_node *key;      /* the key node in `plugins` (position for messages) */
+    sluice_node **section; /* slot of its parameter mapping in the tree */
+} sluice_scene_plugin;
+
+typedef struct sluice_scene {
+    char *path;      /* as given */
+    char *directory; /* absolute directory of the scene file */
+    sluice_node *root;
+    sluice_arena *arena;
+
+    uint32_t dimensions;
+    const char *title;
+    struct {
+        sluice_real spacing, smoothing_length_ratio, rest_density;
+        sluice_real lattice_origin[3];
+    } particles;
+    struct {
+        sluice_real end, max_step;
+    } time;
+    struct {
+        sluice_real min[3], max[3];
+        int periodic[3];
+    } domain;
+    sluice_initial_density initial_density;
+    struct {
+        sluice_real skin; /* fraction of the kernel support */
+        int64_t batch_pairs;
+    } neighbour_search;
+    struct {
+        sluice_real density_band; /* relative to the rest density */
+        sluice_real min_time_step;
+        int64_t every;
+    } watchdog;
+    char **plugin_path; /* absolute directories */
+    size_t plugin_path_count;
+
+    sluice_scene_fluid *fluids;
+    size_t fluid_count;
+    sluice_scene_wall *walls;
+    size_t wall_count;
+    sluice_scene_plugin *plugins;
+    size_t plugin_count;
+} sluice_scene;
+
+/* Parses the file, applies the overrides ("dotted.key=value") and validates
+ * the core sections. Returns 0, or the number of errors (messages in diag);
+ * on error the scene may be partly filled and must still be freed. */
+int sluice_scene_load(sluice_scene *scene, const char *path, const char *const *overrides,
+                      size_t override_count, sluice_diag *diag);
+void sluice_scene_free(sluice_scene *scene);
+
+/* Position helpers for messages about a node. */
+const char *sluice_node_file(const sluice_node *node, const sluice_scene *scene);
+
+#endif

@@ -1,0 +1,73 @@
+/* A simulation: the scene, its loaded components, the particle store, the
+ * neighbour search and the time loop. The `sluice` program is a thin command
+ * line over this; tests and benchmarks drive it directly. */
+#ifndef SLUICE_SIM_H
+#define SLUICE_SIM_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "diag.h"
+#include "sluice/plugin.h"
+
+typedef struct sluice_sim sluice_sim;
+
+typedef struct sluice_load_options {
+    const char *const *overrides; /* "dotted.key=value" */
+    size_t override_count;
+    int threads;                  /* 0: OpenMP default */
+    int check_only;               /* validate and build the initial state, no output */
+} sluice_load_options;
+
+typedef struct sluice_run_options {
+    const char *output_directory;
+    int progress;  /* one progress line on stderr */
+    int quiet;     /* no informational messages */
+} sluice_run_options;
+
+typedef enum sluice_run_status {
+    SLUICE_RUN_COMPLETE = 0,
+    SLUICE_RUN_INPUT_ERROR = 2,   /* bad scene or plugin: nothing was run */
+    SLUICE_RUN_UNSTABLE = 3,      /* the watchdog stopped the run */
+    SLUICE_RUN_FAILED = 4         /* I/O error, out of memory, a plugin failed */
+} sluice_run_status;
+
+/* Loads and validates a scene, loads its plugins and builds the initial
+ * state. On failure returns NULL with the messages in diag. */
+sluice_sim *sluice_sim_load(const char *scene_path, const sluice_load_options *options,
+                            sluice_diag *diag);
+void sluice_sim_free(sluice_sim *sim);
+
+/* Runs to the end time. Returns a sluice_run_status. */
+int sluice_sim_run(sluice_sim *sim, const sluice_run_options *options);
+
+/* Step-wise use (tests, benchmarks). begin() prepares outputs (may be NULL
+ * directory for none), step() advances one step, end() finishes. */
+int sluice_sim_begin(sluice_sim *sim, const char *output_directory);
+int sluice_sim_step(sluice_sim *sim);
+int sluice_sim_end(sluice_sim *sim, int status);
+
+/* Introspection. */
+const sluice_view *sluice_sim_view(sluice_sim *sim);
+int sluice_sim_field(sluice_sim *sim, const char *name, sluice_field *out);
+double sluice_sim_time(const sluice_sim *sim);
+double sluice_sim_end_time(const sluice_sim *sim);
+int64_t sluice_sim_steps(const sluice_sim *sim);
+uint32_t sluice_sim_dimensions(const sluice_sim *sim);
+const char *sluice_sim_resolved_scene(const sluice_sim *sim);
+/* Fields in declaration order: name and first column (for layout checks). */
+uint32_t sluice_sim_field_count(const sluice_sim *sim);
+const char *sluice_sim_field_name(const sluice_sim *sim, uint32_t index);
+/* Memory and work figures. */
+size_t sluice_sim_bytes(const sluice_sim *sim);
+uint64_t sluice_sim_pair_count(const sluice_sim *sim);
+uint64_t sluice_sim_neighbour_rebuilds(const sluice_sim *sim);
+uint64_t sluice_sim_particle_steps(const sluice_sim *sim);
+int sluice_sim_threads(const sluice_sim *sim);
+/* The messages of the last failure (watchdog, plugin error), or "". */
+const char *sluice_sim_failure(const sluice_sim *sim);
+
+/* Lists every plugin on the search path (sluice inspect). */
+int sluice_inspect(FILE *out, const char *component, int markdown);
+
+#endif

@@ -1,0 +1,137 @@
+/* Internal layout of a simulation, shared by sim.c (loading, API table),
+ * run.c (time loop, watchdog, outputs) and inspect.c. Not installed. */
+#ifndef SLUICE_SIM_INTERNAL_H
+#define SLUICE_SIM_INTERNAL_H
+
+#include "diag.h"
+#include "neighbours.h"
+#include "pairs.h"
+#include "particles.h"
+#include "registry.h"
+#include "scene.h"
+#include "sim.h"
+
+#define SLUICE_CORE_INSTANCE UINT32_MAX
+
+typedef struct sluice_declarer {
+    uint32_t instance; /* SLUICE_CORE_INSTANCE for the core */
+    uint32_t access;
+} sluice_declarer;
+
+typedef struct sluice_field_entry {
+    char *name, *units, *doc, *rate_of;
+    sluice_type type;
+    uint32_t components;
+    uint32_t flags;
+    uint32_t kinds; /* integrated kinds (rate fields) */
+    int32_t column;
+    sluice_declarer *declarers;
+    uint32_t declarer_count;
+} sluice_field_entry;
+
+typedef struct sluice_constant_entry {
+    char *name, *unit;
+    sluice_real values[3];
+    uint32_t count;
+    uint32_t publisher;
+} sluice_constant_entry;
+
+struct sluice_host {
+    sluice_sim *sim;
+    uint32_t instance;
+};
+
+typedef struct sluice_instance {
+    const sluice_component *component;
+    const sluice_library *library;
+    const char *path;
+    const char *name;
+    sluice_node *key; /* position in the scene */
+    void *config;
+    void *state;
+    int created;
+    sluice_host host;
+} sluice_instance;
+
+typedef struct sluice_pass {
+    int is_pair;
+    uint32_t instance; /* particle pass */
+    sluice_pair_pass pair;
+} sluice_pass;
+
+struct sluice_table {
+    sluice_sim *sim;
+    char *path;
+    char *header;
+    int fd;
+    int failed;
+};
+
+typedef enum sluice_phase {
+    SLUICE_PHASE_CREATE = 0,
+    SLUICE_PHASE_BIND = 1,
+    SLUICE_PHASE_INITIALISE = 2,
+    SLUICE_PHASE_RUN = 3
+} sluice_phase;
+
+struct sluice_sim {
+    sluice_scene scene;
+    sluice_registry registry;
+    sluice_diag *diag; /* during loading only */
+    sluice_phase phase;
+    int check_only;
+
+    sluice_instance *instances;
+    uint32_t instance_count;
+    int32_t kernel, integrator;
+
+    sluice_field_entry *fields;
+    uint32_t field_count, column_count;
+    sluice_constant_entry *constants;
+    uint32_t constant_count;
+    sluice_rate *rates;
+    uint32_t rate_count;
+    sluice_wall *walls;
+
+    sluice_particles particles;
+    sluice_view view;
+    sluice_field position, kind, id, mass, velocity, density; /* column -1 when absent */
+    sluice_id next_id;
+    sluice_real rest_density, spacing, smoothing_length, support;
+
+    sluice_grid grid;
+    sluice_pair_engine engine;
+    sluice_pass *passes;
+    uint32_t pass_count;
+    uint32_t *accumulate_columns;
+    uint32_t accumulate_count;
+
+    /* time */
+    double time, dt, dt_limit, end;
+    int64_t step;
+    double *requests;
+    size_t request_count, request_capacity;
+
+    /* run */
+    char *output_directory;
+    int threads;
+    double wall_start, wall_seconds;
+    uint64_t particle_steps;
+    sluice_index particles_initial;
+    char *resolved_scene;
+    char failure[4096];
+    sluice_table **tables;
+    size_t table_count;
+    int progress, quiet;
+    double last_progress;
+};
+
+/* sim.c */
+void sluice_sim_refresh_view(sluice_sim *sim);
+void sluice_sim_fail(sluice_sim *sim, const char *format, ...) SLUICE_PRINTF(2, 3);
+int sluice_sim_evaluate(sluice_sim *sim);
+const char *sluice_field_writers(const sluice_sim *sim, const sluice_field_entry *field,
+                                 char *buffer, size_t size);
+double sluice_wall_clock(void);
+
+#endif

@@ -1,0 +1,182 @@
+/* delta-SPH density diffusion (seed 002 with delta = 0.1, as in DualSPHysics):
+ *   d rho_i/dt += delta h c0 sum_j psi_ij . grad_i W_ij V_j,  V_j = m_j / rho_j,
+ * between fluid particles only.
+ *  - form molteni_colagrossi (Molteni & Colagrossi 2009):
+ *      psi_ij = 2 (rho_j - rho_i) r_ji / (r^2 + eta^2)
+ *    diffuses every density difference, including the hydrostatic one: a
+ *    column at rest slowly loses its hydrostatic pressure.
+ *  - form fourtakas (Fourtakas et al. 2019):
+ *      psi_ij = 2 (rho_j - rho_i - rho^H_ji) r_ji / (r^2 + eta^2),
+ *      rho^H_ji = rho0 (g . r_ji) / c0^2
+ *    (the linearised hydrostatic density difference) diffuses only the
+ *    departure from hydrostatics, so a tank at rest keeps rho g H.
+ * It damps the high-frequency density (pressure) noise of weakly
+ * compressible SPH. */
+#include "plugin_util.h"
+
+typedef struct delta_config {
+    sluice_real delta;
+    int form;
+} delta_config;
+
+enum { FORM_MOLTENI_COLAGROSSI = 0, FORM_FOURTAKAS = 1 };
+
+typedef struct delta_state {
+    const sluice_api *api;
+    int form;
+    uint32_t dims;
+    sluice_real coefficient, eta2, hydrostatic[3];
+    sluice_field density, mass, density_rate;
+} delta_state;
+
+static const sluice_param_spec params[] = {
+    {"delta", SLUICE_PARAM_REAL, offsetof(delta_config, delta), "0.1", 0, 1,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
+     "diffusion coefficient delta (seed 002 and DualSPHysics: 0.1)", NULL, 0},
+    {"form", SLUICE_PARAM_ENUM, offsetof(delta_config, form), "fourtakas", 0, 0, 0, NULL,
+     "molteni_colagrossi: diffuse rho_j - rho_i; fourtakas: diffuse its departure from "
+     "hydrostatics (needs gravity)",
+     "molteni_colagrossi|fourtakas", 0},
+};
+
+static const sluice_field_spec fields[] = {
+    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
+     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
+    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
+     "particle mass"},
+    {"density_rate", SLUICE_TYPE_REAL, 1, "kg m^-3 s^-1", SLUICE_ACCUMULATE, 0, "density",
+     SLUICE_KIND_MASK(SLUICE_KIND_FLUID) | SLUICE_KIND_MASK(SLUICE_KIND_WALL),
+     "time derivative of the density"},
+};
+
+static int delta_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
+{
+    const delta_config *c = config;
+    delta_state *s = sluice_util_state(api, host, sizeof *s);
+    if (!s)
+        return SLUICE_ERROR;
+    s->api = api;
+    sluice_real h;
+    if (sluice_util_constant(api, host, "smoothing_length", &h) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    sluice_real dims;
+    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    s->dims = (uint32_t)dims;
+    s->form = c->form;
+    s->coefficient = c->delta * h; /* times c0, known in bind */
+    s->eta2 = (sluice_real)0.01 * h * h;
+    *state = s;
+    return SLUICE_OK;
+}
+
+static int delta_bind(void *state, sluice_host *host)
+{
+    delta_state *s = state;
+    sluice_real c0;
+    if (sluice_util_constant(s->api, host, "speed_of_sound", &c0) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->coefficient *= 2 * c0;
+    if (s->form == FORM_FOURTAKAS) {
+        sluice_real g[3] = {0, 0, 0}, rho0;
+        if (s->api->constant(host, "gravity", g, 3) == 0) {
+            s->api->error(host, "form fourtakas removes the hydrostatic density difference and "
+                                "needs gravity: load the gravity plugin or use form "
+                                "molteni_colagrossi");
+            return SLUICE_ERROR;
+        }
+        if (sluice_util_constant(s->api, host, "rest_density", &rho0) != SLUICE_OK)
+            return SLUICE_ERROR;
+        /* rho^H_ji = rho0 (g . r_ji) / c0^2 = -(rho0 / c0^2) g . r_ij */
+        for (int d = 0; d < 3; d++)
+            s->hydrostatic[d] = -rho0 * g[d] / (c0 * c0);
+    }
+    static const char *const names[] = {"density", "mass", "density_rate"};
+    sluice_field f[3];
+    if (sluice_util_fields(s->api, host, names, f, 3) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->density = f[0];
+    s->mass = f[1];
+    s->density_rate = f[2];
+    return SLUICE_OK;
+}
+
+static void delta_destroy(void *state)
+{
+    free(state);
+}
+
+static inline void delta_pairs(const delta_state *s, const sluice_view *v,
+                               const sluice_pair_batch *b, const int fourtakas, const uint32_t dims)
+{
+    const sluice_real *restrict rho = sluice_real_column(v, s->density, 0);
+    const sluice_real *restrict rhoj = b->gathered[s->density.column];
+    const sluice_real *restrict mj = b->gathered[s->mass.column];
+    const sluice_real *restrict F = b->kernel_gradient;
+    const sluice_real *restrict r = b->distance;
+    const sluice_real *restrict rx = b->offset[0], *restrict ry = b->offset[1];
+    const sluice_real *restrict rz = dims == 3 ? b->offset[2] : b->offset[1];
+    const uint8_t *restrict kj = b->neighbour_kind;
+    sluice_real *restrict rate = sluice_real_column(v, s->density_rate, 0);
+    const sluice_real eta2 = s->eta2, coefficient = s->coefficient;
+    const sluice_real hx = s->hydrostatic[0], hy = s->hydrostatic[1], hz = s->hydrostatic[2];
+    for (sluice_index t = 0; t < b->target_count; t++) {
+        const sluice_index i = b->target[t];
+        const sluice_real rhoi = rho[i];
+        sluice_real sum = 0;
+#pragma omp simd reduction(+ : sum)
+        for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
+            /* psi_ij . grad_i W_ij = 2 d_ji r_ji . r_ij F / (r^2 + eta^2)
+             *                     = -2 d_ji r^2 F / (r^2 + eta^2) */
+            sluice_real difference = rhoj[k] - rhoi;
+            if (fourtakas) {
+                sluice_real h = hx * rx[k] + hy * ry[k];
+                if (dims == 3)
+                    h += hz * rz[k];
+                difference -= h;
+            }
+            const sluice_real r2 = r[k] * r[k];
+            const sluice_real term = difference * r2 * F[k] / (r2 + eta2) * mj[k] / rhoj[k];
+            sum += kj[k] == SLUICE_KIND_FLUID ? term : 0;
+        }
+        rate[i] -= coefficient * sum;
+    }
+}
+
+static void delta_pair(void *state, const sluice_view *v, const sluice_pair_batch *b)
+{
+    const delta_state *s = state;
+    if (s->form == FORM_FOURTAKAS) {
+        if (v->dimensions == 3)
+            delta_pairs(s, v, b, 1, 3);
+        else
+            delta_pairs(s, v, b, 1, 2);
+    } else {
+        delta_pairs(s, v, b, 0, v->dimensions);
+    }
+}
+
+static const sluice_component components[] = {{
+    .name = "delta_sph",
+    .summary = "delta-SPH density diffusion (Molteni & Colagrossi or Fourtakas), fluid pairs",
+    .reference = "Molteni & Colagrossi (2009); Fourtakas et al. (2019); seed 002 (delta = 0.1)",
+    .dimensions = SLUICE_DIMS_ALL,
+    .params = params,
+    .param_count = SLUICE_COUNT(params),
+    .config_size = sizeof(delta_config),
+    .fields = fields,
+    .field_count = SLUICE_COUNT(fields),
+    .target_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+    .neighbour_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+    .create = delta_create,
+    .destroy = delta_destroy,
+    .bind = delta_bind,
+    .pair = delta_pair,
+}};
+
+SLUICE_DEFINE_LIBRARY("delta_sph", "1.0.0", "delta-SPH density diffusion", SLUICE_DIMS_ALL,
+                      components)

@@ -1,0 +1,984 @@
+/* HDF5 particle snapshots with an XDMF 3 index for ParaView / VisIt.
+ *
+ * Every `interval` seconds of simulated time (t = 0, interval, 2 interval, ...,
+ * the core ends steps exactly on these times) and once more at the end of the
+ * run, the particles are written to DIR/<prefix>_<index>.h5 (index with at
+ * least six digits). A file is built complete in memory, written under a
+ * temporary name in the same directory and renamed, so a reader never sees a
+ * half-written snapshot. When the run fails (the watchdog stopped
+ * an unstable run, or another failure) the final snapshot is still written:
+ * it holds the state that made the run stop, and its root attribute `status`
+ * is "failed" (every other snapshot has "ok").
+ *
+ * Layout of a snapshot, all at the root group:
+ *  - one dataset per field, named as the field: scalars [N], vectors and other
+ *    multi-component fields [N, components] (particle-major); REAL as native
+ *    double, UINT8 as uint8, INT32 as int32, ID as uint64; string attributes
+ *    `units` and `description`;
+ *  - attributes time (double, s), step (int64), dimensions (int),
+ *    particle_count (uint64), smoothing_length and spacing (double, m),
+ *    scene (the fully resolved scene, YAML text), plugins (one line per loaded
+ *    plugin: "component library version path"), status ("ok" or "failed").
+ *    Strings are variable-length UTF-8.
+ *
+ * DIR/<prefix>.xdmf is rewritten atomically after every snapshot: a temporal
+ * collection of every snapshot so far, each a Uniform grid with Polyvertex
+ * topology, Geometry XY / XYZ from /position and one Attribute per written
+ * field. File names in it are relative, so the run directory can be moved.
+ *
+ * Fields written: `fields: ""` (the default) writes every field flagged
+ * SLUICE_FIELD_OUTPUT; otherwise `fields` is a comma-separated list of field
+ * names, and position, kind and id are always written in addition. */
+#define _POSIX_C_SOURCE 200809L
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <hdf5.h>
+
+#include "plugin_util.h"
+
+#define H5W_NONE ((hid_t)-1)
+#define H5W_PATH_MAX 4096
+#define H5W_PREFIX_MAX 200
+/* rows per chunk are chosen for about this many bytes per chunk */
+#define H5W_CHUNK_BYTES ((size_t)1 << 20)
+
+typedef struct h5w_config {
+    sluice_real interval;
+    const char *prefix;
+    const char *fields;
+    int64_t compression;
+} h5w_config;
+
+/* A field chosen for output, copied from the core's field table. */
+typedef struct h5w_field {
+    char *name, *units, *doc;
+    sluice_type type;
+    uint32_t components;
+    int32_t column;
+} h5w_field;
+
+/* A growable text buffer. */
+typedef struct h5w_text {
+    char *data;
+    size_t length, capacity;
+    int failed; /* out of memory: the text is incomplete */
+} h5w_text;
+
+typedef struct h5w_state {
+    const sluice_api *api;
+    double interval;
+    int compression;
+    char *prefix;
+    /* explicit `fields` list (empty: every output field) */
+    char **names;
+    uint32_t name_count;
+    /* resolved in initialise() */
+    h5w_field *fields;
+    uint32_t field_count;
+    char *plugins; /* the `plugins` attribute text */
+    /* schedule: the next regular snapshot is at schedule * interval */
+    int64_t schedule;
+    uint64_t snapshots; /* files written; the next file's index */
+    int have_last;
+    int64_t last_step;
+    double last_time;
+    int disabled; /* no output directory (sluice check, library use): write nothing */
+    int broken;   /* a write failed and was reported: do not try again in finish() */
+    /* interleaving buffer for multi-component fields */
+    unsigned char *scratch;
+    size_t scratch_size;
+    /* XDMF document: header and grids; the footer is appended for each write
+     * and removed again */
+    h5w_text xdmf;
+} h5w_state;
+
+static const sluice_param_spec params[] = {
+    {"interval", SLUICE_PARAM_REAL, offsetof(h5w_config, interval), "0.05", 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s",
+     "simulated time between snapshots (the first is at t = 0; a final one is written at the "
+     "end of the run)",
+     NULL, 0},
+    {"prefix", SLUICE_PARAM_STRING, offsetof(h5w_config, prefix), "particles", 0, 0, 0, NULL,
+     "file name prefix in the output directory: <prefix>_000000.h5, ... and <prefix>.xdmf", NULL,
+     0},
+    {"fields", SLUICE_PARAM_STRING, offsetof(h5w_config, fields), "", 0, 0, 0, NULL,
+     "comma-separated field names to write (position, kind and id are always written); empty: "
+     "every field flagged for output",
+     NULL, 0},
+    {"compression", SLUICE_PARAM_INT, offsetof(h5w_config, compression), "0", 0, 9,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
+     "deflate level of chunked datasets (with byte shuffling); 0: contiguous, uncompressed",
+     NULL, 0},
+};
+
+/* ------------------------------------------------------------- helpers -- */
+
+static char *copy_string(const char *s)
+{
+    size_t n = strlen(s ? s : "") + 1;
+    char *d = malloc(n);
+    if (d)
+        memcpy(d, s ? s : "", n);
+    return d;
+}
+
+static void text_reserve(h5w_text *t, size_t extra)
+{
+    if (t->failed)
+        return;
+    if (t->length + extra + 1 <= t->capacity)
+        return;
+    size_t cap = t->capacity ? t->capacity : 4096;
+    while (cap < t->length + extra + 1) {
+        if (cap > ((size_t)-1) / 2) {
+            t->failed = 1;
+            return;
+        }
+        cap *= 2;
+    }
+    char *grown = realloc(t->data, cap);
+    if (!grown) {
+        t->failed = 1;
+        return;
+    }
+    t->data = grown;
+    t->capacity = cap;
+}
+
+static void text_append(h5w_text *t, const char *s, size_t n)
+{
+    text_reserve(t, n);
+    if (t->failed)
+        return;
+    memcpy(t->data + t->length, s, n);
+    t->length += n;
+    t->data[t->length] = '\0';
+}
+
+static void text_printf(h5w_text *t, const char *format, ...) SLUICE_PRINTF(2, 3);
+static void text_printf(h5w_text *t, const char *format, ...)
+{
+    if (t->failed)
+        return;
+    va_list ap;
+    va_start(ap, format);
+    int n = vsnprintf(NULL, 0, format, ap);
+    va_end(ap);
+    if (n < 0) {
+        t->failed = 1;
+        return;
+    }
+    text_reserve(t, (size_t)n);
+    if (t->failed)
+        return;
+    va_start(ap, format);
+    vsnprintf(t->data + t->length, (size_t)n + 1, format, ap);
+    va_end(ap);
+    t->length += (size_t)n;
+}
+
+/* Appends s with the five XML special characters escaped. */
+static void text_xml(h5w_text *t, const char *s)
+{
+    for (; *s; s++) {
+        switch (*s) {
+        case '&': text_append(t, "&amp;", 5); break;
+        case '<': text_append(t, "&lt;", 4); break;
+        case '>': text_append(t, "&gt;", 4); break;
+        case '"': text_append(t, "&quot;", 6); break;
+        case '\'': text_append(t, "&apos;", 6); break;
+        default: text_append(t, s, 1); break;
+        }
+    }
+}
+
+/* Edit distance of two short names (for "did you mean"); large when long. */
+static size_t edit_distance(const char *a, const char *b)
+{
+    size_t la = strlen(a), lb = strlen(b);
+    if (la > 63 || lb > 63)
+        return (size_t)-1;
+    size_t row[64];
+    for (size_t j = 0; j <= lb; j++)
+        row[j] = j;
+    for (size_t i = 1; i <= la; i++) {
+        size_t diagonal = row[0];
+        row[0] = i;
+        for (size_t j = 1; j <= lb; j++) {
+            size_t above = row[j];
+            size_t best = diagonal + (a[i - 1] != b[j - 1]);
+            if (above + 1 < best)
+                best = above + 1;
+            if (row[j - 1] + 1 < best)
+                best = row[j - 1] + 1;
+            row[j] = best;
+            diagonal = above;
+        }
+    }
+    return row[lb];
+}
+
+/* Index of field `name` in the core's field table, or -1. */
+static int64_t find_field(const sluice_api *api, sluice_host *host, const char *name)
+{
+    uint32_t count = api->field_count(host);
+    for (uint32_t f = 0; f < count; f++) {
+        sluice_field_spec spec;
+        if (api->field_info(host, f, &spec, NULL) == SLUICE_OK && spec.name &&
+            strcmp(spec.name, name) == 0)
+            return (int64_t)f;
+    }
+    return -1;
+}
+
+/* ----------------------------------------------------------- lifecycle -- */
+
+static void h5w_destroy(void *state)
+{
+    h5w_state *s = state;
+    if (!s)
+        return;
+    for (uint32_t i = 0; i < s->name_count; i++)
+        free(s->names[i]);
+    free(s->names);
+    for (uint32_t i = 0; i < s->field_count; i++) {
+        free(s->fields[i].name);
+        free(s->fields[i].units);
+        free(s->fields[i].doc);
+    }
+    free(s->fields);
+    free(s->prefix);
+    free(s->plugins);
+    free(s->scratch);
+    free(s->xdmf.data);
+    free(s);
+}
+
+/* Splits the `fields` text into names (trimmed, empty entries ignored,
+ * duplicates dropped). */
+static int parse_names(h5w_state *s, const char *text)
+{
+    const char *p = text ? text : "";
+    while (*p) {
+        const char *end = strchr(p, ',');
+        if (!end)
+            end = p + strlen(p);
+        const char *a = p, *b = end;
+        while (a < b && (*a == ' ' || *a == '\t' || *a == '\n' || *a == '\r'))
+            a++;
+        while (b > a && (b[-1] == ' ' || b[-1] == '\t' || b[-1] == '\n' || b[-1] == '\r'))
+            b--;
+        if (b > a) {
+            size_t n = (size_t)(b - a);
+            int duplicate = 0;
+            for (uint32_t i = 0; i < s->name_count; i++)
+                if (strlen(s->names[i]) == n && memcmp(s->names[i], a, n) == 0)
+                    duplicate = 1;
+            if (!duplicate) {
+                char **grown = realloc(s->names, (s->name_count + 1) * sizeof *grown);
+                if (!grown)
+                    return SLUICE_ERROR;
+                s->names = grown;
+                char *name = malloc(n + 1);
+                if (!name)
+                    return SLUICE_ERROR;
+                memcpy(name, a, n);
+                name[n] = '\0';
+                s->names[s->name_count++] = name;
+            }
+        }
+        p = *end ? end + 1 : end;
+    }
+    return SLUICE_OK;
+}
+
+static int h5w_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
+{
+    const h5w_config *c = config;
+    h5w_state *s = sluice_util_state(api, host, sizeof *s);
+    if (!s)
+        return SLUICE_ERROR;
+    s->api = api;
+    s->interval = (double)c->interval;
+    s->compression = (int)c->compression;
+    const char *prefix = c->prefix ? c->prefix : "";
+    if (!*prefix || strchr(prefix, '/') || strcmp(prefix, ".") == 0 ||
+        strcmp(prefix, "..") == 0) {
+        api->error(host,
+                   "prefix '%s' is not a file name: give a non-empty name without '/' (files "
+                   "are written into the run's output directory)",
+                   prefix);
+        h5w_destroy(s);
+        return SLUICE_ERROR;
+    }
+    if (strlen(prefix) > H5W_PREFIX_MAX) {
+        api->error(host, "prefix is longer than %d bytes", H5W_PREFIX_MAX);
+        h5w_destroy(s);
+        return SLUICE_ERROR;
+    }
+    for (const char *p = prefix; *p; p++)
+        if ((unsigned char)*p < 0x20) {
+            api->error(host, "prefix contains a control character; give a plain file name");
+            h5w_destroy(s);
+            return SLUICE_ERROR;
+        }
+    s->prefix = copy_string(prefix);
+    if (!s->prefix || parse_names(s, c->fields) != SLUICE_OK) {
+        api->error(host, "out of memory");
+        h5w_destroy(s);
+        return SLUICE_ERROR;
+    }
+    if (s->compression > 0) {
+        H5E_auto2_t old_func = NULL;
+        void *old_data = NULL;
+        H5Eget_auto2(H5E_DEFAULT, &old_func, &old_data);
+        H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+        unsigned int info = 0;
+        int ok = H5Zfilter_avail(H5Z_FILTER_DEFLATE) > 0 &&
+                 H5Zget_filter_info(H5Z_FILTER_DEFLATE, &info) >= 0 &&
+                 (info & H5Z_FILTER_CONFIG_ENCODE_ENABLED);
+        H5Eclear2(H5E_DEFAULT);
+        H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
+        if (!ok) {
+            api->error(host, "compression = %d needs HDF5's deflate filter, which this HDF5 "
+                             "library does not provide; use compression: 0",
+                       s->compression);
+            h5w_destroy(s);
+            return SLUICE_ERROR;
+        }
+    }
+    *state = s;
+    return SLUICE_OK;
+}
+
+/* Reports every name of the `fields` list that no plugin declares. */
+static int h5w_bind(void *state, sluice_host *host)
+{
+    h5w_state *s = state;
+    const sluice_api *api = s->api;
+    int errors = 0;
+    for (uint32_t i = 0; i < s->name_count; i++) {
+        const char *name = s->names[i];
+        if (find_field(api, host, name) >= 0)
+            continue;
+        h5w_text available = {0};
+        const char *closest = NULL;
+        size_t best = (size_t)-1;
+        uint32_t count = api->field_count(host);
+        for (uint32_t f = 0; f < count; f++) {
+            sluice_field_spec spec;
+            if (api->field_info(host, f, &spec, NULL) != SLUICE_OK || !spec.name)
+                continue;
+            text_printf(&available, "%s%s", available.length ? ", " : "", spec.name);
+            size_t d = edit_distance(name, spec.name);
+            if (d < best) {
+                best = d;
+                closest = spec.name;
+            }
+        }
+        char hint[160] = "";
+        if (closest && best <= 2)
+            snprintf(hint, sizeof hint, " (did you mean '%s'?)", closest);
+        api->error(host, "fields: unknown field '%s'%s; the available fields are: %s", name, hint,
+                   available.failed || !available.data ? "(out of memory)" : available.data);
+        free(available.data);
+        errors++;
+    }
+    return errors ? SLUICE_ERROR : SLUICE_OK;
+}
+
+/* Appends field table entry `index` to the output list. */
+static int add_field(h5w_state *s, sluice_host *host, uint32_t index, int explicit_choice)
+{
+    const sluice_api *api = s->api;
+    sluice_field_spec spec;
+    sluice_field field;
+    if (api->field_info(host, index, &spec, &field) != SLUICE_OK || !spec.name) {
+        api->error(host, "cannot read entry %u of the field table", index);
+        return SLUICE_ERROR;
+    }
+    for (uint32_t i = 0; i < s->field_count; i++)
+        if (strcmp(s->fields[i].name, spec.name) == 0)
+            return SLUICE_OK;
+    if (!spec.name[0] || strchr(spec.name, '/') || strcmp(spec.name, ".") == 0) {
+        if (explicit_choice) {
+            api->error(host, "field '%s' cannot be written: its name is not a valid HDF5 "
+                             "dataset name",
+                       spec.name);
+            return SLUICE_ERROR;
+        }
+        api->warning(host, "field '%s' is not written: its name is not a valid HDF5 dataset name",
+                     spec.name);
+        return SLUICE_OK;
+    }
+    if (field.components == 0 || field.column < 0) {
+        api->error(host, "field '%s' has no storage (%u components, column %d)", spec.name,
+                   field.components, field.column);
+        return SLUICE_ERROR;
+    }
+    h5w_field *grown = realloc(s->fields, (s->field_count + 1) * sizeof *grown);
+    if (!grown) {
+        api->error(host, "out of memory");
+        return SLUICE_ERROR;
+    }
+    s->fields = grown;
+    h5w_field *f = &grown[s->field_count];
+    memset(f, 0, sizeof *f);
+    f->name = copy_string(spec.name);
+    f->units = copy_string(spec.units);
+    f->doc = copy_string(spec.doc);
+    f->type = field.type;
+    f->components = field.components;
+    f->column = field.column;
+    s->field_count++; /* counted now so that destroy frees the strings */
+    if (!f->name || !f->units || !f->doc) {
+        api->error(host, "out of memory");
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
+/* Fixes the output list (every declaration is known now) and the plugin list. */
+static int h5w_initialise(void *state, sluice_host *host)
+{
+    h5w_state *s = state;
+    const sluice_api *api = s->api;
+    uint32_t count = api->field_count(host);
+    if (s->name_count == 0) {
+        for (uint32_t f = 0; f < count; f++) {
+            sluice_field_spec spec;
+            if (api->field_info(host, f, &spec, NULL) != SLUICE_OK)
+                continue;
+            if ((spec.flags & SLUICE_FIELD_OUTPUT) && add_field(s, host, f, 0) != SLUICE_OK)
+                return SLUICE_ERROR;
+        }
+    }
+    static const char *const always[] = {"position", "kind", "id"};
+    for (uint32_t k = 0; k < SLUICE_COUNT(always) + s->name_count; k++) {
+        const char *name = k < SLUICE_COUNT(always) ? always[k] : s->names[k - SLUICE_COUNT(always)];
+        int64_t index = find_field(api, host, name);
+        if (index < 0) {
+            api->error(host, "fields: unknown field '%s'", name);
+            return SLUICE_ERROR;
+        }
+        if (add_field(s, host, (uint32_t)index, 1) != SLUICE_OK)
+            return SLUICE_ERROR;
+    }
+    for (uint32_t i = 0; i < s->field_count; i++)
+        if (strcmp(s->fields[i].name, "position") == 0 && s->fields[i].type != SLUICE_TYPE_REAL) {
+            api->error(host, "field 'position' is not of type real");
+            return SLUICE_ERROR;
+        }
+
+    h5w_text plugins = {0};
+    uint32_t n = api->plugin_count(host);
+    for (uint32_t k = 0; k < n; k++) {
+        sluice_plugin_info info;
+        if (api->plugin(host, k, &info) != SLUICE_OK)
+            continue;
+        text_printf(&plugins, "%s %s %s %s\n", info.component ? info.component : "?",
+                    info.library ? info.library : "?", info.version ? info.version : "?",
+                    info.path ? info.path : "?");
+    }
+    if (!plugins.failed && !plugins.data)
+        text_append(&plugins, "", 0);
+    if (plugins.failed) {
+        free(plugins.data);
+        api->error(host, "out of memory");
+        return SLUICE_ERROR;
+    }
+    s->plugins = plugins.data;
+    return SLUICE_OK;
+}
+
+/* ---------------------------------------------------------------- HDF5 -- */
+
+/* Where a write failed: the call and HDF5's innermost error message. */
+typedef struct h5w_failure {
+    char text[1024];
+} h5w_failure;
+
+static herr_t innermost_error(unsigned n, const H5E_error2_t *e, void *data)
+{
+    h5w_failure *f = data;
+    if (n == 0 && e && e->desc && e->desc[0]) {
+        size_t used = strlen(f->text);
+        snprintf(f->text + used, sizeof f->text - used, ": %s", e->desc);
+        for (char *p = f->text + used; *p; p++)
+            if (*p == '\n' || *p == '\r' || *p == '\t')
+                *p = ' ';
+    }
+    return 0;
+}
+
+static void fail(h5w_failure *f, const char *format, ...) SLUICE_PRINTF(2, 3);
+static void fail(h5w_failure *f, const char *format, ...)
+{
+    if (f->text[0])
+        return; /* keep the first cause */
+    va_list ap;
+    va_start(ap, format);
+    vsnprintf(f->text, sizeof f->text, format, ap);
+    va_end(ap);
+    H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, innermost_error, f);
+    H5Eclear2(H5E_DEFAULT);
+}
+
+static void close_id(hid_t *id, herr_t (*closer)(hid_t), h5w_failure *f, const char *what)
+{
+    if (*id < 0)
+        return;
+    if (closer(*id) < 0)
+        fail(f, "%s failed", what);
+    *id = H5W_NONE;
+}
+
+static int attr_scalar(hid_t object, const char *name, hid_t stored_type, hid_t given_type,
+                       const void *value, h5w_failure *f)
+{
+    hid_t space = H5W_NONE, attr = H5W_NONE;
+    int ok = 0;
+    if ((space = H5Screate(H5S_SCALAR)) < 0)
+        fail(f, "H5Screate for attribute '%s' failed", name);
+    else if ((attr = H5Acreate2(object, name, stored_type, space, H5P_DEFAULT, H5P_DEFAULT)) < 0)
+        fail(f, "creating attribute '%s' failed", name);
+    else if (H5Awrite(attr, given_type, value) < 0)
+        fail(f, "writing attribute '%s' failed", name);
+    else
+        ok = 1;
+    close_id(&attr, H5Aclose, f, "H5Aclose");
+    close_id(&space, H5Sclose, f, "H5Sclose");
+    return ok && !f->text[0] ? 0 : -1;
+}
+
+/* A variable-length UTF-8 string attribute (no size limit on the text). */
+static int attr_string(hid_t object, const char *name, const char *value, h5w_failure *f)
+{
+    hid_t type = H5Tcopy(H5T_C_S1);
+    if (type < 0) {
+        fail(f, "H5Tcopy for attribute '%s' failed", name);
+        return -1;
+    }
+    int rc = -1;
+    if (H5Tset_size(type, H5T_VARIABLE) < 0 || H5Tset_cset(type, H5T_CSET_UTF8) < 0)
+        fail(f, "making the string type of attribute '%s' failed", name);
+    else {
+        const char *text = value ? value : "";
+        rc = attr_scalar(object, name, type, type, &text, f);
+    }
+    close_id(&type, H5Tclose, f, "H5Tclose");
+    return rc == 0 && !f->text[0] ? 0 : -1;
+}
+
+static hid_t memory_type(sluice_type type)
+{
+    switch (type) {
+    case SLUICE_TYPE_REAL: return sizeof(sluice_real) == sizeof(float) ? H5T_NATIVE_FLOAT
+                                                                          : H5T_NATIVE_DOUBLE;
+    case SLUICE_TYPE_INT32: return H5T_NATIVE_INT32;
+    case SLUICE_TYPE_UINT8: return H5T_NATIVE_UINT8;
+    case SLUICE_TYPE_ID: return H5T_NATIVE_UINT64;
+    }
+    return H5W_NONE;
+}
+
+static hid_t file_type(sluice_type type)
+{
+    switch (type) {
+    case SLUICE_TYPE_REAL: return H5T_NATIVE_DOUBLE;
+    case SLUICE_TYPE_INT32: return H5T_NATIVE_INT32;
+    case SLUICE_TYPE_UINT8: return H5T_NATIVE_UINT8;
+    case SLUICE_TYPE_ID: return H5T_NATIVE_UINT64;
+    }
+    return H5W_NONE;
+}
+
+static size_t element_size(sluice_type type)
+{
+    switch (type) {
+    case SLUICE_TYPE_REAL: return sizeof(sluice_real);
+    case SLUICE_TYPE_INT32: return sizeof(int32_t);
+    case SLUICE_TYPE_UINT8: return sizeof(uint8_t);
+    case SLUICE_TYPE_ID: return sizeof(sluice_id);
+    }
+    return 0;
+}
+
+/* Structure of arrays (one column per component) to particle-major rows. */
+#define H5W_INTERLEAVE(SIZE)                                                                 \
+    for (uint32_t c = 0; c < components; c++) {                                              \
+        const unsigned char *src = columns[column + (int32_t)c];                              \
+        for (size_t i = 0; i < n; i++)                                                       \
+            memcpy(out + (i * components + c) * (SIZE), src + i * (SIZE), (SIZE));           \
+    }
+
+static void interleave(unsigned char *out, void *const *columns, int32_t column,
+                       uint32_t components, size_t n, size_t size)
+{
+    switch (size) {
+    case 1: H5W_INTERLEAVE(1) break;
+    case 2: H5W_INTERLEAVE(2) break;
+    case 4: H5W_INTERLEAVE(4) break;
+    case 8: H5W_INTERLEAVE(8) break;
+    default: H5W_INTERLEAVE(size) break;
+    }
+}
+
+static int write_field(h5w_state *s, hid_t file, const h5w_field *field, const sluice_view *v,
+                       h5w_failure *f)
+{
+    const size_t n = v->count;
+    const uint32_t components = field->components;
+    const int rank = components == 1 ? 1 : 2;
+    hsize_t dims[2] = {(hsize_t)n, (hsize_t)components};
+    const size_t size = element_size(field->type);
+    hid_t space = H5W_NONE, dcpl = H5W_NONE, dset = H5W_NONE;
+    const void *data = NULL;
+
+    if (n > 0 && components == 1) {
+        data = v->columns[field->column];
+    } else if (n > 0) {
+        if (n > ((size_t)-1) / components / size) {
+            fail(f, "field '%s' is too large to buffer", field->name);
+            return -1;
+        }
+        size_t bytes = n * components * size;
+        if (bytes > s->scratch_size) {
+            unsigned char *grown = realloc(s->scratch, bytes);
+            if (!grown) {
+                fail(f, "out of memory interleaving field '%s' (%zu bytes)", field->name, bytes);
+                return -1;
+            }
+            s->scratch = grown;
+            s->scratch_size = bytes;
+        }
+        interleave(s->scratch, v->columns, field->column, components, n, size);
+        data = s->scratch;
+    }
+
+    if ((space = H5Screate_simple(rank, dims, NULL)) < 0) {
+        fail(f, "H5Screate_simple for field '%s' failed", field->name);
+        goto done;
+    }
+    if ((dcpl = H5Pcreate(H5P_DATASET_CREATE)) < 0) {
+        fail(f, "H5Pcreate for field '%s' failed", field->name);
+        goto done;
+    }
+    if (s->compression > 0 && n > 0) {
+        size_t row_bytes = (size_t)components * 8;
+        size_t rows = H5W_CHUNK_BYTES / row_bytes;
+        if (rows < 1)
+            rows = 1;
+        hsize_t chunk[2] = {(hsize_t)(rows < n ? rows : n), (hsize_t)components};
+        if (H5Pset_chunk(dcpl, rank, chunk) < 0 || H5Pset_shuffle(dcpl) < 0 ||
+            H5Pset_deflate(dcpl, (unsigned)s->compression) < 0) {
+            fail(f, "setting up compression of field '%s' failed", field->name);
+            goto done;
+        }
+    }
+    if ((dset = H5Dcreate2(file, field->name, file_type(field->type), space, H5P_DEFAULT, dcpl,
+                           H5P_DEFAULT)) < 0) {
+        fail(f, "creating dataset '%s' failed", field->name);
+        goto done;
+    }
+    if (n > 0 &&
+        H5Dwrite(dset, memory_type(field->type), H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
+        fail(f, "writing dataset '%s' failed", field->name);
+        goto done;
+    }
+    if (attr_string(dset, "units", field->units, f) == 0)
+        attr_string(dset, "description", field->doc, f);
+done:
+    close_id(&dset, H5Dclose, f, "H5Dclose");
+    close_id(&dcpl, H5Pclose, f, "H5Pclose");
+    close_id(&space, H5Sclose, f, "H5Sclose");
+    return f->text[0] ? -1 : 0;
+}
+
+/* Builds the complete snapshot file in memory (HDF5's core driver, no
+ * backing store) and returns its image in *image (malloc'd, *image_size
+ * bytes). The file reaches the disk only through write_file_atomic: HDF5
+ * never writes to the disk itself, so a full disk is an ordinary write error
+ * (a failed H5Fclose of an on-disk file leaves HDF5 1.10 with a half-closed
+ * file that crashes the library when it shuts down). */
+static int build_image(h5w_state *s, sluice_host *host, const sluice_view *v, const char *name,
+                       const char *status, void **image, size_t *image_size, h5w_failure *f)
+{
+    const sluice_api *api = s->api;
+    const char *scene = api->resolved_scene(host);
+    if (!scene)
+        scene = "";
+    /* the core driver grows its buffer in steps of `increment`: one step
+     * should hold the whole file */
+    size_t estimate = 65536 + strlen(scene) + strlen(s->plugins);
+    for (uint32_t i = 0; i < s->field_count; i++)
+        estimate += 4096 + strlen(s->fields[i].units) + strlen(s->fields[i].doc) +
+                    (size_t)v->count * s->fields[i].components * 8;
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    if (fapl < 0) {
+        fail(f, "H5Pcreate(H5P_FILE_ACCESS) failed");
+        return -1;
+    }
+    if (H5Pset_fapl_core(fapl, estimate, 0) < 0) {
+        fail(f, "H5Pset_fapl_core failed");
+        close_id(&fapl, H5Pclose, f, "H5Pclose");
+        return -1;
+    }
+    hid_t file = H5Fcreate(name, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+    close_id(&fapl, H5Pclose, f, "H5Pclose");
+    if (file < 0) {
+        fail(f, "H5Fcreate failed");
+        return -1;
+    }
+    for (uint32_t i = 0; i < s->field_count && !f->text[0]; i++)
+        write_field(s, file, &s->fields[i], v, f);
+    if (!f->text[0]) {
+        double time = v->time, h = (double)v->smoothing_length, dx = (double)v->spacing;
+        int64_t step = v->step;
+        int dimensions = (int)v->dimensions;
+        uint64_t count = v->count;
+        int rc = attr_scalar(file, "time", H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE, &time, f);
+        if (rc == 0)
+            rc = attr_scalar(file, "step", H5T_NATIVE_INT64, H5T_NATIVE_INT64, &step, f);
+        if (rc == 0)
+            rc = attr_scalar(file, "dimensions", H5T_NATIVE_INT, H5T_NATIVE_INT, &dimensions, f);
+        if (rc == 0)
+            rc = attr_scalar(file, "particle_count", H5T_NATIVE_UINT64, H5T_NATIVE_UINT64,
+                             &count, f);
+        if (rc == 0)
+            rc = attr_scalar(file, "smoothing_length", H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE, &h,
+                             f);
+        if (rc == 0)
+            rc = attr_scalar(file, "spacing", H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE, &dx, f);
+        if (rc == 0)
+            rc = attr_string(file, "scene", scene, f);
+        if (rc == 0)
+            rc = attr_string(file, "plugins", s->plugins, f);
+        if (rc == 0)
+            attr_string(file, "status", status, f);
+    }
+    if (!f->text[0] && H5Fflush(file, H5F_SCOPE_LOCAL) < 0)
+        fail(f, "H5Fflush failed");
+    if (!f->text[0]) {
+        ssize_t size = H5Fget_file_image(file, NULL, 0);
+        void *buffer = size > 0 ? malloc((size_t)size) : NULL;
+        if (size <= 0)
+            fail(f, "H5Fget_file_image failed");
+        else if (!buffer)
+            fail(f, "out of memory for the file image (%zd bytes)", size);
+        else if (H5Fget_file_image(file, buffer, (size_t)size) != size)
+            fail(f, "H5Fget_file_image failed");
+        if (f->text[0]) {
+            free(buffer);
+        } else {
+            *image = buffer;
+            *image_size = (size_t)size;
+        }
+    }
+    if (H5Fclose(file) < 0)
+        fail(f, "H5Fclose failed");
+    if (f->text[0]) {
+        free(*image);
+        *image = NULL;
+        *image_size = 0;
+        return -1;
+    }
+    return 0;
+}
+
+/* ---------------------------------------------------------------- XDMF -- */
+
+static const char *xdmf_number_type(sluice_type type, int *precision)
+{
+    switch (type) {
+    case SLUICE_TYPE_REAL: *precision = 8; return "Float";
+    case SLUICE_TYPE_INT32: *precision = 4; return "Int";
+    case SLUICE_TYPE_UINT8: *precision = 1; return "UChar";
+    case SLUICE_TYPE_ID: *precision = 8; return "UInt";
+    }
+    *precision = 8;
+    return "Float";
+}
+
+static void xdmf_data_item(h5w_text *t, const h5w_field *field, size_t n, const char *file_name)
+{
+    int precision;
+    const char *number = xdmf_number_type(field->type, &precision);
+    if (field->components == 1)
+        text_printf(t, "<DataItem Dimensions=\"%zu\"", n);
+    else
+        text_printf(t, "<DataItem Dimensions=\"%zu %u\"", n, field->components);
+    text_printf(t, " NumberType=\"%s\" Precision=\"%d\" Format=\"HDF\">", number, precision);
+    text_xml(t, file_name);
+    text_append(t, ":/", 2);
+    text_xml(t, field->name);
+    text_append(t, "</DataItem>", 11);
+}
+
+/* Adds the grid of one snapshot and rewrites the XDMF file. */
+static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v,
+                      const char *file_name, const char *stem)
+{
+    const sluice_api *api = s->api;
+    h5w_text *t = &s->xdmf;
+    if (t->length == 0) {
+        text_printf(t, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+                       "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n"
+                       "  <Domain>\n"
+                       "    <Grid Name=\"");
+        text_xml(t, s->prefix);
+        text_printf(t, "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
+    }
+    const size_t n = v->count;
+    const h5w_field *position = NULL;
+    for (uint32_t i = 0; i < s->field_count; i++)
+        if (strcmp(s->fields[i].name, "position") == 0)
+            position = &s->fields[i];
+    text_printf(t, "      <Grid Name=\"");
+    text_xml(t, stem);
+    text_printf(t, "\" GridType=\"Uniform\">\n        <Time Value=\"%.15g\"/>\n", v->time);
+    text_printf(t,
+                "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" "
+                "NodesPerElement=\"1\"/>\n",
+                n);
+    text_printf(t, "        <Geometry GeometryType=\"%s\">\n          ",
+                v->dimensions == 3 ? "XYZ" : "XY");
+    if (position)
+        xdmf_data_item(t, position, n, file_name);
+    text_printf(t, "\n        </Geometry>\n");
+    for (uint32_t i = 0; i < s->field_count; i++) {
+        const h5w_field *field = &s->fields[i];
+        const char *kind = field->components == 1             ? "Scalar"
+                           : field->components == v->dimensions ? "Vector"
+                                                                : "Matrix";
+        text_printf(t, "        <Attribute Name=\"");
+        text_xml(t, field->name);
+        text_printf(t, "\" AttributeType=\"%s\" Center=\"Node\">\n          ", kind);
+        xdmf_data_item(t, field, n, file_name);
+        text_printf(t, "\n        </Attribute>\n");
+    }
+    text_printf(t, "      </Grid>\n");
+    const size_t body = t->length;
+    text_printf(t, "    </Grid>\n  </Domain>\n</Xdmf>\n");
+    if (t->failed) {
+        api->error(host, "out of memory building the XDMF index");
+        return SLUICE_ERROR;
+    }
+    char name[H5W_PREFIX_MAX + 8], path[H5W_PATH_MAX];
+    snprintf(name, sizeof name, "%s.xdmf", s->prefix);
+    if (api->output_path(host, name, path, sizeof path) != SLUICE_OK) {
+        api->error(host, "the path of '%s' in the output directory is too long", name);
+        return SLUICE_ERROR;
+    }
+    int rc = api->write_file_atomic(host, path, t->data, t->length);
+    t->length = body; /* drop the footer; the next grid goes here */
+    t->data[body] = '\0';
+    return rc;
+}
+
+/* ------------------------------------------------------------ snapshots -- */
+
+static int write_snapshot(h5w_state *s, sluice_host *host, const char *status)
+{
+    const sluice_api *api = s->api;
+    const sluice_view *v = api->view(host);
+    /* the prefix is at most H5W_PREFIX_MAX bytes (checked in create) */
+    char stem[H5W_PREFIX_MAX + 32], name[H5W_PREFIX_MAX + 40], path[H5W_PATH_MAX];
+    snprintf(stem, sizeof stem, "%s_%06llu", s->prefix, (unsigned long long)s->snapshots);
+    snprintf(name, sizeof name, "%.*s.h5", (int)(sizeof stem), stem);
+    if (api->output_path(host, name, path, sizeof path) != SLUICE_OK) {
+        if (!path[0]) {
+            s->disabled = 1; /* no output directory: nothing is written */
+            return SLUICE_OK;
+        }
+        api->error(host, "the path of '%s' in the output directory is too long", name);
+        s->broken = 1;
+        return SLUICE_ERROR;
+    }
+
+    /* HDF5 errors are reported once, here, not printed by the library */
+    H5E_auto2_t old_func = NULL;
+    void *old_data = NULL;
+    H5Eget_auto2(H5E_DEFAULT, &old_func, &old_data);
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+    h5w_failure failure = {{0}};
+    void *image = NULL;
+    size_t image_size = 0;
+    int rc = build_image(s, host, v, name, status, &image, &image_size, &failure);
+    H5Eclear2(H5E_DEFAULT);
+    H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
+    if (rc != 0) {
+        api->error(host, "cannot write snapshot '%s' (t = %.9g s): %s", path, v->time,
+                   failure.text);
+        s->broken = 1;
+        return SLUICE_ERROR;
+    }
+    /* a temporary file in the same directory, renamed once complete; the
+     * core reports a failure with the path */
+    rc = api->write_file_atomic(host, path, image, image_size);
+    free(image);
+    if (rc != SLUICE_OK) {
+        s->broken = 1;
+        return SLUICE_ERROR;
+    }
+    s->snapshots++;
+    s->have_last = 1;
+    s->last_step = v->step;
+    s->last_time = v->time;
+    if (write_xdmf(s, host, v, name, stem) != SLUICE_OK) {
+        s->broken = 1;
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
+static int h5w_after_step(void *state, sluice_host *host)
+{
+    h5w_state *s = state;
+    const sluice_view *v = s->api->view(host);
+    const double tolerance = 1e-9 * s->interval;
+    if (v->time + tolerance < (double)s->schedule * s->interval)
+        return SLUICE_OK;
+    if (!s->disabled && write_snapshot(s, host, "ok") != SLUICE_OK)
+        return SLUICE_ERROR;
+    while ((double)s->schedule * s->interval <= v->time + tolerance)
+        s->schedule++;
+    s->api->request_time(host, (double)s->schedule * s->interval);
+    return SLUICE_OK;
+}
+
+/* The final snapshot: always after a failure (it holds the state that made
+ * the run stop), otherwise unless the last regular one is of this state. */
+static int h5w_finish(void *state, sluice_host *host, int status)
+{
+    h5w_state *s = state;
+    if (s->disabled || s->broken)
+        return SLUICE_OK;
+    const sluice_view *v = s->api->view(host);
+    if (status != SLUICE_FINISH_FAILED && s->have_last && s->last_step == v->step &&
+        s->last_time == v->time)
+        return SLUICE_OK;
+    return write_snapshot(s, host, status == SLUICE_FINISH_FAILED ? "failed" : "ok");
+}
+
+static const sluice_component components[] = {{
+    .name = "hdf5",
+    .summary = "particle snapshots in HDF5 (one file per output time) with an XDMF index",
+    .reference = "HDF5 (The HDF Group); XDMF 3 (xdmf.org)",
+    .dimensions = SLUICE_DIMS_ALL,
+    .params = params,
+    .param_count = SLUICE_COUNT(params),
+    .config_size = sizeof(h5w_config),
+    .create = h5w_create,
+    .destroy = h5w_destroy,
+    .bind = h5w_bind,
+    .initialise = h5w_initialise,
+    .after_step = h5w_after_step,
+    .finish = h5w_finish,
+}};
+
+SLUICE_DEFINE_LIBRARY("hdf5_writer", "1.0.0", "HDF5 particle snapshots with an XDMF index",
+                      SLUICE_DIMS_ALL, components)

@@ -1,0 +1,187 @@
+/* Monaghan artificial viscosity (Monaghan 1992; seeds 000, 001, 002):
+ *   dv_i/dt += - sum_j m_j Pi_ij grad_i W_ij,
+ *   Pi_ij = (-alpha cbar_ij mu_ij + beta mu_ij^2) / rhobar_ij  when v_ij . r_ij < 0, else 0,
+ *   mu_ij = h v_ij . r_ij / (r^2 + eta^2),  eta^2 = 0.01 h^2.
+ * It also limits the time step with the viscous condition of Monaghan (1989)
+ * as used by DualSPHysics: dt <= C h / (c_i + max_j |mu_ij|), with the
+ * Courant number C published by the time-step plugin. */
+#include <math.h>
+
+#include "plugin_util.h"
+
+typedef struct av_config {
+    sluice_real alpha, beta;
+} av_config;
+
+typedef struct av_state {
+    const sluice_api *api;
+    sluice_real alpha, beta, h, eta2, courant;
+    sluice_field velocity, density, sound_speed, mass, acceleration, mu_max;
+} av_state;
+
+static const sluice_param_spec params[] = {
+    {"alpha", SLUICE_PARAM_REAL, offsetof(av_config, alpha), "0.1", 0, 10,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
+     "linear coefficient (seed 000: 0.1, seed 002: 0.06)", NULL, 0},
+    {"beta", SLUICE_PARAM_REAL, offsetof(av_config, beta), "0", 0, 10,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1", "quadratic coefficient (seeds: 0)", NULL, 0},
+};
+
+static const sluice_field_spec fields[] = {
+    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
+     SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
+     "velocity"},
+    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
+     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
+    {"sound_speed", SLUICE_TYPE_REAL, 1, "m s^-1", SLUICE_READ | SLUICE_READ_NEIGHBOUR, 0, NULL,
+     0, "local speed of sound"},
+    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
+     "particle mass"},
+    {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0,
+     "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
+    {"viscous_mu_max", SLUICE_TYPE_REAL, 1, "m s^-1", SLUICE_WRITE, 0, NULL, 0,
+     "largest |mu_ij| over the neighbours (viscous time-step condition)"},
+};
+
+static int av_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
+{
+    const av_config *c = config;
+    av_state *s = sluice_util_state(api, host, sizeof *s);
+    if (!s)
+        return SLUICE_ERROR;
+    s->api = api;
+    s->alpha = c->alpha;
+    s->beta = c->beta;
+    if (sluice_util_constant(api, host, "smoothing_length", &s->h) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    s->eta2 = (sluice_real)0.01 * s->h * s->h;
+    *state = s;
+    return SLUICE_OK;
+}
+
+static int av_bind(void *state, sluice_host *host)
+{
+    av_state *s = state;
+    static const char *const names[] = {"velocity", "density",      "sound_speed",
+                                        "mass",     "acceleration", "viscous_mu_max"};
+    sluice_field f[6];
+    if (sluice_util_fields(s->api, host, names, f, 6) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->velocity = f[0];
+    s->density = f[1];
+    s->sound_speed = f[2];
+    s->mass = f[3];
+    s->acceleration = f[4];
+    s->mu_max = f[5];
+    if (sluice_util_constant(s->api, host, "courant_number", &s->courant) != SLUICE_OK)
+        return SLUICE_ERROR;
+    return SLUICE_OK;
+}
+
+static void av_destroy(void *state)
+{
+    free(state);
+}
+
+static inline void av_pairs(const av_state *s, const sluice_view *v, const sluice_pair_batch *b,
+                            const uint32_t dims)
+{
+    const sluice_real *vel[3], *vj[3];
+    for (uint32_t d = 0; d < dims; d++) {
+        vel[d] = sluice_real_column(v, s->velocity, d);
+        vj[d] = b->gathered[s->velocity.column + (int32_t)d];
+    }
+    const sluice_real *restrict rho = sluice_real_column(v, s->density, 0);
+    const sluice_real *restrict cs = sluice_real_column(v, s->sound_speed, 0);
+    const sluice_real *restrict rhoj = b->gathered[s->density.column];
+    const sluice_real *restrict cj = b->gathered[s->sound_speed.column];
+    const sluice_real *restrict mj = b->gathered[s->mass.column];
+    const sluice_real *restrict F = b->kernel_gradient;
+    const sluice_real *restrict rx = b->offset[0], *restrict ry = b->offset[1];
+    const sluice_real *restrict rz = dims == 3 ? b->offset[2] : b->offset[1];
+    const sluice_real *restrict r = b->distance;
+    const sluice_real *restrict vxj = vj[0], *restrict vyj = vj[1];
+    const sluice_real *restrict vzj = dims == 3 ? vj[2] : vj[1];
+    sluice_real *restrict ax = sluice_real_column(v, s->acceleration, 0);
+    sluice_real *restrict ay = sluice_real_column(v, s->acceleration, 1);
+    sluice_real *restrict az = dims == 3 ? sluice_real_column(v, s->acceleration, 2) : ay;
+    sluice_real *restrict mu_max = sluice_real_column(v, s->mu_max, 0);
+    const sluice_real h = s->h, eta2 = s->eta2, alpha = s->alpha, beta = s->beta;
+    for (sluice_index t = 0; t < b->target_count; t++) {
+        const sluice_index i = b->target[t];
+        const sluice_real vxi = vel[0][i], vyi = vel[1][i], vzi = dims == 3 ? vel[2][i] : 0;
+        const sluice_real rhoi = rho[i], ci = cs[i];
+        sluice_real sx = 0, sy = 0, sz = 0, worst = 0;
+#pragma omp simd reduction(+ : sx, sy, sz) reduction(max : worst)
+        for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
+            sluice_real dot = (vxi - vxj[k]) * rx[k] + (vyi - vyj[k]) * ry[k];
+            if (dims == 3)
+                dot += (vzi - vzj[k]) * rz[k];
+            const sluice_real mu = h * dot / (r[k] * r[k] + eta2);
+            const sluice_real amu = mu < 0 ? -mu : mu;
+            worst = amu > worst ? amu : worst;
+            const sluice_real cbar = (sluice_real)0.5 * (ci + cj[k]);
+            const sluice_real rhobar = (sluice_real)0.5 * (rhoi + rhoj[k]);
+            const sluice_real pi = dot < 0 ? (-alpha * cbar * mu + beta * mu * mu) / rhobar : 0;
+            const sluice_real c = mj[k] * pi * F[k];
+            sx += c * rx[k];
+            sy += c * ry[k];
+            if (dims == 3)
+                sz += c * rz[k];
+        }
+        ax[i] -= sx;
+        ay[i] -= sy;
+        if (dims == 3)
+            az[i] -= sz;
+        mu_max[i] = worst;
+    }
+}
+
+static void av_pair(void *state, const sluice_view *v, const sluice_pair_batch *b)
+{
+    if (v->dimensions == 3)
+        av_pairs(state, v, b, 3);
+    else
+        av_pairs(state, v, b, 2);
+}
+
+static sluice_real av_time_step_limit(void *state, const sluice_view *v, sluice_index begin,
+                                      sluice_index end)
+{
+    const av_state *s = state;
+    const sluice_real *mu = sluice_real_column(v, s->mu_max, 0);
+    const sluice_real *c = sluice_real_column(v, s->sound_speed, 0);
+    sluice_real limit = (sluice_real)INFINITY;
+    for (sluice_index i = begin; i < end; i++) {
+        if (v->kind[i] != SLUICE_KIND_FLUID)
+            continue;
+        sluice_real dt = s->courant * s->h / (c[i] + mu[i]);
+        if (dt < limit || dt != dt)
+            limit = dt;
+    }
+    return limit;
+}
+
+static const sluice_component components[] = {{
+    .name = "artificial_viscosity",
+    .summary = "Monaghan artificial viscosity (alpha, beta) with its viscous time-step limit",
+    .reference = "Monaghan (1992); seeds 000, 001, 002",
+    .dimensions = SLUICE_DIMS_ALL,
+    .params = params,
+    .param_count = SLUICE_COUNT(params),
+    .config_size = sizeof(av_config),
+    .fields = fields,
+    .field_count = SLUICE_COUNT(fields),
+    .target_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+    .neighbour_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID) | SLUICE_KIND_MASK(SLUICE_KIND_WALL),
+    .create = av_create,
+    .destroy = av_destroy,
+    .bind = av_bind,
+    .pair = av_pair,
+    .time_step_limit = av_time_step_limit,
+}};
+
+SLUICE_DEFINE_LIBRARY("artificial_viscosity", "1.0.0", "Monaghan artificial viscosity",
+                      SLUICE_DIMS_ALL, components)

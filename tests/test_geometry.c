@@ -1,0 +1,1376 @@
+/* Geometry: point in polygon, lattice fills of boxes/polygons/prisms, closest
+ * points on segments and triangles, wall construction (normals, pseudo-normals,
+ * open ends, refusals), signed distance around 2D/3D tanks and boxes (checked
+ * against closed-form distances at many random points), and wall layer points
+ * checked against analytic counts and independent per-point conditions. */
+#include "test_util.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <time.h>
+
+#include "geometry.h"
+
+#define EPS 1e-12
+
+/* ------------------------------------------------------------- helpers -- */
+
+static double uniform(uint64_t *state, double lo, double hi)
+{
+    *state = *state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return lo + (hi - lo) * ((double)(*state >> 11) * (1.0 / 9007199254740992.0));
+}
+
+static double seconds(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+typedef struct key3 {
+    int64_t k[3];
+} key3;
+
+static int key3_compare(const void *pa, const void *pb)
+{
+    const key3 *a = pa, *b = pb;
+    for (int d = 2; d >= 0; d--)
+        if (a->k[d] != b->k[d])
+            return a->k[d] < b->k[d] ? -1 : 1;
+    return 0;
+}
+
+/* Lattice keys of the points; checks that every point is a lattice point
+ * (z = 0 in 2D) and returns the number of duplicates. keys may be NULL. */
+static size_t lattice_keys(const sluice_points *pts, uint32_t dims, double dx,
+                           const double origin[3], key3 **keys_out)
+{
+    key3 *keys = calloc(pts->count ? pts->count : 1, sizeof *keys);
+    ck_assert_ptr_nonnull(keys);
+    for (size_t i = 0; i < pts->count; i++) {
+        for (uint32_t d = 0; d < 3; d++) {
+            double x = pts->xyz[3 * i + d];
+            if (d >= dims) {
+                ck_assert_double_eq(x, 0.0);
+                continue;
+            }
+            double u = (x - origin[d]) / dx - 0.5;
+            keys[i].k[d] = llround(u);
+            ck_assert_msg(fabs(u - (double)keys[i].k[d]) < 1e-6, "point %zu off the lattice", i);
+        }
+    }
+    qsort(keys, pts->count, sizeof *keys, key3_compare);
+    size_t duplicates = 0;
+    for (size_t i = 1; i < pts->count; i++)
+        duplicates += key3_compare(&keys[i - 1], &keys[i]) == 0;
+    if (keys_out)
+        *keys_out = keys;
+    else
+        free(keys);
+    return duplicates;
+}
+
+/* Number of (i, j) (and k) in [0, L)^2 (^3) with sum (i + 1/2)^2 <= L^2: the
+ * lattice points of a quarter disc (octant of a ball) of radius L spacings. */
+static long quarter_disc(int L)
+{
+    long n = 0;
+    for (int i = 0; i < L; i++)
+        for (int j = 0; j < L; j++)
+            n += (i + 0.5) * (i + 0.5) + (j + 0.5) * (j + 0.5) <= (double)L * L;
+    return n;
+}
+
+static long ball_octant(int L)
+{
+    long n = 0;
+    for (int i = 0; i < L; i++)
+        for (int j = 0; j < L; j++)
+            for (int k = 0; k < L; k++)
+                n += (i + 0.5) * (i + 0.5) + (j + 0.5) * (j + 0.5) + (k + 0.5) * (k + 0.5) <=
+                     (double)L * L;
+    return n;
+}
+
+/* Distance from p to the axis-aligned box [lo, hi] (its surface, from either
+ * side) and whether p is strictly inside. */
+static double box_surface_distance(const double p[3], const double lo[3], const double hi[3],
+                                   uint32_t dims, int *inside)
+{
+    double outside2 = 0, inner = HUGE_VAL;
+    int in = 1;
+    for (uint32_t d = 0; d < dims; d++) {
+        double below = lo[d] - p[d], above = p[d] - hi[d];
+        if (below > 0)
+            outside2 += below * below, in = 0;
+        if (above > 0)
+            outside2 += above * above, in = 0;
+        inner = fmin(inner, fmin(p[d] - lo[d], hi[d] - p[d]));
+    }
+    *inside = in;
+    return in ? inner : sqrt(outside2);
+}
+
+static double signed_distance(const sluice_wall_geometry *w, double x, double y, double z,
+                              int *beyond, uint32_t *element)
+{
+    sluice_real p[3] = {x, y, z};
+    int b = -1;
+    double d = sluice_wall_signed_distance(w, p, &b, element);
+    ck_assert(b == 0 || b == 1);
+    if (beyond)
+        *beyond = b;
+    return d;
+}
+
+static void assert_sd(const sluice_wall_geometry *w, double x, double y, double z, double expect,
+                      int expect_beyond)
+{
+    int beyond;
+    double d = signed_distance(w, x, y, z, &beyond, NULL);
+    ck_assert_msg(fabs(d - expect) < 1e-12 && beyond == expect_beyond,
+                  "signed distance at (%g, %g, %g): %.15g beyond %d, expected %.15g beyond %d", x,
+                  y, z, d, beyond, expect, expect_beyond);
+}
+
+static void assert_beyond(const sluice_wall_geometry *w, double x, double y, double z)
+{
+    int beyond;
+    signed_distance(w, x, y, z, &beyond, NULL);
+    ck_assert_msg(beyond == 1, "(%g, %g, %g) should be beyond an open end", x, y, z);
+}
+
+/* --------------------------------------------------------- point in polygon -- */
+
+START_TEST(point_in_polygon_convex)
+{
+    const sluice_real square[] = {0, 0, 1, 0, 1, 1, 0, 1};
+    ck_assert(sluice_point_in_polygon(square, 4, 0.5, 0.5));
+    ck_assert(!sluice_point_in_polygon(square, 4, 1.5, 0.5));
+    ck_assert(!sluice_point_in_polygon(square, 4, -0.1, 0.5));
+    ck_assert(!sluice_point_in_polygon(square, 4, 0.5, 1.2));
+    ck_assert(!sluice_point_in_polygon(square, 4, 0.5, -1e-9));
+    /* axis-aligned edges follow the half-open rule min <= x < max */
+    ck_assert(sluice_point_in_polygon(square, 4, 0.0, 0.5));
+    ck_assert(!sluice_point_in_polygon(square, 4, 1.0, 0.5));
+    ck_assert(sluice_point_in_polygon(square, 4, 0.5, 0.0));
+    ck_assert(!sluice_point_in_polygon(square, 4, 0.5, 1.0));
+    /* a clockwise regular hexagon of radius 1 */
+    sluice_real hexagon[12];
+    for (int k = 0; k < 6; k++) {
+        hexagon[2 * k] = cos(-k * M_PI / 3);
+        hexagon[2 * k + 1] = sin(-k * M_PI / 3);
+    }
+    ck_assert(sluice_point_in_polygon(hexagon, 6, 0, 0));
+    ck_assert(sluice_point_in_polygon(hexagon, 6, 0.95, 0));
+    ck_assert(sluice_point_in_polygon(hexagon, 6, 0, 0.85));
+    ck_assert(!sluice_point_in_polygon(hexagon, 6, 0, 0.88));
+    ck_assert(!sluice_point_in_polygon(hexagon, 6, 0.9, 0.5));
+    ck_assert(!sluice_point_in_polygon(hexagon, 6, 1.01, 0));
+    /* fewer than three vertices: nothing is inside */
+    ck_assert(!sluice_point_in_polygon(square, 2, 0.5, 0.0));
+}
+END_TEST
+
+START_TEST(point_in_polygon_concave)
+{
+    const sluice_real L[] = {0, 0, 2, 0, 2, 1, 1, 1, 1, 2, 0, 2};
+    ck_assert(sluice_point_in_polygon(L, 6, 0.5, 0.5));
+    ck_assert(sluice_point_in_polygon(L, 6, 1.5, 0.5));
+    ck_assert(sluice_point_in_polygon(L, 6, 0.5, 1.5));
+    ck_assert(!sluice_point_in_polygon(L, 6, 1.5, 1.5)); /* the notch */
+    ck_assert(!sluice_point_in_polygon(L, 6, 1.01, 1.01));
+    ck_assert(sluice_point_in_polygon(L, 6, 0.99, 1.01));
+    ck_assert(!sluice_point_in_polygon(L, 6, 2.5, 0.5));
+    /* a dart, concave at (1, 1) */
+    const sluice_real dart[] = {0, 0, 2, 1, 0, 2, 1, 1};
+    ck_assert(sluice_point_in_polygon(dart, 4, 1.5, 1.0));
+    ck_assert(sluice_point_in_polygon(dart, 4, 0.2, 0.15));
+    ck_assert(sluice_point_in_polygon(dart, 4, 0.2, 1.85));
+    ck_assert(!sluice_point_in_polygon(dart, 4, 0.5, 1.0)); /* the notch */
+    ck_assert(!sluice_point_in_polygon(dart, 4, 0.2, 0.3));
+    ck_assert(!sluice_point_in_polygon(dart, 4, 2.1, 1.0));
+}
+END_TEST
+
+/* ----------------------------------------------------------------- fills -- */
+
+static size_t fill_count(const sluice_region *r, uint32_t dims, double dx, const double o[3])
+{
+    sluice_points pts = {0};
+    sluice_real origin[3] = {o[0], o[1], o[2]};
+    ck_assert_int_eq(sluice_region_fill(r, dims, dx, origin, &pts), 0);
+    size_t n = pts.count;
+    ck_assert_uint_eq(lattice_keys(&pts, dims, dx, o, NULL), 0);
+    sluice_points_free(&pts);
+    return n;
+}
+
+START_TEST(box_fill_2d)
+{
+    const double zero[3] = {0, 0, 0};
+    sluice_region box = {.shape = SLUICE_REGION_BOX, .min = {0, 0, 0}, .max = {1, 2, 0}};
+    sluice_points pts = {0};
+    ck_assert_int_eq(sluice_region_fill(&box, 2, 0.02, (sluice_real[3]){0, 0, 0}, &pts), 0);
+    ck_assert_uint_eq(pts.count, 5000);
+    ck_assert_double_eq_tol(pts.xyz[0], 0.01, EPS);
+    ck_assert_double_eq_tol(pts.xyz[1], 0.01, EPS);
+    for (size_t i = 0; i < pts.count; i++) {
+        ck_assert(sluice_region_contains(&box, 2, pts.xyz + 3 * i));
+        ck_assert_double_eq(pts.xyz[3 * i + 2], 0.0);
+    }
+    ck_assert_uint_eq(lattice_keys(&pts, 2, 0.02, zero, NULL), 0);
+    sluice_points_free(&pts);
+    ck_assert_ptr_null(pts.xyz);
+
+    /* boundaries on lattice points: min included, max excluded */
+    sluice_region aligned = {.shape = SLUICE_REGION_BOX, .min = {0.01, 0.01, 0},
+                             .max = {0.99, 0.05, 0}};
+    ck_assert_uint_eq(fill_count(&aligned, 2, 0.02, zero), 49 * 2);
+    sluice_region tenths = {.shape = SLUICE_REGION_BOX, .min = {0.05, 0, 0}, .max = {0.35, 0.3, 0}};
+    ck_assert_uint_eq(fill_count(&tenths, 2, 0.1, zero), 3 * 3);
+    /* ... also where (bound - origin) / dx - 1/2 rounds just above the integer:
+     * 0.07 / 0.02 - 0.5 = 3.0000000000000004, 2.49 / 0.02 - 0.5 = 124.00000000000001 */
+    sluice_region rounding = {.shape = SLUICE_REGION_BOX, .min = {0.07, 0.07, 0},
+                              .max = {2.49, 1.11, 0}};
+    ck_assert_int_eq(sluice_region_fill(&rounding, 2, 0.02, NULL, &pts), 0);
+    ck_assert_uint_eq(pts.count, 121 * 52);
+    double lo[2] = {HUGE_VAL, HUGE_VAL}, hi[2] = {-HUGE_VAL, -HUGE_VAL};
+    for (size_t i = 0; i < pts.count; i++)
+        for (int d = 0; d < 2; d++) {
+            lo[d] = fmin(lo[d], pts.xyz[3 * i + d]);
+            hi[d] = fmax(hi[d], pts.xyz[3 * i + d]);
+        }
+    ck_assert_double_eq_tol(lo[0], 0.07, 1e-12);
+    ck_assert_double_eq_tol(lo[1], 0.07, 1e-12);
+    ck_assert_double_eq_tol(hi[0], 2.47, 1e-12);
+    ck_assert_double_eq_tol(hi[1], 1.09, 1e-12);
+    sluice_points_free(&pts);
+    /* sluice_region_contains is half-open too */
+    ck_assert(sluice_region_contains(&box, 2, (sluice_real[3]){0, 0, 0}));
+    ck_assert(!sluice_region_contains(&box, 2, (sluice_real[3]){1, 0.5, 0}));
+    ck_assert(!sluice_region_contains(&box, 2, (sluice_real[3]){0.5, 2, 0}));
+    ck_assert(!sluice_region_contains(&box, 2, (sluice_real[3]){-1e-12, 0.5, 0}));
+    ck_assert(sluice_region_contains(&box, 2, (sluice_real[3]){0.5, 0.5, 7})); /* z unused */
+    /* negative lattice indices and an offset origin */
+    sluice_region negative = {.shape = SLUICE_REGION_BOX, .min = {-1, -1, 0}, .max = {0, 0, 0}};
+    ck_assert_uint_eq(fill_count(&negative, 2, 0.1, (double[3]){0.3, 0.7, 0}), 100);
+    /* empty and invalid */
+    sluice_region empty = {.shape = SLUICE_REGION_BOX, .min = {0, 0, 0}, .max = {0.005, 1, 0}};
+    ck_assert_uint_eq(fill_count(&empty, 2, 0.02, zero), 0);
+    ck_assert_int_eq(sluice_region_fill(&box, 2, 0, NULL, &pts), -1);
+    ck_assert_int_eq(sluice_region_fill(&box, 4, 0.1, NULL, &pts), -1);
+    sluice_points_free(&pts);
+}
+END_TEST
+
+START_TEST(box_fill_3d)
+{
+    const double zero[3] = {0, 0, 0};
+    sluice_region box = {.shape = SLUICE_REGION_BOX, .min = {0, 0, 0}, .max = {1, 2, 0.5}};
+    ck_assert_uint_eq(fill_count(&box, 3, 0.05, zero), 8000);
+    sluice_points pts = {0};
+    ck_assert_int_eq(sluice_region_fill(&box, 3, 0.05, (sluice_real[3]){0, 0, 0}, &pts), 0);
+    for (size_t i = 0; i < pts.count; i++)
+        ck_assert(sluice_region_contains(&box, 3, pts.xyz + 3 * i));
+    ck_assert_double_eq_tol(pts.xyz[2], 0.025, EPS);
+    sluice_points_free(&pts);
+    /* appending to a non-empty list keeps what is there */
+    sluice_region small = {.shape = SLUICE_REGION_BOX, .min = {0, 0, 0}, .max = {0.1, 0.1, 0.1}};
+    ck_assert_int_eq(sluice_region_fill(&small, 3, 0.05, NULL, &pts), 0);
+    ck_assert_int_eq(sluice_region_fill(&small, 3, 0.05, NULL, &pts), 0);
+    ck_assert_uint_eq(pts.count, 16);
+    sluice_points_free(&pts);
+}
+END_TEST
+
+/* Fills the polygon and checks: every point inside, every lattice point of
+ * the bounding box that is inside was filled, and count dx^2 is within one
+ * boundary layer (perimeter dx) of the exact area. */
+static size_t check_polygon_fill(const sluice_real *poly, uint32_t n, double dx, const double o[3],
+                                 double area)
+{
+    sluice_region r = {.shape = SLUICE_REGION_POLYGON, .polygon = poly, .vertex_count = n};
+    sluice_points pts = {0};
+    sluice_real origin[3] = {o[0], o[1], o[2]};
+    ck_assert_int_eq(sluice_region_fill(&r, 2, dx, origin, &pts), 0);
+    for (size_t i = 0; i < pts.count; i++) {
+        ck_assert(sluice_region_contains(&r, 2, pts.xyz + 3 * i));
+        ck_assert(sluice_point_in_polygon(poly, n, pts.xyz[3 * i], pts.xyz[3 * i + 1]));
+    }
+    ck_assert_uint_eq(lattice_keys(&pts, 2, dx, o, NULL), 0);
+    /* completeness, by brute force over the bounding box */
+    sluice_real lo[3], hi[3];
+    sluice_region_bounds(&r, 2, lo, hi);
+    size_t brute = 0;
+    for (long j = (long)floor((lo[1] - o[1]) / dx) - 2; j <= (long)ceil((hi[1] - o[1]) / dx) + 2;
+         j++)
+        for (long i = (long)floor((lo[0] - o[0]) / dx) - 2;
+             i <= (long)ceil((hi[0] - o[0]) / dx) + 2; i++)
+            brute += sluice_point_in_polygon(poly, n, o[0] + (i + 0.5) * dx,
+                                             o[1] + (j + 0.5) * dx);
+    ck_assert_uint_eq(pts.count, brute);
+    double perimeter = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t m = (k + 1) % n;
+        perimeter += hypot(poly[2 * m] - poly[2 * k], poly[2 * m + 1] - poly[2 * k + 1]);
+    }
+    double filled = (double)pts.count * dx * dx;
+    ck_assert_msg(fabs(filled - area) <= perimeter * dx,
+                  "filled area %g, exact %g, allowed error %g", filled, area, perimeter * dx);
+    size_t count = pts.count;
+    sluice_points_free(&pts);
+    return count;
+}
+
+START_TEST(polygon_fill_triangle)
+{
+    const double zero[3] = {0, 0, 0};
+    const sluice_real tri[] = {0, 0, 1, 0, 0, 0.7};
+    size_t n = check_polygon_fill(tri, 3, 0.01, zero, 0.35);
+    ck_assert_uint_gt(n, 3000);
+    const sluice_real tri_cw[] = {0, 0, 0, 0.7, 1, 0};
+    ck_assert_uint_eq(check_polygon_fill(tri_cw, 3, 0.01, zero, 0.35), n);
+    /* a right triangle whose hypotenuse runs through lattice points */
+    const sluice_real aligned[] = {0, 0, 1, 0, 0, 1};
+    check_polygon_fill(aligned, 3, 0.02, zero, 0.5);
+    check_polygon_fill(tri, 3, 0.013, (double[3]){0.004, -0.002, 0}, 0.35);
+}
+END_TEST
+
+START_TEST(polygon_fill_l_shape)
+{
+    const double zero[3] = {0, 0, 0};
+    const sluice_real L[] = {0, 0, 2, 0, 2, 1, 1, 1, 1, 2, 0, 2};
+    /* boundaries on lattice lines: exactly area / dx^2 */
+    ck_assert_uint_eq(check_polygon_fill(L, 6, 0.02, zero, 3.0), 7500);
+    const sluice_real L_cw[] = {0, 0, 0, 2, 1, 2, 1, 1, 2, 1, 2, 0};
+    ck_assert_uint_eq(check_polygon_fill(L_cw, 6, 0.02, zero, 3.0), 7500);
+    check_polygon_fill(L, 6, 0.017, (double[3]){0.003, 0.011, 0}, 3.0);
+    /* a polygon with the box's boundary gives the box's points */
+    const sluice_real rect[] = {0, 0, 1, 0, 1, 2, 0, 2};
+    ck_assert_uint_eq(check_polygon_fill(rect, 4, 0.02, zero, 2.0), 5000);
+    /* degenerate polygons fill nothing */
+    sluice_region line = {.shape = SLUICE_REGION_POLYGON, .polygon = rect, .vertex_count = 2};
+    ck_assert_uint_eq(fill_count(&line, 2, 0.02, zero), 0);
+}
+END_TEST
+
+START_TEST(prism_fill)
+{
+    const sluice_real L[] = {0, 0, 2, 0, 2, 1, 1, 1, 1, 2, 0, 2};
+    sluice_region prism = {.shape = SLUICE_REGION_PRISM, .min = {0, 0, -0.25}, .max = {0, 0, 0.25},
+                           .polygon = L, .vertex_count = 6};
+    sluice_points pts = {0};
+    ck_assert_int_eq(sluice_region_fill(&prism, 3, 0.05, NULL, &pts), 0);
+    ck_assert_uint_eq(pts.count, 1200 * 10);
+    for (size_t i = 0; i < pts.count; i++)
+        ck_assert(sluice_region_contains(&prism, 3, pts.xyz + 3 * i));
+    ck_assert_uint_eq(lattice_keys(&pts, 3, 0.05, (double[3]){0, 0, 0}, NULL), 0);
+    sluice_real lo[3], hi[3];
+    sluice_region_bounds(&prism, 3, lo, hi);
+    ck_assert_double_eq(lo[0], 0);
+    ck_assert_double_eq(hi[1], 2);
+    ck_assert_double_eq(lo[2], -0.25);
+    ck_assert_double_eq(hi[2], 0.25);
+    ck_assert(!sluice_region_contains(&prism, 3, (sluice_real[3]){0.5, 0.5, 0.25}));
+    ck_assert(sluice_region_contains(&prism, 3, (sluice_real[3]){0.5, 0.5, -0.25}));
+    ck_assert(!sluice_region_contains(&prism, 3, (sluice_real[3]){1.5, 1.5, 0}));
+    sluice_points_free(&pts);
+}
+END_TEST
+
+/* ------------------------------------------------------- closest points -- */
+
+static void assert_point(const sluice_real got[3], double x, double y, double z)
+{
+    ck_assert_msg(got[0] == x && got[1] == y && got[2] == z,
+                  "closest point (%.17g, %.17g, %.17g), expected (%g, %g, %g)", got[0], got[1],
+                  got[2], x, y, z);
+}
+
+START_TEST(segment_closest)
+{
+    const sluice_real a[3] = {0, 0, 0}, b[3] = {2, 0, 0};
+    sluice_real c[3];
+    int f = -1;
+    ck_assert_double_eq(sluice_segment_closest((sluice_real[3]){1, 1, 0}, a, b, c, &f), 1.0);
+    ck_assert_int_eq(f, 0);
+    assert_point(c, 1, 0, 0);
+    ck_assert_double_eq_tol(sluice_segment_closest((sluice_real[3]){-1, 1, 0}, a, b, c, &f),
+                            sqrt(2.0), EPS);
+    ck_assert_int_eq(f, 1);
+    assert_point(c, 0, 0, 0);
+    ck_assert_double_eq_tol(sluice_segment_closest((sluice_real[3]){3, -1, 0}, a, b, c, &f),
+                            sqrt(2.0), EPS);
+    ck_assert_int_eq(f, 2);
+    assert_point(c, 2, 0, 0);
+    /* on the segment, and in 3D */
+    ck_assert_double_eq(sluice_segment_closest((sluice_real[3]){0.5, 0, 0}, a, b, c, &f), 0.0);
+    ck_assert_int_eq(f, 0);
+    const sluice_real a3[3] = {1, 1, 1}, b3[3] = {1, 1, 3};
+    ck_assert_double_eq(sluice_segment_closest((sluice_real[3]){1, 4, 2.5}, a3, b3, c, &f), 3.0);
+    ck_assert_int_eq(f, 0);
+    assert_point(c, 1, 1, 2.5);
+}
+END_TEST
+
+START_TEST(triangle_closest_regions)
+{
+    const sluice_real a[3] = {0, 0, 0}, b[3] = {1, 0, 0}, c[3] = {0, 1, 0};
+    struct {
+        sluice_real p[3];
+        int feature;
+        double q[3];
+    } cases[] = {
+        {{0.25, 0.25, 2}, 0, {0.25, 0.25, 0}},   /* face */
+        {{-1, -1, 1}, 1, {0, 0, 0}},             /* vertex a */
+        {{2, -0.5, 0.25}, 2, {1, 0, 0}},         /* vertex b */
+        {{-0.5, 2, -1}, 3, {0, 1, 0}},           /* vertex c */
+        {{0.5, -1, 0.5}, 4, {0.5, 0, 0}},        /* edge ab */
+        {{1, 1, 0}, 5, {0.5, 0.5, 0}},           /* edge bc */
+        {{-1, 0.5, -0.25}, 6, {0, 0.5, 0}},      /* edge ca */
+        {{0.25, 0.5, -3}, 0, {0.25, 0.5, 0}},    /* face, from behind */
+        {{0.75, 0.75, 0.5}, 5, {0.5, 0.5, 0}},   /* edge bc, off the plane */
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        sluice_real q[3];
+        int f = -1;
+        double d = sluice_triangle_closest(cases[i].p, a, b, c, q, &f);
+        ck_assert_msg(f == cases[i].feature, "case %zu: feature %d, expected %d", i, f,
+                      cases[i].feature);
+        assert_point(q, cases[i].q[0], cases[i].q[1], cases[i].q[2]);
+        double e[3] = {cases[i].p[0] - cases[i].q[0], cases[i].p[1] - cases[i].q[1],
+                       cases[i].p[2] - cases[i].q[2]};
+        ck_assert_double_eq_tol(d, sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]), EPS);
+    }
+    /* a degenerate (collinear) triangle falls back to its edges */
+    const sluice_real d0[3] = {0, 0, 0}, d1[3] = {1, 0, 0}, d2[3] = {2, 0, 0};
+    sluice_real q[3];
+    int f = -1;
+    ck_assert_double_eq(sluice_triangle_closest((sluice_real[3]){0.5, 1, 0}, d0, d1, d2, q, &f),
+                        1.0);
+    assert_point(q, 0.5, 0, 0);
+    ck_assert_int_eq(f, 4);
+}
+END_TEST
+
+/* A general triangle against brute force over a fine barycentric sampling. */
+START_TEST(triangle_closest_random)
+{
+    uint64_t rng = 12345;
+    const sluice_real a[3] = {0.3, -0.2, 0.1}, b[3] = {1.4, 0.5, -0.3}, c[3] = {-0.1, 0.9, 0.8};
+    const int N = 200;
+    for (int trial = 0; trial < 300; trial++) {
+        sluice_real p[3] = {uniform(&rng, -1, 2), uniform(&rng, -1, 2), uniform(&rng, -1, 2)};
+        sluice_real q[3];
+        int f;
+        double d = sluice_triangle_closest(p, a, b, c, q, &f);
+        double best = HUGE_VAL;
+        for (int i = 0; i <= N; i++)
+            for (int j = 0; i + j <= N; j++) {
+                double u = (double)i / N, v = (double)j / N, w = 1 - u - v, s = 0;
+                for (int k = 0; k < 3; k++) {
+                    double x = w * a[k] + u * b[k] + v * c[k] - p[k];
+                    s += x * x;
+                }
+                best = fmin(best, sqrt(s));
+            }
+        ck_assert(d <= best + 1e-12);
+        ck_assert(d >= best - 0.02);
+        double e = 0;
+        for (int k = 0; k < 3; k++)
+            e += (p[k] - q[k]) * (p[k] - q[k]);
+        ck_assert_double_eq_tol(sqrt(e), d, 1e-12);
+        ck_assert(f >= 0 && f <= 6);
+    }
+}
+END_TEST
+
+/* ----------------------------------------------------------- wall build -- */
+
+START_TEST(wall_refusals)
+{
+    sluice_wall_geometry w;
+    const char *reason = NULL;
+    const sluice_real one[] = {0, 0};
+    ck_assert_int_eq(sluice_wall_build_polyline(&w, one, 1, 0, &reason), -1);
+    ck_assert_ptr_nonnull(reason);
+    ck_assert_ptr_null(w.points);
+    sluice_wall_geometry_free(&w);
+    reason = NULL;
+    const sluice_real repeated[] = {0, 0, 1, 0, 1, 0, 2, 1};
+    ck_assert_int_eq(sluice_wall_build_polyline(&w, repeated, 4, 0, &reason), -1);
+    ck_assert_ptr_nonnull(reason);
+    ck_assert_ptr_null(w.points);
+    reason = NULL;
+    const sluice_real two[] = {0, 0, 1, 0};
+    ck_assert_int_eq(sluice_wall_build_polyline(&w, two, 2, 1, &reason), -1);
+    ck_assert_ptr_nonnull(reason);
+    reason = NULL;
+    const sluice_real closing[] = {0, 0, 1, 0, 1, 1, 0, 0}; /* closed, last == first */
+    ck_assert_int_eq(sluice_wall_build_polyline(&w, closing, 4, 1, &reason), -1);
+    ck_assert_ptr_nonnull(reason);
+    reason = NULL;
+    const sluice_real nan_point[] = {0, 0, NAN, 1};
+    ck_assert_int_eq(sluice_wall_build_polyline(&w, nan_point, 2, 0, &reason), -1);
+    ck_assert_ptr_nonnull(reason);
+    /* the same vertices open are fine, and NULL reason is allowed */
+    ck_assert_int_eq(sluice_wall_build_polyline(&w, closing, 3, 1, NULL), 0);
+    ck_assert_uint_eq(w.element_count, 3);
+    sluice_wall_geometry_free(&w);
+    ck_assert_ptr_null(w.points);
+    sluice_wall_geometry_free(&w); /* twice is harmless */
+
+    const sluice_real v[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 2, 0, 0};
+    const uint32_t out_of_range[] = {0, 1, 7};
+    reason = NULL;
+    ck_assert_int_eq(sluice_wall_build_triangles(&w, v, 5, out_of_range, 1, &reason), -1);
+    ck_assert_ptr_nonnull(reason);
+    const uint32_t same_index[] = {0, 1, 1};
+    reason = NULL;
+    ck_assert_int_eq(sluice_wall_build_triangles(&w, v, 5, same_index, 1, &reason), -1);
+    ck_assert_ptr_nonnull(reason);
+    const uint32_t collinear[] = {0, 1, 4};
+    reason = NULL;
+    ck_assert_int_eq(sluice_wall_build_triangles(&w, v, 5, collinear, 1, &reason), -1);
+    ck_assert_ptr_nonnull(reason);
+    const uint32_t three_on_an_edge[] = {0, 1, 2, 1, 0, 3, 0, 1, 3};
+    reason = NULL;
+    ck_assert_int_eq(sluice_wall_build_triangles(&w, v, 5, three_on_an_edge, 3, &reason), -1);
+    ck_assert_ptr_nonnull(reason);
+    ck_assert_ptr_null(w.points);
+    const uint32_t inconsistent[] = {0, 1, 2, 0, 1, 3};
+    reason = NULL;
+    ck_assert_int_eq(sluice_wall_build_triangles(&w, v, 5, inconsistent, 2, &reason), -1);
+    ck_assert_ptr_nonnull(reason);
+    reason = NULL;
+    ck_assert_int_eq(sluice_wall_build_triangles(&w, v, 5, NULL, 0, &reason), -1);
+    ck_assert_ptr_nonnull(reason);
+    const uint32_t consistent[] = {0, 1, 2, 1, 0, 3};
+    ck_assert_int_eq(sluice_wall_build_triangles(&w, v, 5, consistent, 2, &reason), 0);
+    ck_assert_uint_eq(w.element_count, 2);
+    sluice_wall_geometry_free(&w);
+
+    const sluice_real lo[3] = {0, 0, 0}, flat[3] = {1, 0, 1}, hi[3] = {1, 1, 1};
+    reason = NULL;
+    ck_assert_int_eq(sluice_wall_build_tank(&w, 3, lo, flat, &reason), -1);
+    ck_assert_ptr_nonnull(reason);
+    reason = NULL;
+    ck_assert_int_eq(sluice_wall_build_box(&w, 2, lo, flat, &reason), -1);
+    ck_assert_ptr_nonnull(reason);
+    reason = NULL;
+    ck_assert_int_eq(sluice_wall_build_box(&w, 4, lo, hi, &reason), -1);
+    ck_assert_ptr_nonnull(reason);
+    /* in 2D the z bounds are not used */
+    ck_assert_int_eq(sluice_wall_build_tank(&w, 2, lo, (sluice_real[3]){1, 1, 0}, &reason), 0);
+    sluice_wall_geometry_free(&w);
+}
+END_TEST
+
+static void assert_vec(const sluice_real *v, double x, double y, double z)
+{
+    ck_assert_msg(fabs(v[0] - x) < EPS && fabs(v[1] - y) < EPS && fabs(v[2] - z) < EPS,
+                  "(%.15g, %.15g, %.15g), expected (%g, %g, %g)", v[0], v[1], v[2], x, y, z);
+}
+
+START_TEST(wall_normals_2d)
+{
+    sluice_wall_geometry w;
+    const char *reason = NULL;
+    const sluice_real lo[3] = {0, 0, 0}, hi[3] = {4, 2.5, 0};
+    ck_assert_int_eq(sluice_wall_build_tank(&w, 2, lo, hi, &reason), 0);
+    ck_assert_uint_eq(w.dimensions, 2);
+    ck_assert_uint_eq(w.element_count, 3);
+    assert_vec(w.points + 0, 0, 2.5, 0);
+    assert_vec(w.points + 3, 0, 0, 0);
+    assert_vec(w.normals + 0, 1, 0, 0); /* into the tank */
+    assert_vec(w.normals + 3, 0, 1, 0);
+    assert_vec(w.normals + 6, -1, 0, 0);
+    const uint8_t open[6] = {1, 0, 0, 0, 0, 1};
+    for (int k = 0; k < 6; k++)
+        ck_assert_uint_eq(w.open_vertex[k], open[k]);
+    const double s = sqrt(0.5);
+    assert_vec(w.vertex_normals + 0, 1, 0, 0);  /* open end: the segment normal */
+    assert_vec(w.vertex_normals + 3, s, s, 0);  /* bottom-left, end of segment 0 */
+    assert_vec(w.vertex_normals + 6, s, s, 0);  /* bottom-left, start of segment 1 */
+    assert_vec(w.vertex_normals + 9, -s, s, 0); /* bottom-right */
+    assert_vec(w.vertex_normals + 15, -1, 0, 0);
+    sluice_wall_geometry_free(&w);
+
+    ck_assert_int_eq(sluice_wall_build_box(&w, 2, lo, hi, &reason), 0);
+    ck_assert_uint_eq(w.element_count, 4);
+    for (uint32_t e = 0; e < 4; e++) {
+        double mx = 0.5 * (w.points[6 * e] + w.points[6 * e + 3]) - 2;
+        double my = 0.5 * (w.points[6 * e + 1] + w.points[6 * e + 4]) - 1.25;
+        ck_assert(w.normals[3 * e] * mx + w.normals[3 * e + 1] * my > 0); /* out of the box */
+        ck_assert(!w.open_vertex[2 * e] && !w.open_vertex[2 * e + 1]);
+        /* vertex pseudo-normals point out of the box, diagonally */
+        for (int j = 0; j < 2; j++) {
+            const sluice_real *v = w.points + 6 * e + 3 * j, *n = w.vertex_normals + 6 * e + 3 * j;
+            ck_assert_double_eq_tol(fabs(n[0]), s, EPS);
+            ck_assert(n[0] * (v[0] - 2) > 0 && n[1] * (v[1] - 1.25) > 0);
+        }
+    }
+    sluice_wall_geometry_free(&w);
+}
+END_TEST
+
+START_TEST(wall_normals_3d)
+{
+    sluice_wall_geometry w;
+    const char *reason = NULL;
+    const sluice_real lo[3] = {0, 0, 0}, hi[3] = {1, 0.6, 0.5};
+    const double centre[3] = {0.5, 0.3, 0.25};
+    for (int tank = 1; tank >= 0; tank--) {
+        int rc = tank ? sluice_wall_build_tank(&w, 3, lo, hi, &reason)
+                      : sluice_wall_build_box(&w, 3, lo, hi, &reason);
+        ck_assert_int_eq(rc, 0);
+        ck_assert_uint_eq(w.dimensions, 3);
+        ck_assert_uint_eq(w.element_count, tank ? 10 : 12);
+        int open_edges = 0, top_faces = 0;
+        for (uint32_t e = 0; e < w.element_count; e++) {
+            const sluice_real *p = w.points + 9 * e, *n = w.normals + 3 * e;
+            double to_centre = 0;
+            for (int d = 0; d < 3; d++)
+                to_centre += n[d] * (centre[d] - (p[d] + p[3 + d] + p[6 + d]) / 3);
+            ck_assert(tank ? to_centre > 0 : to_centre < 0);
+            top_faces += p[2] == 0.5 && p[5] == 0.5 && p[8] == 0.5;
+            for (int j = 0; j < 3; j++) {
+                const sluice_real *v = p + 3 * j, *vn = w.vertex_normals + 9 * e + 3 * j;
+                const sluice_real *q = p + 3 * ((j + 1) % 3);
+                const sluice_real *en = w.edge_normals + 9 * e + 3 * j;
+                open_edges += w.open_edge[3 * e + j];
+                /* open edges: the top rim of the tank */
+                int rim = tank && v[2] == 0.5 && q[2] == 0.5;
+                ck_assert_int_eq(w.open_edge[3 * e + j], rim);
+                ck_assert_int_eq(w.open_vertex[3 * e + j], tank && v[2] == 0.5);
+                /* corner pseudo-normals: the diagonal of the corner */
+                const double r3 = 1 / sqrt(3.0);
+                double sx = v[0] == 0 ? 1 : -1, sy = v[1] == 0 ? 1 : -1, sz = v[2] == 0 ? 1 : -1;
+                if (tank && v[2] == 0)
+                    assert_vec(vn, sx * r3, sy * r3, sz * r3);
+                if (tank && v[2] == 0.5)
+                    assert_vec(vn, sx * sqrt(0.5), sy * sqrt(0.5), 0);
+                if (!tank)
+                    assert_vec(vn, -sx * r3, -sy * r3, -sz * r3);
+                /* edge pseudo-normals: face normal inside a face, diagonal on
+                 * the box's edges */
+                int axes = (v[0] != q[0]) + (v[1] != q[1]) + (v[2] != q[2]);
+                if (axes == 2 || rim) {
+                    assert_vec(en, n[0], n[1], n[2]);
+                } else {
+                    double ex = v[0] == q[0] ? (v[0] == 0 ? 1 : -1) : 0;
+                    double ey = v[1] == q[1] ? (v[1] == 0 ? 1 : -1) : 0;
+                    double ez = v[2] == q[2] ? (v[2] == 0 ? 1 : -1) : 0;
+                    double f = tank ? sqrt(0.5) : -sqrt(0.5);
+                    assert_vec(en, f * ex, f * ey, f * ez);
+                }
+            }
+        }
+        ck_assert_int_eq(open_edges, tank ? 4 : 0);
+        ck_assert_int_eq(top_faces, tank ? 0 : 2);
+        sluice_wall_geometry_free(&w);
+    }
+}
+END_TEST
+
+/* -------------------------------------------------------- signed distance -- */
+
+START_TEST(signed_distance_tank_2d)
+{
+    sluice_wall_geometry w;
+    const char *reason = NULL;
+    ck_assert_int_eq(
+        sluice_wall_build_tank(&w, 2, (sluice_real[3]){0, 0, 0}, (sluice_real[3]){4, 2.5, 0},
+                               &reason),
+        0);
+    uint32_t element = 99;
+    ck_assert_double_eq_tol(signed_distance(&w, 2, 1, 0, NULL, &element), 1.0, EPS);
+    ck_assert_uint_eq(element, 1);
+    assert_sd(&w, 2, -0.5, 0, -0.5, 0);
+    assert_sd(&w, -0.3, 1, 0, -0.3, 0);
+    assert_sd(&w, 4.2, 1, 0, -0.2, 0);
+    assert_sd(&w, 3.9, 1, 0, 0.1, 0);
+    assert_sd(&w, 0, 1, 0, 0, 0); /* on the wall */
+    /* bottom-left corner, inside and outside */
+    assert_sd(&w, 0.1, 0.2, 0, 0.1, 0);
+    assert_sd(&w, 0.2, 0.1, 0, 0.1, 0);
+    assert_sd(&w, 0.1, 0.1, 0, 0.1, 0);
+    assert_sd(&w, -0.3, -0.4, 0, -0.5, 0);
+    assert_sd(&w, -0.1, 0.05, 0, -0.1, 0);
+    assert_sd(&w, 0.05, -0.1, 0, -0.1, 0);
+    assert_sd(&w, -0.1, -0.1, 0, -sqrt(0.02), 0);
+    assert_sd(&w, 4.3, -0.4, 0, -0.5, 0);
+    /* next to the open top ends: in front of / behind the wall, or beyond it */
+    assert_sd(&w, -0.1, 2.4, 0, -0.1, 0);
+    assert_sd(&w, 0.1, 2.4, 0, 0.1, 0);
+    assert_beyond(&w, -0.1, 2.6, 0);
+    assert_beyond(&w, 0.5, 2.7, 0);
+    assert_beyond(&w, 3.9, 2.6, 0);
+    assert_beyond(&w, 4.3, 2.6, 0);
+    assert_beyond(&w, 2, 3, 0);
+    assert_beyond(&w, 0, 2.6, 0);
+    /* exactly level with the end is not beyond */
+    assert_sd(&w, -0.1, 2.5, 0, -0.1, 0);
+    sluice_wall_geometry_free(&w);
+}
+END_TEST
+
+/* The tank [0,1] x [0,0.6] x [0,0.5] (open top) and the box of the same
+ * bounds: fixed points at faces, edges and corners, then random points
+ * against the closed-form distance to a box. */
+START_TEST(signed_distance_3d)
+{
+    sluice_wall_geometry tank, box;
+    const char *reason = NULL;
+    const sluice_real lo[3] = {0, 0, 0}, hi[3] = {1, 0.6, 0.5};
+    ck_assert_int_eq(sluice_wall_build_tank(&tank, 3, lo, hi, &reason), 0);
+    ck_assert_int_eq(sluice_wall_build_box(&box, 3, lo, hi, &reason), 0);
+
+    /* tank: faces */
+    assert_sd(&tank, 0.5, 0.3, 0.25, 0.25, 0);
+    assert_sd(&tank, -0.2, 0.3, 0.25, -0.2, 0);
+    assert_sd(&tank, 0.5, 0.3, -0.1, -0.1, 0);
+    assert_sd(&tank, 0.9, 0.3, 0.3, 0.1, 0);
+    assert_sd(&tank, 0.5, 0.7, 0.3, -0.1, 0);
+    /* tank: edges (bottom, vertical) inside and outside */
+    assert_sd(&tank, 0.5, -0.3, -0.4, -0.5, 0);
+    assert_sd(&tank, -0.3, -0.4, 0.25, -0.5, 0);
+    assert_sd(&tank, 1.3, 0.3, -0.4, -0.5, 0);
+    assert_sd(&tank, 0.5, 0.05, 0.05, 0.05, 0);
+    assert_sd(&tank, 0.05, 0.05, 0.3, 0.05, 0);
+    /* tank: corners */
+    assert_sd(&tank, -0.1, -0.2, -0.2, -0.3, 0);
+    assert_sd(&tank, 1.2, 0.7, -0.2, -0.3, 0);
+    assert_sd(&tank, 0.1, 0.1, 0.1, 0.1, 0);
+    assert_sd(&tank, 0.95, 0.55, 0.05, 0.05, 0);
+    /* tank: near the open top */
+    assert_sd(&tank, -0.1, 0.3, 0.45, -0.1, 0);
+    assert_sd(&tank, 0.1, 0.3, 0.45, 0.1, 0);
+    assert_sd(&tank, -0.1, -0.1, 0.45, -sqrt(0.02), 0);
+    assert_sd(&tank, -0.1, -0.1, 0.5, -sqrt(0.02), 0); /* level with the rim corner */
+    assert_beyond(&tank, 0.5, 0.3, 0.6);
+    assert_beyond(&tank, -0.1, 0.3, 0.55);
+    assert_beyond(&tank, 0.1, 0.3, 0.55);
+    assert_beyond(&tank, -0.1, -0.1, 0.6);
+    assert_beyond(&tank, 1.1, 0.7, 0.51);
+    assert_beyond(&tank, 0.02, 0.01, 0.5001);
+
+    /* box (fluid outside) */
+    assert_sd(&box, 0.5, 0.3, 0.25, -0.25, 0);
+    assert_sd(&box, 1.2, 0.3, 0.25, 0.2, 0);
+    assert_sd(&box, 0.5, 0.3, 0.6, 0.1, 0);
+    assert_sd(&box, 1.3, 0.3, 0.9, 0.5, 0);
+    assert_sd(&box, 0.5, -0.3, -0.4, 0.5, 0);
+    assert_sd(&box, 1.1, 0.8, 0.7, 0.3, 0);
+    assert_sd(&box, -0.1, -0.2, -0.2, 0.3, 0);
+    assert_sd(&box, 0.9, 0.55, 0.45, -0.05, 0);
+    assert_sd(&box, 0.95, 0.5, 0.3, -0.05, 0);
+    assert_sd(&box, 1, 0.3, 0.25, 0, 0);
+
+    uint64_t rng = 7;
+    const double blo[3] = {0, 0, 0}, bhi[3] = {1, 0.6, 0.5};
+    for (int trial = 0; trial < 20000; trial++) {
+        double p[3] = {uniform(&rng, -0.4, 1.4), uniform(&rng, -0.4, 1.0),
+                       uniform(&rng, -0.4, 0.9)};
+        int inside, beyond;
+        double dist = box_surface_distance(p, blo, bhi, 3, &inside);
+        double d = signed_distance(&box, p[0], p[1], p[2], &beyond, NULL);
+        ck_assert_msg(fabs(d - (inside ? -dist : dist)) < 1e-12 && !beyond,
+                      "box at (%g, %g, %g): %g, expected %g", p[0], p[1], p[2], d,
+                      inside ? -dist : dist);
+        d = signed_distance(&tank, p[0], p[1], p[2], &beyond, NULL);
+        if (inside) /* the open top is no wall */
+            dist = fmin(fmin(fmin(p[0], 1 - p[0]), fmin(p[1], 0.6 - p[1])), p[2]);
+        if (p[2] > 0.5 + 1e-9) {
+            ck_assert_msg(beyond, "tank at (%g, %g, %g) should be beyond", p[0], p[1], p[2]);
+        } else if (p[2] < 0.5 - 1e-9) {
+            ck_assert_msg(fabs(d - (inside ? dist : -dist)) < 1e-12 && !beyond,
+                          "tank at (%g, %g, %g): %g beyond %d, expected %g", p[0], p[1], p[2],
+                          d, beyond, inside ? dist : -dist);
+        }
+    }
+    sluice_wall_geometry_free(&tank);
+    sluice_wall_geometry_free(&box);
+}
+END_TEST
+
+/* Brute-force distance to the segments of a closed polygon. */
+static double polygon_distance(const sluice_real *xy, uint32_t n, const sluice_real p[3])
+{
+    double best = HUGE_VAL;
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t m = (k + 1) % n;
+        sluice_real a[3] = {xy[2 * k], xy[2 * k + 1], 0}, b[3] = {xy[2 * m], xy[2 * m + 1], 0};
+        best = fmin(best, sluice_segment_closest(p, a, b, NULL, NULL));
+    }
+    return best;
+}
+
+/* Closed polylines as obstacles (fluid outside, clockwise): the sign must be
+ * negative exactly inside the polygon, at convex and concave corners. */
+START_TEST(signed_distance_obstacles_2d)
+{
+    const sluice_real L_cw[] = {0, 0, 0, 2, 1, 2, 1, 1, 2, 1, 2, 0};
+    const sluice_real dart_cw[] = {0, 0, 1, 1, 0, 2, 2, 1};
+    const sluice_real box_cw[] = {0.2, 0.4, 0.2, 1.0, 1.2, 1.0, 1.2, 0.4};
+    const sluice_real *shapes[] = {L_cw, dart_cw, box_cw};
+    const uint32_t counts[] = {6, 4, 4};
+    uint64_t rng = 99;
+    for (int s = 0; s < 3; s++) {
+        sluice_wall_geometry w;
+        const char *reason = NULL;
+        ck_assert_int_eq(sluice_wall_build_polyline(&w, shapes[s], counts[s], 1, &reason), 0);
+        for (int trial = 0; trial < 20000; trial++) {
+            sluice_real p[3] = {uniform(&rng, -0.5, 2.5), uniform(&rng, -0.5, 2.5), 0};
+            /* also points on the diagonals through the corners */
+            if (trial % 4 == 0) {
+                uint32_t v = (uint32_t)trial / 4 % counts[s];
+                double t = uniform(&rng, -0.3, 0.3);
+                p[0] = shapes[s][2 * v] + t;
+                p[1] = shapes[s][2 * v + 1] + (trial % 8 ? t : -t);
+            }
+            int beyond;
+            double d = signed_distance(&w, p[0], p[1], 0, &beyond, NULL);
+            double dist = polygon_distance(shapes[s], counts[s], p);
+            int inside = sluice_point_in_polygon(shapes[s], counts[s], p[0], p[1]);
+            if (dist < 1e-9)
+                continue;
+            ck_assert_msg(fabs(d - (inside ? -dist : dist)) < 1e-12 && !beyond,
+                          "shape %d at (%g, %g): %g, expected %g", s, p[0], p[1], d,
+                          inside ? -dist : dist);
+        }
+        sluice_wall_geometry_free(&w);
+    }
+    /* the box builder gives the same as the clockwise polyline */
+    sluice_wall_geometry a, b;
+    ck_assert_int_eq(sluice_wall_build_polyline(&a, box_cw, 4, 1, NULL), 0);
+    ck_assert_int_eq(sluice_wall_build_box(&b, 2, (sluice_real[3]){0.2, 0.4, 0},
+                                           (sluice_real[3]){1.2, 1.0, 0}, NULL),
+                     0);
+    for (int trial = 0; trial < 1000; trial++) {
+        sluice_real p[3] = {uniform(&rng, -0.5, 2), uniform(&rng, -0.5, 2), 0};
+        ck_assert_double_eq(sluice_wall_signed_distance(&a, p, NULL, NULL),
+                            sluice_wall_signed_distance(&b, p, NULL, NULL));
+    }
+    sluice_wall_geometry_free(&a);
+    sluice_wall_geometry_free(&b);
+}
+END_TEST
+
+/* Closed meshes with sharp (55 degree) and reflex edges and corners, as
+ * obstacles: the sign must say inside/outside exactly, the magnitude must be
+ * the distance to the nearest triangle. */
+static int tetra_inside(const double p[3])
+{
+    return p[0] > 0 && p[1] > 0 && p[2] > 0 && p[0] + p[1] + p[2] < 1;
+}
+
+static int l_prism_inside(const double p[3])
+{
+    const sluice_real L[] = {0, 0, 2, 0, 2, 1, 1, 1, 1, 2, 0, 2};
+    return p[2] > 0 && p[2] < 0.5 && sluice_point_in_polygon(L, 6, p[0], p[1]);
+}
+
+START_TEST(signed_distance_meshes_3d)
+{
+    const sluice_real tetra_v[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    const uint32_t tetra_f[] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+    /* the L polygon (counter-clockwise) extruded over z in [0, 0.5] */
+    const sluice_real L[] = {0, 0, 2, 0, 2, 1, 1, 1, 1, 2, 0, 2};
+    sluice_real prism_v[12 * 3];
+    for (int i = 0; i < 12; i++) {
+        prism_v[3 * i] = L[2 * (i % 6)];
+        prism_v[3 * i + 1] = L[2 * (i % 6) + 1];
+        prism_v[3 * i + 2] = i < 6 ? 0 : 0.5;
+    }
+    uint32_t prism_f[20 * 3], nf = 0;
+    const uint32_t cap[4][3] = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {0, 4, 5}};
+    for (int t = 0; t < 4; t++) {
+        uint32_t *bottom = prism_f + 3 * nf++, *top = prism_f + 3 * nf++;
+        bottom[0] = cap[t][0], bottom[1] = cap[t][2], bottom[2] = cap[t][1]; /* -z */
+        top[0] = 6 + cap[t][0], top[1] = 6 + cap[t][1], top[2] = 6 + cap[t][2];
+    }
+    for (uint32_t i = 0; i < 6; i++) {
+        uint32_t j = (i + 1) % 6;
+        uint32_t *a = prism_f + 3 * nf++, *b = prism_f + 3 * nf++;
+        a[0] = i, a[1] = j, a[2] = 6 + j;
+        b[0] = i, b[1] = 6 + j, b[2] = 6 + i;
+    }
+    const struct {
+        const sluice_real *v;
+        const uint32_t *f;
+        uint32_t nv, nf;
+        int (*inside)(const double p[3]);
+        double lo[3], hi[3];
+    } meshes[] = {
+        {tetra_v, tetra_f, 4, 4, tetra_inside, {-0.5, -0.5, -0.5}, {1.5, 1.5, 1.5}},
+        {prism_v, prism_f, 12, 20, l_prism_inside, {-0.5, -0.5, -0.5}, {2.5, 2.5, 1.0}},
+    };
+    uint64_t rng = 5;
+    for (int m = 0; m < 2; m++) {
+        sluice_wall_geometry w;
+        const char *reason = NULL;
+        ck_assert_msg(sluice_wall_build_triangles(&w, meshes[m].v, meshes[m].nv, meshes[m].f,
+                                                  meshes[m].nf, &reason) == 0,
+                      "%s", reason);
+        for (uint32_t e = 0; e < 3 * w.element_count; e++)
+            ck_assert(!w.open_edge[e] && !w.open_vertex[e]);
+        for (int trial = 0; trial < 40000; trial++) {
+            double p[3];
+            for (int d = 0; d < 3; d++)
+                p[d] = uniform(&rng, meshes[m].lo[d], meshes[m].hi[d]);
+            if (trial % 2) { /* near a vertex, where the pseudo-normals matter */
+                uint32_t v = (uint32_t)trial / 2 % meshes[m].nv;
+                for (int d = 0; d < 3; d++)
+                    p[d] = meshes[m].v[3 * v + (uint32_t)d] + uniform(&rng, -0.2, 0.2);
+            }
+            double dist = HUGE_VAL;
+            for (uint32_t t = 0; t < meshes[m].nf; t++) {
+                const uint32_t *f = meshes[m].f + 3 * t;
+                dist = fmin(dist, sluice_triangle_closest((sluice_real[3]){p[0], p[1], p[2]},
+                                                          meshes[m].v + 3 * f[0],
+                                                          meshes[m].v + 3 * f[1],
+                                                          meshes[m].v + 3 * f[2], NULL, NULL));
+            }
+            if (dist < 1e-9)
+                continue;
+            int beyond;
+            double d = signed_distance(&w, p[0], p[1], p[2], &beyond, NULL);
+            double expect = meshes[m].inside(p) ? -dist : dist;
+            ck_assert_msg(fabs(d - expect) < 1e-12 && !beyond,
+                          "mesh %d at (%g, %g, %g): %g, expected %g", m, p[0], p[1], p[2], d,
+                          expect);
+        }
+        sluice_wall_geometry_free(&w);
+    }
+}
+END_TEST
+
+/* ------------------------------------------------------------ wall layers -- */
+
+static void layer(const sluice_wall_geometry *w, double dx, double thickness, sluice_points *pts)
+{
+    *pts = (sluice_points){0};
+    ck_assert_int_eq(sluice_wall_layer_points(w, dx, (sluice_real[3]){0, 0, 0}, thickness, pts), 0);
+}
+
+/* Every point: a lattice point, once, behind the wall within the thickness,
+ * not beyond an end. */
+static void check_layer_points(const sluice_wall_geometry *w, const sluice_points *pts, double dx,
+                               double thickness)
+{
+    const double zero[3] = {0, 0, 0};
+    ck_assert_uint_eq(lattice_keys(pts, w->dimensions, dx, zero, NULL), 0);
+    for (size_t i = 0; i < pts->count; i++) {
+        int beyond;
+        double d = sluice_wall_signed_distance(w, pts->xyz + 3 * i, &beyond, NULL);
+        ck_assert_msg(d >= -thickness - 1e-9 * dx && d < 0 && !beyond,
+                      "layer point (%g, %g, %g) at signed distance %g beyond %d", pts->xyz[3 * i],
+                      pts->xyz[3 * i + 1], pts->xyz[3 * i + 2], d, beyond);
+    }
+}
+
+START_TEST(layer_tank_2d)
+{
+    const double dx = 0.02, T = 3 * dx;
+    sluice_wall_geometry w;
+    ck_assert_int_eq(sluice_wall_build_tank(&w, 2, (sluice_real[3]){0, 0, 0},
+                                            (sluice_real[3]){4, 2.5, 0}, NULL),
+                     0);
+    sluice_points pts;
+    layer(&w, dx, T, &pts);
+    check_layer_points(&w, &pts, dx, T);
+    /* analytic: 3 rows under the 200 bottom cells, 3 columns beside the 125
+     * cells of each side, and at each bottom corner the lattice points of a
+     * quarter disc of radius 3 spacings (8 of the 9 corner points: the far
+     * corner (-0.05, -0.05) is 0.0707 > 0.06 from the wall) */
+    long expected = 3 * 200 + 2 * 3 * 125 + 2 * quarter_disc(3);
+    ck_assert_int_eq(quarter_disc(3), 8);
+    ck_assert_int_eq((long)pts.count, expected);
+    int rows[3] = {0, 0, 0};
+    double row_min[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, row_max[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    double min_x = HUGE_VAL, max_x = -HUGE_VAL, max_y = -HUGE_VAL;
+    int corner_points = 0;
+    for (size_t i = 0; i < pts.count; i++) {
+        double x = pts.xyz[3 * i], y = pts.xyz[3 * i + 1];
+        max_y = fmax(max_y, y);
+        ck_assert(!(x > 0 && x < 4 && y > 0)); /* nothing inside the tank */
+        if (y < 0) {
+            long r = lround((-y / dx - 0.5));
+            ck_assert_msg(r >= 0 && r < 3 && fabs(y + (r + 0.5) * dx) < 1e-12,
+                          "a point at y = %g under the bottom", y);
+            rows[r]++;
+            row_min[r] = fmin(row_min[r], x);
+            row_max[r] = fmax(row_max[r], x);
+            min_x = fmin(min_x, x);
+            max_x = fmax(max_x, x);
+            if (x < 0 || x > 4) {
+                corner_points++;
+                double cx = x < 0 ? x : x - 4;
+                ck_assert(cx * cx + y * y <= T * T);
+            }
+        }
+    }
+    ck_assert_int_eq(corner_points, 16);
+    /* three layers below the bottom spanning x from -0.05 to 4.05 */
+    ck_assert_double_eq_tol(min_x, -0.05, 1e-12);
+    ck_assert_double_eq_tol(max_x, 4.05, 1e-12);
+    ck_assert_int_eq(rows[0], 206);
+    ck_assert_int_eq(rows[1], 206);
+    ck_assert_int_eq(rows[2], 204);
+    ck_assert_double_eq_tol(row_min[0], -0.05, 1e-12);
+    ck_assert_double_eq_tol(row_max[1], 4.05, 1e-12);
+    ck_assert_double_eq_tol(row_min[2], -0.03, 1e-12);
+    ck_assert_double_eq_tol(row_max[2], 4.03, 1e-12);
+    /* nothing beside the open top: the highest points are the last row below it */
+    ck_assert_double_eq_tol(max_y, 2.49, 1e-12);
+    ck_assert(max_y <= 2.5 + dx);
+    sluice_points_free(&pts);
+
+    /* a thicker layer only adds points; thickness 0 gives none here */
+    layer(&w, dx, 5 * dx, &pts);
+    ck_assert_int_eq((long)pts.count, 5 * 200 + 2 * 5 * 125 + 2 * quarter_disc(5));
+    sluice_points_free(&pts);
+    layer(&w, dx, 0, &pts);
+    ck_assert_uint_eq(pts.count, 0);
+    sluice_points_free(&pts);
+    sluice_wall_geometry_free(&w);
+}
+END_TEST
+
+START_TEST(layer_tank_3d)
+{
+    const double dx = 0.05, T = 3 * dx;
+    sluice_wall_geometry w;
+    ck_assert_int_eq(sluice_wall_build_tank(&w, 3, (sluice_real[3]){0, 0, 0},
+                                            (sluice_real[3]){1, 0.6, 0.5}, NULL),
+                     0);
+    sluice_points pts;
+    layer(&w, dx, T, &pts);
+    check_layer_points(&w, &pts, dx, T);
+    const long nx = 20, ny = 12, nz = 10;
+    /* bottom slab, side slabs, vertical edges, bottom edges, bottom corners */
+    long expected = 3 * nx * ny + 3 * nz * 2 * (nx + ny) + 4 * nz * quarter_disc(3) +
+                    2 * (nx + ny) * quarter_disc(3) + 4 * ball_octant(3);
+    ck_assert_int_eq(ball_octant(3), 17);
+    ck_assert_int_eq(expected, 3540);
+    ck_assert_int_eq((long)pts.count, expected);
+    double max_z = -HUGE_VAL;
+    int bottom_rows[3] = {0, 0, 0};
+    for (size_t i = 0; i < pts.count; i++) {
+        const sluice_real *p = pts.xyz + 3 * i;
+        max_z = fmax(max_z, p[2]);
+        int inside = p[0] > 0 && p[0] < 1 && p[1] > 0 && p[1] < 0.6 && p[2] > 0;
+        ck_assert(!inside);
+        if (p[0] > 0 && p[0] < 1 && p[1] > 0 && p[1] < 0.6) {
+            long r = lround(-p[2] / dx - 0.5);
+            ck_assert(r >= 0 && r < 3);
+            bottom_rows[r]++;
+        }
+    }
+    for (int r = 0; r < 3; r++)
+        ck_assert_int_eq(bottom_rows[r], nx * ny);
+    ck_assert_double_eq_tol(max_z, 0.475, 1e-12);
+    sluice_points_free(&pts);
+    sluice_wall_geometry_free(&w);
+}
+END_TEST
+
+/* A 30 degree wall: the layer is exactly the lattice points behind it within
+ * the thickness whose projection falls on the segment. */
+START_TEST(layer_slanted_2d)
+{
+    const double dx = 0.02, T = 3 * dx;
+    const double c30 = cos(M_PI / 6), s30 = sin(M_PI / 6);
+    const double a[2] = {0.1, 0.2}, b[2] = {0.1 + 2 * c30, 0.2 + 2 * s30};
+    const sluice_real xy[4] = {a[0], a[1], b[0], b[1]};
+    sluice_wall_geometry w;
+    ck_assert_int_eq(sluice_wall_build_polyline(&w, xy, 2, 0, NULL), 0);
+    sluice_points pts;
+    layer(&w, dx, T, &pts);
+    check_layer_points(&w, &pts, dx, T);
+    const double n[2] = {-s30, c30}, u[2] = {c30, s30};
+    for (size_t i = 0; i < pts.count; i++) {
+        double px = pts.xyz[3 * i] - a[0], py = pts.xyz[3 * i + 1] - a[1];
+        double behind = px * n[0] + py * n[1], t = (px * u[0] + py * u[1]) / 2;
+        ck_assert(behind < 0 && behind >= -T - 1e-12);
+        ck_assert(t >= -1e-9 && t <= 1 + 1e-9);
+    }
+    long brute = 0;
+    for (long j = -10; j < 100; j++)
+        for (long i = -10; i < 120; i++) {
+            double px = (i + 0.5) * dx - a[0], py = (j + 0.5) * dx - a[1];
+            double behind = px * n[0] + py * n[1], t = (px * u[0] + py * u[1]) / 2;
+            brute += behind <= 0 && behind >= -T && t >= 0 && t <= 1;
+        }
+    ck_assert_int_eq((long)pts.count, brute);
+    ck_assert_int_gt(brute, 200);
+    sluice_points_free(&pts);
+    sluice_wall_geometry_free(&w);
+
+    /* a tank with slanted sides: every layer point is outside the tank,
+     * within the thickness of the wall */
+    const sluice_real trap[] = {0, 2, 0.5, 0, 3.5, 0, 4, 2};
+    ck_assert_int_eq(sluice_wall_build_polyline(&w, trap, 4, 0, NULL), 0);
+    layer(&w, dx, T, &pts);
+    check_layer_points(&w, &pts, dx, T);
+    ck_assert_int_gt((long)pts.count, 2.5 * 7.1 / dx);
+    for (size_t i = 0; i < pts.count; i++) {
+        const sluice_real *p = pts.xyz + 3 * i;
+        ck_assert(!sluice_point_in_polygon(trap, 4, p[0], p[1]));
+        double dist = HUGE_VAL;
+        for (int s = 0; s < 3; s++) {
+            sluice_real sa[3] = {trap[2 * s], trap[2 * s + 1], 0};
+            sluice_real sb[3] = {trap[2 * s + 2], trap[2 * s + 3], 0};
+            dist = fmin(dist, sluice_segment_closest(p, sa, sb, NULL, NULL));
+        }
+        ck_assert(dist > 0 && dist <= T + 1e-12);
+        ck_assert(p[1] < 2);
+    }
+    sluice_points_free(&pts);
+    sluice_wall_geometry_free(&w);
+}
+END_TEST
+
+START_TEST(layer_box_obstacles)
+{
+    /* 2D: the box [0.2, 1.2] x [0.4, 1.0], 50 x 30 cells, layer inside */
+    const double dx = 0.02, T = 3 * dx;
+    sluice_wall_geometry w;
+    const sluice_real lo2[3] = {0.2, 0.4, 0}, hi2[3] = {1.2, 1.0, 0};
+    ck_assert_int_eq(sluice_wall_build_box(&w, 2, lo2, hi2, NULL), 0);
+    sluice_points pts;
+    layer(&w, dx, T, &pts);
+    check_layer_points(&w, &pts, dx, T);
+    ck_assert_int_eq((long)pts.count, 50 * 30 - 44 * 24);
+    sluice_region r2 = {.shape = SLUICE_REGION_BOX, .min = {0.2, 0.4, 0}, .max = {1.2, 1.0, 0}};
+    for (size_t i = 0; i < pts.count; i++)
+        ck_assert(sluice_region_contains(&r2, 2, pts.xyz + 3 * i));
+    sluice_points_free(&pts);
+    sluice_wall_geometry_free(&w);
+
+    /* 3D: [0,1] x [0,0.6] x [0,0.5] at 0.05, 20 x 12 x 10 cells */
+    const double dx3 = 0.05, T3 = 3 * dx3;
+    ck_assert_int_eq(sluice_wall_build_box(&w, 3, (sluice_real[3]){0, 0, 0},
+                                           (sluice_real[3]){1, 0.6, 0.5}, NULL),
+                     0);
+    layer(&w, dx3, T3, &pts);
+    check_layer_points(&w, &pts, dx3, T3);
+    ck_assert_int_eq((long)pts.count, 20 * 12 * 10 - 14 * 6 * 4);
+    sluice_region r3 = {.shape = SLUICE_REGION_BOX, .min = {0, 0, 0}, .max = {1, 0.6, 0.5}};
+    for (size_t i = 0; i < pts.count; i++)
+        ck_assert(sluice_region_contains(&r3, 3, pts.xyz + 3 * i));
+    sluice_points_free(&pts);
+    /* a box thinner than twice the thickness is filled completely */
+    sluice_wall_geometry_free(&w);
+    ck_assert_int_eq(sluice_wall_build_box(&w, 3, (sluice_real[3]){0, 0, 0},
+                                           (sluice_real[3]){0.2, 0.6, 0.5}, NULL),
+                     0);
+    layer(&w, dx3, T3, &pts);
+    ck_assert_int_eq((long)pts.count, 4 * 12 * 10);
+    sluice_points_free(&pts);
+    sluice_wall_geometry_free(&w);
+}
+END_TEST
+
+/* ---------------------------------------------------------------- scale -- */
+
+START_TEST(fill_million)
+{
+    sluice_region box = {.shape = SLUICE_REGION_BOX, .min = {0, 0, 0}, .max = {1, 1, 0}};
+    sluice_points pts = {0};
+    double t0 = seconds();
+    ck_assert_int_eq(sluice_region_fill(&box, 2, 0.001, NULL, &pts), 0);
+    double t1 = seconds();
+    ck_assert_uint_eq(pts.count, 1000000);
+    sluice_points_free(&pts);
+    const sluice_real L[] = {0, 0, 2, 0, 2, 1, 1, 1, 1, 2, 0, 2};
+    sluice_region poly = {.shape = SLUICE_REGION_POLYGON, .polygon = L, .vertex_count = 6};
+    double t2 = seconds();
+    ck_assert_int_eq(sluice_region_fill(&poly, 2, 0.002, NULL, &pts), 0);
+    double t3 = seconds();
+    ck_assert_uint_eq(pts.count, 750000);
+    sluice_points_free(&pts);
+    printf("fill: 1e6 box points %.3f s, 7.5e5 polygon points %.3f s\n", t1 - t0, t3 - t2);
+    ck_assert(t1 - t0 < 10 && t3 - t2 < 10);
+}
+END_TEST
+
+/* A circle of 10^4 segments, as an obstacle: layer inside the ring. */
+START_TEST(layer_many_segments)
+{
+    const uint32_t n = 10000;
+    const double R = 0.5, dx = 0.001, T = 3 * dx;
+    sluice_real *xy = malloc(2 * n * sizeof *xy);
+    ck_assert_ptr_nonnull(xy);
+    for (uint32_t k = 0; k < n; k++) { /* clockwise: fluid outside */
+        xy[2 * k] = 0.5 + R * cos(-2 * M_PI * k / n);
+        xy[2 * k + 1] = 0.5 + R * sin(-2 * M_PI * k / n);
+    }
+    sluice_wall_geometry w;
+    ck_assert_int_eq(sluice_wall_build_polyline(&w, xy, n, 1, NULL), 0);
+    sluice_points pts;
+    double t0 = seconds();
+    layer(&w, dx, T, &pts);
+    double t1 = seconds();
+    printf("layer of %u segments: %zu points in %.3f s\n", n, pts.count, t1 - t0);
+    ck_assert(t1 - t0 < 10);
+    ck_assert_uint_eq(lattice_keys(&pts, 2, dx, (double[3]){0, 0, 0}, NULL), 0);
+    const double sagitta = R * (1 - cos(M_PI / n));
+    for (size_t i = 0; i < pts.count; i++) {
+        double r = hypot(pts.xyz[3 * i] - 0.5, pts.xyz[3 * i + 1] - 0.5);
+        ck_assert(r < R && r >= R - T - sagitta - 1e-12);
+    }
+    long brute = 0;
+    for (long j = 0; j < 1000; j++)
+        for (long i = 0; i < 1000; i++) {
+            double r = hypot((i + 0.5) * dx - 0.5, (j + 0.5) * dx - 0.5);
+            brute += r < R - sagitta && r >= R - T;
+        }
+    /* all points certainly in the layer, and hardly more */
+    ck_assert_int_ge((long)pts.count, brute);
+    ck_assert_int_le((long)pts.count, brute + 200);
+    sluice_points_free(&pts);
+    sluice_wall_geometry_free(&w);
+    free(xy);
+}
+END_TEST
+
+/* The unit cube with every face cut into m x m squares (2 m^2 triangles):
+ * the same signed distance and the same layer as the 12-triangle box. */
+START_TEST(layer_many_triangles)
+{
+    const uint32_t m = 29; /* 6 * 2 * 29^2 = 10092 triangles */
+    const uint32_t side = m + 1;
+    uint32_t *index = malloc((size_t)side * side * side * sizeof *index);
+    sluice_real *vertices = malloc((size_t)side * side * side * 3 * sizeof *vertices);
+    uint32_t *faces = malloc((size_t)6 * 2 * m * m * 3 * sizeof *faces);
+    ck_assert(index && vertices && faces);
+    uint32_t nv = 0, nf = 0;
+    for (uint32_t k = 0; k < side; k++)
+        for (uint32_t j = 0; j < side; j++)
+            for (uint32_t i = 0; i < side; i++) {
+                size_t at = ((size_t)k * side + j) * side + i;
+                int surface = i == 0 || j == 0 || k == 0 || i == m || j == m || k == m;
+                index[at] = surface ? nv : UINT32_MAX;
+                if (surface) {
+                    vertices[3 * nv] = (double)i / m;
+                    vertices[3 * nv + 1] = (double)j / m;
+                    vertices[3 * nv + 2] = (double)k / m;
+                    nv++;
+                }
+            }
+    /* each face: axis `a` fixed at 0 or m; (u, v) the other two axes */
+    for (int a = 0; a < 3; a++)
+        for (int high = 0; high < 2; high++)
+            for (uint32_t u = 0; u < m; u++)
+                for (uint32_t v = 0; v < m; v++) {
+                    uint32_t q[4];
+                    const uint32_t du[4] = {0, 1, 1, 0}, dv[4] = {0, 0, 1, 1};
+                    for (int c = 0; c < 4; c++) {
+                        uint32_t g[3];
+                        g[a] = high ? m : 0;
+                        g[(a + 1) % 3] = u + du[c];
+                        g[(a + 2) % 3] = v + dv[c];
+                        q[c] = index[((size_t)g[2] * side + g[1]) * side + g[0]];
+                    }
+                    /* (u, v, a) is right-handed: the cycle's normal is +a;
+                     * outward is +a on the high face */
+                    if (!high) {
+                        uint32_t t = q[1];
+                        q[1] = q[3];
+                        q[3] = t;
+                    }
+                    uint32_t *f = faces + 3 * nf;
+                    f[0] = q[0], f[1] = q[1], f[2] = q[2];
+                    f[3] = q[0], f[4] = q[2], f[5] = q[3];
+                    nf += 2;
+                }
+    ck_assert_uint_eq(nf, 10092);
+    sluice_wall_geometry fine, coarse;
+    const char *reason = NULL;
+    ck_assert_msg(sluice_wall_build_triangles(&fine, vertices, nv, faces, nf, &reason) == 0, "%s",
+                  reason);
+    ck_assert_int_eq(sluice_wall_build_box(&coarse, 3, (sluice_real[3]){0, 0, 0},
+                                           (sluice_real[3]){1, 1, 1}, NULL),
+                     0);
+    for (uint32_t e = 0; e < fine.element_count * 3; e++)
+        ck_assert(!fine.open_edge[e]);
+    uint64_t rng = 3;
+    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    for (int trial = 0; trial < 300; trial++) {
+        double p[3] = {uniform(&rng, -0.3, 1.3), uniform(&rng, -0.3, 1.3),
+                       uniform(&rng, -0.3, 1.3)};
+        int inside, beyond;
+        double dist = box_surface_distance(p, lo, hi, 3, &inside);
+        double d = signed_distance(&fine, p[0], p[1], p[2], &beyond, NULL);
+        ck_assert_msg(fabs(d - (inside ? -dist : dist)) < 1e-12 && !beyond,
+                      "(%g, %g, %g): %g, expected %g", p[0], p[1], p[2], d, inside ? -dist : dist);
+    }
+    const double dx = 0.02, T = 3 * dx;
+    sluice_points a, b;
+    double t0 = seconds();
+    layer(&fine, dx, T, &a);
+    double t1 = seconds();
+    printf("layer of %u triangles: %zu points in %.3f s\n", nf, a.count, t1 - t0);
+    ck_assert(t1 - t0 < 10);
+    layer(&coarse, dx, T, &b);
+    ck_assert_uint_eq(b.count, 50 * 50 * 50 - 44 * 44 * 44);
+    ck_assert_uint_eq(a.count, b.count);
+    key3 *ka, *kb;
+    ck_assert_uint_eq(lattice_keys(&a, 3, dx, lo, &ka), 0);
+    ck_assert_uint_eq(lattice_keys(&b, 3, dx, lo, &kb), 0);
+    ck_assert_int_eq(memcmp(ka, kb, a.count * sizeof *ka), 0);
+    free(ka);
+    free(kb);
+    sluice_points_free(&a);
+    sluice_points_free(&b);
+    sluice_wall_geometry_free(&fine);
+    sluice_wall_geometry_free(&coarse);
+    free(index);
+    free(vertices);
+    free(faces);
+}
+END_TEST
+
+int main(void)
+{
+    Suite *s = suite_create("geometry");
+    TCase *basics = tcase_create("basics");
+    tcase_set_timeout(basics, 120);
+    tcase_add_test(basics, point_in_polygon_convex);
+    tcase_add_test(basics, point_in_polygon_concave);
+    tcase_add_test(basics, box_fill_2d);
+    tcase_add_test(basics, box_fill_3d);
+    tcase_add_test(basics, polygon_fill_triangle);
+    tcase_add_test(basics, polygon_fill_l_shape);
+    tcase_add_test(basics, prism_fill);
+    tcase_add_test(basics, segment_closest);
+    tcase_add_test(basics, triangle_closest_regions);
+    tcase_add_test(basics, triangle_closest_random);
+    suite_add_tcase(s, basics);
+    TCase *walls = tcase_create("walls");
+    tcase_set_timeout(walls, 120);
+    tcase_add_test(walls, wall_refusals);
+    tcase_add_test(walls, wall_normals_2d);
+    tcase_add_test(walls, wall_normals_3d);
+    tcase_add_test(walls, signed_distance_tank_2d);
+    tcase_add_test(walls, signed_distance_3d);
+    tcase_add_test(walls, signed_distance_obstacles_2d);
+    tcase_add_test(walls, signed_distance_meshes_3d);
+    tcase_add_test(walls, layer_tank_2d);
+    tcase_add_test(walls, layer_tank_3d);
+    tcase_add_test(walls, layer_slanted_2d);
+    tcase_add_test(walls, layer_box_obstacles);
+    suite_add_tcase(s, walls);
+    TCase *scale = tcase_create("scale");
+    tcase_set_timeout(scale, 300);
+    tcase_add_test(scale, fill_million);
+    tcase_add_test(scale, layer_many_segments);
+    tcase_add_test(scale, layer_many_triangles);
+    suite_add_tcase(s, scale);
+    return test_run_suite(s);
+}

@@ -1,0 +1,346 @@
+/* Bad input through the sluice program: every case must give one clear
+ * message naming file:line:column, exit with status 2, never crash, and
+ * leave no output directory behind. */
+#include "sluice/plugin.h"
+#include "test_util.h"
+
+/* A valid small scene; cases edit one line of it. Line numbers matter. */
+static const char *base_lines[] = {
+    "dimensions: 2",                                   /* 1 */
+    "particles:",                                      /* 2 */
+    "  spacing: 0.05",                                 /* 3 */
+    "time:",                                           /* 4 */
+    "  end: 0.01",                                     /* 5 */
+    "domain:",                                         /* 6 */
+    "  min: [-0.2, -0.2]",                             /* 7 */
+    "  max: [1.2, 1.2]",                               /* 8 */
+    "geometry:",                                       /* 9 */
+    "  fluid:",                                        /* 10 */
+    "    - {shape: box, min: [0, 0], max: [0.5, 0.5]}", /* 11 */
+    "  walls:",                                        /* 12 */
+    "    - {shape: tank, min: [0, 0], max: [1, 1]}",   /* 13 */
+    "plugins:",                                        /* 14 */
+    "  wendland_c2: {}",                               /* 15 */
+    "  tait:",                                         /* 16 */
+    "    speed_of_sound: 20",                          /* 17 */
+    "  continuity: {}",                                /* 18 */
+    "  pressure_gradient: {}",                         /* 19 */
+    "  artificial_viscosity: {alpha: 0.1}",            /* 20 */
+    "  gravity: {}",                                   /* 21 */
+    "  dbc: {}",                                       /* 22 */
+    "  time_step: {}",                                 /* 23 */
+    "  symplectic: {}",                                /* 24 */
+};
+#define BASE_COUNT (sizeof base_lines / sizeof base_lines[0])
+
+/* The base scene with line `line` (1-based; 0 for none) replaced by
+ * `replacement` and `extra` appended. */
+static char *scene_text(int line, const char *replacement, const char *extra)
+{
+    char *text = NULL;
+    size_t size = 0;
+    FILE *f = open_memstream(&text, &size);
+    for (size_t i = 0; i < BASE_COUNT; i++)
+        fprintf(f, "%s\n", (int)i + 1 == line ? replacement : base_lines[i]);
+    if (extra)
+        fputs(extra, f);
+    fclose(f);
+    return text;
+}
+
+typedef struct outcome {
+    int status;
+    char *output;
+    char *dir;
+    char *scene;
+} outcome;
+
+static outcome run_case(const char *text, const char *extra_args)
+{
+    outcome o;
+    o.dir = test_scratch("input");
+    ck_assert_ptr_nonnull(o.dir);
+    o.scene = test_write_file(o.dir, "scene.yaml", text);
+    char *args = NULL;
+    ck_assert_int_ge(asprintf(&args, "run %s --out %s/out --no-progress %s", o.scene, o.dir,
+                              extra_args ? extra_args : ""),
+                     0);
+    o.status = test_sluice(args, &o.output);
+    free(args);
+    return o;
+}
+
+static void expect_error(outcome *o, int line, int column, const char *needle)
+{
+    ck_assert_msg(o->status == 2, "exit status %d (expected 2); output:\n%s", o->status,
+                  o->output);
+    ck_assert_msg(test_count_lines(o->output, "error:") == 1,
+                  "expected exactly one error message, got:\n%s", o->output);
+    char *where = NULL;
+    ck_assert_int_ge(asprintf(&where, "%s:%d:%d: error: ", o->scene, line, column), 0);
+    ck_assert_msg(strstr(o->output, where), "expected '%s' in:\n%s", where, o->output);
+    ck_assert_msg(strstr(o->output, needle), "expected '%s' in:\n%s", needle, o->output);
+    char *out = NULL;
+    ck_assert_int_ge(asprintf(&out, "%s/out", o->dir), 0);
+    ck_assert_msg(!test_exists(out), "bad input must not create the output directory");
+    ck_assert_msg(!strstr(o->output, "Sanitizer") && !strstr(o->output, "runtime error"),
+                  "sanitizer report:\n%s", o->output);
+    free(out);
+    free(where);
+}
+
+static void done(outcome *o)
+{
+    free(o->output);
+    free(o->dir);
+    free(o->scene);
+}
+
+START_TEST(valid_base_scene_runs)
+{
+    char *text = scene_text(0, NULL, NULL);
+    outcome o = run_case(text, "--quiet");
+    ck_assert_msg(o.status == 0, "the base scene must run (status %d):\n%s", o.status, o.output);
+    char *json = NULL;
+    ck_assert_int_ge(asprintf(&json, "%s/out/run.json", o.dir), 0);
+    ck_assert(test_exists(json));
+    free(json);
+    done(&o);
+    free(text);
+}
+END_TEST
+
+START_TEST(yaml_syntax_error)
+{
+    char *text = scene_text(5, "  end: 0.01: 2", NULL);
+    outcome o = run_case(text, NULL);
+    expect_error(&o, 5, 12, "YAML syntax error");
+    done(&o);
+    free(text);
+}
+END_TEST
+
+START_TEST(unknown_plugin_parameter_suggests)
+{
+    char *text = scene_text(17, "    speed_of_sond: 20", NULL);
+    outcome o = run_case(text, NULL);
+    expect_error(&o, 17, 5, "did you mean 'speed_of_sound'?");
+    done(&o);
+    free(text);
+}
+END_TEST
+
+START_TEST(unknown_top_level_key_suggests)
+{
+    char *text = scene_text(4, "tmie:", NULL);
+    outcome o = run_case(text, NULL);
+    ck_assert_int_eq(o.status, 2);
+    ck_assert_msg(strstr(o.output, "4:1: error: unknown key 'tmie' at the top level; did you "
+                                   "mean 'time'?"),
+                  "%s", o.output);
+    done(&o);
+    free(text);
+}
+END_TEST
+
+START_TEST(wrong_type)
+{
+    char *text = scene_text(17, "    speed_of_sound: fast", NULL);
+    outcome o = run_case(text, NULL);
+    expect_error(&o, 17, 21, "plugins.tait.speed_of_sound");
+    ck_assert(strstr(o.output, "number"));
+    done(&o);
+    free(text);
+}
+END_TEST
+
+START_TEST(out_of_range)
+{
+    char *text = scene_text(20, "  artificial_viscosity: {alpha: -1}", NULL);
+    outcome o = run_case(text, NULL);
+    expect_error(&o, 20, 33, "plugins.artificial_viscosity.alpha");
+    ck_assert(strstr(o.output, "range"));
+    done(&o);
+    free(text);
+}
+END_TEST
+
+START_TEST(missing_plugin_suggests)
+{
+    char *text = scene_text(16, "  taitt:", NULL);
+    outcome o = run_case(text, NULL);
+    expect_error(&o, 16, 3, "did you mean 'tait'?");
+    done(&o);
+    free(text);
+}
+END_TEST
+
+static char *fixture_scene(const char *plugin)
+{
+    char *extra = NULL;
+    ck_assert_int_ge(asprintf(&extra, "  %s: {}\nplugin_path: %s\n", plugin,
+                              getenv("SLUICE_FIXTURE_DIR")),
+                     0);
+    char *text = scene_text(0, NULL, extra);
+    free(extra);
+    return text;
+}
+
+START_TEST(plugin_wrong_abi_major)
+{
+    char *text = fixture_scene("abi_major_plugin");
+    outcome o = run_case(text, NULL);
+    expect_error(&o, 25, 3, "abi_major_plugin.so");
+    char *versions = NULL;
+    ck_assert_int_ge(asprintf(&versions, "ABI %d.0, but this sluice provides ABI %d.%d",
+                              SLUICE_ABI_MAJOR + 1, SLUICE_ABI_MAJOR, SLUICE_ABI_MINOR),
+                     0);
+    ck_assert_msg(strstr(o.output, versions), "expected '%s' in:\n%s", versions, o.output);
+    free(versions);
+    done(&o);
+    free(text);
+}
+END_TEST
+
+START_TEST(plugin_newer_abi_minor)
+{
+    char *text = fixture_scene("abi_minor_plugin");
+    outcome o = run_case(text, NULL);
+    expect_error(&o, 25, 3, "abi_minor_plugin.so");
+    ck_assert(strstr(o.output, "needs a newer sluice"));
+    done(&o);
+    free(text);
+}
+END_TEST
+
+START_TEST(plugin_wrong_real_type)
+{
+    char *text = fixture_scene("float_plugin");
+    outcome o = run_case(text, NULL);
+    expect_error(&o, 25, 3, "4-byte real type");
+    done(&o);
+    free(text);
+}
+END_TEST
+
+START_TEST(plugin_without_entry_point)
+{
+    char *text = fixture_scene("no_entry_plugin");
+    outcome o = run_case(text, NULL);
+    expect_error(&o, 25, 3, "no entry point 'sluice_plugin_entry'");
+    done(&o);
+    free(text);
+}
+END_TEST
+
+START_TEST(plugin_failing_init)
+{
+    char *text = fixture_scene("failing_init_plugin");
+    outcome o = run_case(text, NULL);
+    expect_error(&o, 25, 3, "cannot open its lookup table 'missing.dat'");
+    done(&o);
+    free(text);
+}
+END_TEST
+
+START_TEST(not_a_shared_object)
+{
+    char *dir = test_scratch("garbage");
+    char *so = test_write_file(dir, "garbage_plugin.so", "this is not an ELF file\n");
+    char *extra = NULL;
+    ck_assert_int_ge(asprintf(&extra, "  garbage_plugin: {}\nplugin_path: %s\n", dir), 0);
+    char *text = scene_text(0, NULL, extra);
+    outcome o = run_case(text, NULL);
+    expect_error(&o, 25, 3, "cannot be loaded");
+    done(&o);
+    free(text);
+    free(extra);
+    free(so);
+    free(dir);
+}
+END_TEST
+
+START_TEST(unreadable_scene_files)
+{
+    char *dir = test_scratch("unreadable");
+    char *args = NULL, *output = NULL;
+    /* a path that does not exist */
+    ck_assert_int_ge(asprintf(&args, "run %s/nope.yaml --out %s/out", dir, dir), 0);
+    int status = test_sluice(args, &output);
+    ck_assert_int_eq(status, 2);
+    ck_assert_msg(strstr(output, "nope.yaml:1:1: error: cannot read file"), "%s", output);
+    ck_assert_int_eq(test_count_lines(output, "error:"), 1);
+    free(args);
+    free(output);
+    /* a directory given as the scene */
+    ck_assert_int_ge(asprintf(&args, "check %s", dir), 0);
+    status = test_sluice(args, &output);
+    ck_assert_int_eq(status, 2);
+    ck_assert_msg(strstr(output, ":1:1: error: cannot read file"), "%s", output);
+    free(args);
+    free(output);
+    char *out = NULL;
+    ck_assert_int_ge(asprintf(&out, "%s/out", dir), 0);
+    ck_assert(!test_exists(out));
+    free(out);
+    free(dir);
+}
+END_TEST
+
+START_TEST(bad_command_line_override)
+{
+    char *text = scene_text(0, NULL, NULL);
+    outcome o = run_case(text, "--set time.edn=1");
+    ck_assert_int_eq(o.status, 2);
+    ck_assert_msg(strstr(o.output, "--set #1:1:") && strstr(o.output, "did you mean 'end'?"),
+                  "%s", o.output);
+    done(&o);
+    outcome p = run_case(text, "--set particles.spacing=-1");
+    ck_assert_int_eq(p.status, 2);
+    ck_assert_msg(strstr(p.output, "particles.spacing") && strstr(p.output, "range"), "%s",
+                  p.output);
+    done(&p);
+    free(text);
+}
+END_TEST
+
+START_TEST(geometry_errors)
+{
+    char *text = scene_text(11, "    - {shape: bx, min: [0, 0], max: [0.5, 0.5]}", NULL);
+    outcome o = run_case(text, NULL);
+    expect_error(&o, 11, 15, "did you mean 'box'?");
+    done(&o);
+    free(text);
+    text = scene_text(8, "  max: [0.4, 1.2]", NULL); /* tank wall outside the domain */
+    o = run_case(text, NULL);
+    ck_assert_int_eq(o.status, 2);
+    ck_assert_msg(strstr(o.output, "outside the domain"), "%s", o.output);
+    done(&o);
+    free(text);
+}
+END_TEST
+
+int main(void)
+{
+    Suite *s = suite_create("input errors");
+    TCase *tc = tcase_create("cli");
+    tcase_set_timeout(tc, 300);
+    tcase_add_test(tc, valid_base_scene_runs);
+    tcase_add_test(tc, yaml_syntax_error);
+    tcase_add_test(tc, unknown_plugin_parameter_suggests);
+    tcase_add_test(tc, unknown_top_level_key_suggests);
+    tcase_add_test(tc, wrong_type);
+    tcase_add_test(tc, out_of_range);
+    tcase_add_test(tc, missing_plugin_suggests);
+    tcase_add_test(tc, plugin_wrong_abi_major);
+    tcase_add_test(tc, plugin_newer_abi_minor);
+    tcase_add_test(tc, plugin_wrong_real_type);
+    tcase_add_test(tc, plugin_without_entry_point);
+    tcase_add_test(tc, plugin_failing_init);
+    tcase_add_test(tc, not_a_shared_object);
+    tcase_add_test(tc, unreadable_scene_files);
+    tcase_add_test(tc, bad_command_line_override);
+    tcase_add_test(tc, geometry_errors);
+    suite_add_tcase(s, tc);
+    return test_run_suite(s);
+}
