@@ -28,11 +28,12 @@ static double uniform(void)
     return (double)(rng_state >> 11) * (1.0 / 9007199254740992.0);
 }
 
-static void test_kernel(void *state, sluice_index n, const sluice_real *r, sluice_real *w,
-                        sluice_real *f)
+static void test_kernel(void *state, sluice_index n, const sluice_real *r2, sluice_real *r,
+                        sluice_real *w, sluice_real *f)
 {
     (void)state;
     for (sluice_index k = 0; k < n; k++) {
+        r[k] = sqrt(r2[k]);
         if (w)
             w[k] = 1 - r[k];
         f[k] = -1;

@@ -21,7 +21,7 @@ START_TEST(template_plugin_builds_loads_and_acts)
     /* 2. build the template with pkg-config pointing at the staged .pc */
     ck_assert_int_ge(asprintf(&command,
                               "pc=$(dirname $(find %s/stage -name sluice-plugin.pc | head -n 1)) && "
-                              "make -s -C %s/tools/plugin-template OUT=%s PKG_CONFIG_PATH=$pc "
+                              "PKG_CONFIG_PATH=$pc make -s -C %s/tools/plugin-template OUT=%s "
                               ">%s/make.log 2>&1",
                               dir, test_source_dir(), dir, dir),
                      0);

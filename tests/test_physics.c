@@ -30,8 +30,8 @@ static sluice_sim *kernel_sim(const char *kernel, int dims)
 static double kernel_w(sluice_sim *sim, double r, double *f)
 {
     const sluice_instance *k = &sim->instances[sim->kernel];
-    sluice_real rr = (sluice_real)r, w = 0, ff = 0;
-    k->component->kernel(k->state, 1, &rr, &w, &ff);
+    sluice_real rr = (sluice_real)(r * r), distance = 0, w = 0, ff = 0;
+    k->component->kernel(k->state, 1, &rr, &distance, &w, &ff);
     if (f)
         *f = (double)ff;
     return (double)w;

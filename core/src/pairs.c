@@ -21,6 +21,7 @@ static void workspace_free(sluice_pair_workspace *w)
     free(w->neighbour_kind);
     for (int d = 0; d < 3; d++)
         free(w->offset[d]);
+    free(w->distance_squared);
     free(w->distance);
     free(w->kernel);
     free(w->gradient);
@@ -29,7 +30,7 @@ static void workspace_free(sluice_pair_workspace *w)
     w->target = w->pair_begin = w->neighbour = NULL;
     w->neighbour_kind = NULL;
     w->offset[0] = w->offset[1] = w->offset[2] = NULL;
-    w->distance = w->kernel = w->gradient = w->gathered_storage = NULL;
+    w->distance_squared = w->distance = w->kernel = w->gradient = w->gathered_storage = NULL;
     w->gathered = NULL;
     w->pair_capacity = w->target_capacity = 0;
 }
@@ -54,13 +55,14 @@ static int workspace_reserve(sluice_pair_workspace *w, sluice_index pairs, uint3
     w->neighbour_kind = aligned_array(cap, 1);
     for (int d = 0; d < 3; d++)
         w->offset[d] = aligned_array(cap, sizeof(sluice_real));
+    w->distance_squared = aligned_array(cap, sizeof(sluice_real));
     w->distance = aligned_array(cap, sizeof(sluice_real));
     w->kernel = aligned_array(cap, sizeof(sluice_real));
     w->gradient = aligned_array(cap, sizeof(sluice_real));
     w->gathered_storage = aligned_array((size_t)cap * (s ? s : 1), sizeof(sluice_real));
     w->gathered = calloc(columns ? columns : 1, sizeof *w->gathered);
     if (!w->target || !w->pair_begin || !w->neighbour || !w->neighbour_kind || !w->offset[0] ||
-        !w->offset[1] || !w->offset[2] || !w->distance || !w->kernel || !w->gradient ||
+        !w->offset[1] || !w->offset[2] || !w->distance_squared || !w->distance || !w->kernel || !w->gradient ||
         !w->gathered_storage || !w->gathered) {
         workspace_free(w);
         return -1;
@@ -107,7 +109,7 @@ size_t sluice_pair_engine_bytes(const sluice_pair_engine *engine)
     size_t b = 0;
     for (int t = 0; t < engine->thread_count; t++) {
         const sluice_pair_workspace *w = &engine->workspaces[t];
-        b += (size_t)w->pair_capacity * (2 * sizeof(sluice_index) + 1 + 6 * sizeof(sluice_real) +
+        b += (size_t)w->pair_capacity * (2 * sizeof(sluice_index) + 1 + 7 * sizeof(sluice_real) +
                                          w->gathered_slots * sizeof(sluice_real));
     }
     return b;
@@ -121,14 +123,15 @@ static void flush(sluice_pair_engine *engine, const sluice_pair_pass *pass,
     if (targets == 0)
         return;
     sluice_real *restrict r = w->distance;
-#pragma omp simd
-    for (sluice_index p = 0; p < pairs; p++)
-        r[p] = sqrt(r[p]);
-    engine->kernel->kernel(engine->kernel_state, pairs, r, pass->needs_kernel ? w->kernel : NULL,
-                           w->gradient);
+    engine->kernel->kernel(engine->kernel_state, pairs, w->distance_squared, r,
+                           pass->needs_kernel[kind] ? w->kernel : NULL, w->gradient);
     const sluice_index *restrict nb = w->neighbour;
-    for (uint32_t g = 0; g < pass->gathered_count; g++) {
-        uint32_t column = pass->gathered_columns[g];
+    const uint8_t *restrict kinds = view->kind;
+    uint8_t *restrict nk = w->neighbour_kind;
+    for (sluice_index p = 0; p < pairs; p++)
+        nk[p] = kinds[nb[p]];
+    for (uint32_t g = 0; g < pass->gathered_count[kind]; g++) {
+        uint32_t column = pass->gathered_columns[kind][g];
         const sluice_real *restrict src = view->columns[column];
         sluice_real *restrict dst = w->gathered_storage + (size_t)g * w->pair_capacity;
 #pragma omp simd
@@ -148,7 +151,7 @@ static void flush(sluice_pair_engine *engine, const sluice_pair_pass *pass,
     batch.offset[1] = w->offset[1];
     batch.offset[2] = view->dimensions == 3 ? w->offset[2] : NULL;
     batch.distance = r;
-    batch.kernel = pass->needs_kernel ? w->kernel : NULL;
+    batch.kernel = pass->needs_kernel[kind] ? w->kernel : NULL;
     batch.kernel_gradient = w->gradient;
     batch.gathered = w->gathered;
     batch.kernel_self = engine->kernel_self;
@@ -159,11 +162,94 @@ static void flush(sluice_pair_engine *engine, const sluice_pair_pass *pass,
     }
     w->pairs += pairs;
     w->batches++;
+    /* a column gathered for this kind must not leak into a batch of another */
+    for (uint32_t g = 0; g < pass->gathered_count[kind]; g++)
+        w->gathered[pass->gathered_columns[kind][g]] = NULL;
 }
 
 static inline double minimum_image(double dx, double length)
 {
     return dx - length * nearbyint(dx / length);
+}
+
+/* Appends the pairs of target i within the support to the workspace, from
+ * its Verlet-list candidates m0 .. m1 - 1; returns the new pair count. The
+ * flags are compile-time constants in each specialisation below, so the
+ * loop carries no test of the dimension, periodicity or kind mask. */
+static inline sluice_index fill_target(sluice_pair_workspace *restrict w, const sluice_grid *grid,
+                                       const sluice_view *view, sluice_index i,
+                                       const sluice_index *restrict list, sluice_index m0,
+                                       sluice_index m1, sluice_index np, double support2,
+                                       uint32_t mask, const int dims, const int periodic,
+                                       const int all_kinds)
+{
+    const sluice_real *restrict x = view->position[0], *restrict y = view->position[1];
+    const sluice_real *restrict z = dims == 3 ? view->position[2] : view->position[1];
+    const uint8_t *restrict kind = view->kind;
+    sluice_index *restrict nb = w->neighbour;
+    sluice_real *restrict ox = w->offset[0], *restrict oy = w->offset[1],
+                          *restrict oz = w->offset[2];
+    sluice_real *restrict r2 = w->distance_squared;
+    const double xi = (double)x[i], yi = (double)y[i], zi = dims == 3 ? (double)z[i] : 0.0;
+    const double lx = grid->length[0], ly = grid->length[1], lz = grid->length[2];
+    const int px = periodic && grid->periodic[0], py = periodic && grid->periodic[1],
+              pz = periodic && dims == 3 && grid->periodic[2];
+    for (sluice_index m = m0; m < m1; m++) {
+        const sluice_index j = list[m];
+        double dx = xi - (double)x[j];
+        double dy = yi - (double)y[j];
+        double dz = dims == 3 ? zi - (double)z[j] : 0.0;
+        if (periodic) {
+            if (px)
+                dx = minimum_image(dx, lx);
+            if (py)
+                dy = minimum_image(dy, ly);
+            if (pz)
+                dz = minimum_image(dz, lz);
+        }
+        const double s = dx * dx + dy * dy + dz * dz;
+        nb[np] = j;
+        ox[np] = (sluice_real)dx;
+        oy[np] = (sluice_real)dy;
+        if (dims == 3)
+            oz[np] = (sluice_real)dz;
+        r2[np] = (sluice_real)s;
+        if (all_kinds)
+            np += (sluice_index)(s < support2);
+        else
+            np += (sluice_index)((s < support2) & ((mask >> kind[j]) & 1u));
+    }
+    return np;
+}
+
+typedef sluice_index (*fill_fn)(sluice_pair_workspace *restrict, const sluice_grid *,
+                                const sluice_view *, sluice_index, const sluice_index *restrict,
+                                sluice_index, sluice_index, sluice_index, double, uint32_t);
+
+#define FILL_VARIANT(name, dims, periodic, all_kinds)                                            \
+    static sluice_index name(sluice_pair_workspace *restrict w, const sluice_grid *grid,         \
+                             const sluice_view *view, sluice_index i,                           \
+                             const sluice_index *restrict list, sluice_index m0, sluice_index m1, \
+                             sluice_index np, double support2, uint32_t mask)                   \
+    {                                                                                           \
+        return fill_target(w, grid, view, i, list, m0, m1, np, support2, mask, dims, periodic,  \
+                           all_kinds);                                                          \
+    }
+FILL_VARIANT(fill_2d, 2, 0, 0)
+FILL_VARIANT(fill_2d_all, 2, 0, 1)
+FILL_VARIANT(fill_2d_periodic, 2, 1, 0)
+FILL_VARIANT(fill_2d_periodic_all, 2, 1, 1)
+FILL_VARIANT(fill_3d, 3, 0, 0)
+FILL_VARIANT(fill_3d_all, 3, 0, 1)
+FILL_VARIANT(fill_3d_periodic, 3, 1, 0)
+FILL_VARIANT(fill_3d_periodic_all, 3, 1, 1)
+
+static fill_fn choose_fill(uint32_t dims, int periodic, int all_kinds)
+{
+    static const fill_fn table[2][2][2] = {
+        {{fill_2d, fill_2d_all}, {fill_2d_periodic, fill_2d_periodic_all}},
+        {{fill_3d, fill_3d_all}, {fill_3d_periodic, fill_3d_periodic_all}}};
+    return table[dims == 3][periodic != 0][all_kinds != 0];
 }
 
 int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pass,
@@ -180,12 +266,10 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
     {
         int tid = omp_get_thread_num();
         sluice_pair_workspace *w = &engine->workspaces[tid];
-        if (workspace_reserve(w, engine->batch_pairs, pass->gathered_count) != 0)
+        if (workspace_reserve(w, engine->batch_pairs, pass->gathered_max) != 0)
             failed = 1;
         for (uint32_t c = 0; c < w->column_count && !failed; c++)
             w->gathered[c] = NULL;
-        const sluice_real *x = view->position[0], *y = view->position[1];
-        const sluice_real *z = dims == 3 ? view->position[2] : view->position[1];
         const uint8_t *kind = view->kind;
         const sluice_index *list = grid->list, *begin = grid->list_begin;
 
@@ -199,6 +283,7 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
                 const uint32_t mask = pass->neighbour_mask[k];
                 if (!mask)
                     continue;
+                const fill_fn fill = choose_fill(dims, periodic, mask == SLUICE_KINDS_ALL);
                 sluice_index t = 0, np = 0;
                 for (sluice_index i = a; i < b; i++) {
                     if (kind[i] != k)
@@ -212,7 +297,7 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
                         np = 0;
                     }
                     if (candidates > w->pair_capacity) {
-                        if (workspace_reserve(w, candidates, pass->gathered_count) != 0) {
+                        if (workspace_reserve(w, candidates, pass->gathered_max) != 0) {
                             failed = 1;
                             break;
                         }
@@ -221,36 +306,7 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
                     }
                     w->target[t] = i;
                     w->pair_begin[t] = np;
-                    const double xi = (double)x[i], yi = (double)y[i];
-                    const double zi = dims == 3 ? (double)z[i] : 0.0;
-                    sluice_index *restrict nb = w->neighbour;
-                    uint8_t *restrict nk = w->neighbour_kind;
-                    sluice_real *restrict ox = w->offset[0], *restrict oy = w->offset[1],
-                                          *restrict oz = w->offset[2];
-                    sluice_real *restrict r2 = w->distance;
-                    for (sluice_index m = m0; m < m1; m++) {
-                        const sluice_index j = list[m];
-                        double dx = xi - (double)x[j];
-                        double dy = yi - (double)y[j];
-                        double dz = dims == 3 ? zi - (double)z[j] : 0.0;
-                        if (periodic) {
-                            if (grid->periodic[0])
-                                dx = minimum_image(dx, grid->length[0]);
-                            if (grid->periodic[1])
-                                dy = minimum_image(dy, grid->length[1]);
-                            if (dims == 3 && grid->periodic[2])
-                                dz = minimum_image(dz, grid->length[2]);
-                        }
-                        const double s = dx * dx + dy * dy + dz * dz;
-                        const uint8_t kj = kind[j];
-                        nb[np] = j;
-                        nk[np] = kj;
-                        ox[np] = (sluice_real)dx;
-                        oy[np] = (sluice_real)dy;
-                        oz[np] = (sluice_real)dz;
-                        r2[np] = (sluice_real)s;
-                        np += (sluice_index)((s < support2) & ((mask >> kj) & 1u));
-                    }
+                    np = fill(w, grid, view, i, list, m0, m1, np, support2, mask);
                     t++;
                 }
                 if (failed)

@@ -20,16 +20,19 @@ typedef struct sluice_pair_pass {
     uint32_t term_count;
     sluice_pair_term *terms;
     uint32_t neighbour_mask[SLUICE_KIND_COUNT]; /* per target kind; 0: kind is not a target */
-    uint32_t gathered_count;
-    uint32_t *gathered_columns; /* REAL columns gathered at j */
-    int needs_kernel;
+    /* REAL columns gathered at j, per target kind: only those the terms that
+     * act on that kind read */
+    uint32_t gathered_count[SLUICE_KIND_COUNT];
+    uint32_t *gathered_columns[SLUICE_KIND_COUNT];
+    uint32_t gathered_max; /* largest gathered_count */
+    int needs_kernel[SLUICE_KIND_COUNT];
 } sluice_pair_pass;
 
 typedef struct sluice_pair_workspace {
     sluice_index pair_capacity, target_capacity;
     sluice_index *target, *pair_begin, *neighbour;
     uint8_t *neighbour_kind;
-    sluice_real *offset[3], *distance, *kernel, *gradient;
+    sluice_real *offset[3], *distance_squared, *distance, *kernel, *gradient;
     sluice_real *gathered_storage;
     uint32_t gathered_slots;
     const sluice_real **gathered; /* column_count pointers */

@@ -70,11 +70,12 @@ static void host_message(sluice_host *host, sluice_severity severity, const char
             sluice_diag_add(sim->diag, severity, key ? key->file : sim->scene.path,
                             key ? key->line : 0, key ? key->column : 0, "plugin '%s': %s", name,
                             text);
+        } else if (severity == SLUICE_SEVERITY_ERROR && !sim->failure[0]) {
+            /* the first error of a run is its failure, printed once by the caller */
+            sluice_sim_fail(sim, "plugin '%s': %s", name, text);
         } else {
-            fprintf(stderr, "\nsluice: %s: plugin '%s': %s\n",
+            fprintf(stderr, "%ssluice: %s: plugin '%s': %s\n", sim->progress ? "\n" : "",
                     severity == SLUICE_SEVERITY_ERROR ? "error" : "warning", name, text);
-            if (severity == SLUICE_SEVERITY_ERROR)
-                sluice_sim_fail(sim, "plugin '%s': %s", name, text);
         }
     }
 }
@@ -1025,10 +1026,15 @@ static int build_schedule(sluice_sim *sim)
         sluice_pass *p = &sim->passes[sim->pass_count++];
         p->is_pair = 1;
         p->pair.terms = calloc(terms, sizeof *p->pair.terms);
-        p->pair.gathered_columns = calloc(sim->column_count + 1, sizeof *p->pair.gathered_columns);
-        if (!p->pair.terms || !p->pair.gathered_columns)
+        if (!p->pair.terms)
             goto oom;
-        uint8_t *gather = calloc(sim->column_count + 1, 1);
+        for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
+            p->pair.gathered_columns[k] =
+                calloc(sim->column_count + 1, sizeof *p->pair.gathered_columns[k]);
+            if (!p->pair.gathered_columns[k])
+                goto oom;
+        }
+        uint8_t *gather = calloc((size_t)SLUICE_KIND_COUNT * (sim->column_count + 1), 1);
         if (!gather)
             goto oom;
         for (uint32_t v = 0; v < n; v++) {
@@ -1040,24 +1046,31 @@ static int build_schedule(sluice_sim *sim)
             t->state = sim->instances[v].state;
             t->target_kinds = c->target_kinds;
             t->neighbour_kinds = c->neighbour_kinds;
-            for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++)
-                if (c->target_kinds & SLUICE_KIND_MASK(k))
-                    p->pair.neighbour_mask[k] |= c->neighbour_kinds;
-            if (c->flags & SLUICE_COMPONENT_NEEDS_KERNEL)
-                p->pair.needs_kernel = 1;
-            for (uint32_t f = 0; f < sim->field_count; f++) {
-                const sluice_field_entry *field = &sim->fields[f];
-                for (uint32_t d = 0; d < field->declarer_count; d++)
-                    if (field->declarers[d].instance == v &&
-                        (field->declarers[d].access & SLUICE_READ_NEIGHBOUR) &&
-                        field->type == SLUICE_TYPE_REAL)
-                        for (uint32_t comp = 0; comp < field->components; comp++)
-                            gather[field->column + (int32_t)comp] = 1;
+            for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
+                if (!(c->target_kinds & SLUICE_KIND_MASK(k)))
+                    continue;
+                p->pair.neighbour_mask[k] |= c->neighbour_kinds;
+                if (c->flags & SLUICE_COMPONENT_NEEDS_KERNEL)
+                    p->pair.needs_kernel[k] = 1;
+                for (uint32_t f = 0; f < sim->field_count; f++) {
+                    const sluice_field_entry *field = &sim->fields[f];
+                    for (uint32_t d = 0; d < field->declarer_count; d++)
+                        if (field->declarers[d].instance == v &&
+                            (field->declarers[d].access & SLUICE_READ_NEIGHBOUR) &&
+                            field->type == SLUICE_TYPE_REAL)
+                            for (uint32_t comp = 0; comp < field->components; comp++)
+                                gather[(size_t)k * (sim->column_count + 1) +
+                                       (size_t)(field->column + (int32_t)comp)] = 1;
+                }
             }
         }
-        for (uint32_t c = 0; c < sim->column_count; c++)
-            if (gather[c])
-                p->pair.gathered_columns[p->pair.gathered_count++] = c;
+        for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
+            for (uint32_t c = 0; c < sim->column_count; c++)
+                if (gather[(size_t)k * (sim->column_count + 1) + c])
+                    p->pair.gathered_columns[k][p->pair.gathered_count[k]++] = c;
+            if (p->pair.gathered_count[k] > p->pair.gathered_max)
+                p->pair.gathered_max = p->pair.gathered_count[k];
+        }
         free(gather);
     }
     /* accumulated columns, zeroed before every evaluation */
@@ -1661,8 +1674,8 @@ static int load(sluice_sim *sim, const char *scene_path, const sluice_load_optio
     const sluice_instance *kernel = &sim->instances[sim->kernel];
     sim->engine.kernel = kernel->component;
     sim->engine.kernel_state = kernel->state;
-    sluice_real zero = 0, w0 = 0, f0 = 0;
-    kernel->component->kernel(kernel->state, 1, &zero, &w0, &f0);
+    sluice_real zero = 0, r0 = 0, w0 = 0, f0 = 0;
+    kernel->component->kernel(kernel->state, 1, &zero, &r0, &w0, &f0);
     sim->engine.kernel_self = w0;
     sim->particles_initial = sim->particles.count;
 
@@ -1734,7 +1747,8 @@ void sluice_sim_free(sluice_sim *sim)
     if (sim->passes)
         for (uint32_t p = 0; p < sim->pass_count; p++) {
             free(sim->passes[p].pair.terms);
-            free(sim->passes[p].pair.gathered_columns);
+            for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++)
+                free(sim->passes[p].pair.gathered_columns[k]);
         }
     free(sim->passes);
     free(sim->accumulate_columns);

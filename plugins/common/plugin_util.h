@@ -3,7 +3,9 @@
 #ifndef SLUICE_PLUGIN_UTIL_H
 #define SLUICE_PLUGIN_UTIL_H
 
+#include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 #define SLUICE_PI 3.14159265358979323846
 
@@ -39,6 +41,24 @@ static inline void *sluice_util_state(const sluice_api *api, sluice_host *host, 
     if (!p)
         api->error(host, "out of memory");
     return p;
+}
+
+/* Largest of non-negative values in a form the compiler vectorises: IEEE
+ * doubles >= 0 order exactly like their bit patterns read as integers (and a
+ * NaN's pattern is above infinity, so NaN propagates). Floating-point max
+ * reductions (a > b ? a : b, fmax) do not vectorise without -ffinite-math. */
+_Static_assert(sizeof(sluice_real) == sizeof(int64_t), "sluice_util_bits assumes 8-byte reals");
+static inline int64_t sluice_util_bits(sluice_real non_negative)
+{
+    int64_t bits;
+    memcpy(&bits, &non_negative, sizeof bits);
+    return bits;
+}
+static inline sluice_real sluice_util_from_bits(int64_t bits)
+{
+    sluice_real value;
+    memcpy(&value, &bits, sizeof value);
+    return value;
 }
 
 #endif

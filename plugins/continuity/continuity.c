@@ -71,7 +71,7 @@ static inline void continuity_pairs(const continuity_state *s, const sluice_view
         const sluice_index i = b->target[t];
         const sluice_real vxi = vel[0][i], vyi = vel[1][i], vzi = dims == 3 ? vel[2][i] : 0;
         sluice_real sum = 0;
-#pragma omp simd reduction(+ : sum)
+
         for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
             sluice_real dot = (vxi - vxj[k]) * rx[k] + (vyi - vyj[k]) * ry[k];
             if (dims == 3)

@@ -128,7 +128,7 @@ static inline void delta_pairs(const delta_state *s, const sluice_view *v,
         const sluice_index i = b->target[t];
         const sluice_real rhoi = rho[i];
         sluice_real sum = 0;
-#pragma omp simd reduction(+ : sum)
+
         for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
             /* psi_ij . grad_i W_ij = 2 d_ji r_ji . r_ij F / (r^2 + eta^2)
              *                     = -2 d_ji r^2 F / (r^2 + eta^2) */

@@ -52,14 +52,16 @@ static int wendland_create(const sluice_api *api, sluice_host *host, const void 
 }
 
 /* W = a (1 - q/2)^4 (2q + 1), F = -5 a (1 - q/2)^3 / h^2, q = r/h <= 2 */
-static void wendland_kernel(void *state, sluice_index n, const sluice_real *restrict r,
-                            sluice_real *restrict w, sluice_real *restrict f)
+static void wendland_kernel(void *state, sluice_index n, const sluice_real *restrict r2,
+                            sluice_real *restrict r, sluice_real *restrict w,
+                            sluice_real *restrict f)
 {
     const kernel_state *s = state;
     const sluice_real ih = s->inverse_h, a = s->normalisation, b = -5 * s->gradient_normalisation;
     if (w) {
 #pragma omp simd
         for (sluice_index k = 0; k < n; k++) {
+            r[k] = sqrt(r2[k]);
             sluice_real q = r[k] * ih;
             sluice_real t = 1 - (sluice_real)0.5 * q;
             t = t > 0 ? t : 0;
@@ -70,6 +72,7 @@ static void wendland_kernel(void *state, sluice_index n, const sluice_real *rest
     } else {
 #pragma omp simd
         for (sluice_index k = 0; k < n; k++) {
+            r[k] = sqrt(r2[k]);
             sluice_real t = 1 - (sluice_real)0.5 * r[k] * ih;
             t = t > 0 ? t : 0;
             f[k] = b * t * t * t;
@@ -87,13 +90,14 @@ static int cubic_create(const sluice_api *api, sluice_host *host, const void *co
 
 /* W = a (1 - 1.5 q^2 + 0.75 q^3) for q < 1, a 0.25 (2 - q)^3 for 1 <= q < 2.
  * F = (a / h^2) (-3 + 2.25 q) for q < 1, (a / h^2) (-0.75 (2 - q)^2 / q) beyond. */
-static void cubic_kernel(void *state, sluice_index n, const sluice_real *restrict r,
-                         sluice_real *restrict w, sluice_real *restrict f)
+static void cubic_kernel(void *state, sluice_index n, const sluice_real *restrict r2,
+                         sluice_real *restrict r, sluice_real *restrict w, sluice_real *restrict f)
 {
     const kernel_state *s = state;
     const sluice_real ih = s->inverse_h, a = s->normalisation, g = s->gradient_normalisation;
 #pragma omp simd
     for (sluice_index k = 0; k < n; k++) {
+        r[k] = sqrt(r2[k]);
         sluice_real q = r[k] * ih;
         sluice_real t = 2 - q;
         t = t > 0 ? t : 0;

@@ -71,7 +71,7 @@ static inline void pressure_pairs(const pressure_state *s, const sluice_view *v,
         const sluice_index i = b->target[t];
         const sluice_real pi_term = p[i] / (rho[i] * rho[i]);
         sluice_real sx = 0, sy = 0, sz = 0;
-#pragma omp simd reduction(+ : sx, sy, sz)
+
         for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
             sluice_real c = mj[k] * (pi_term + pj[k] / (rhoj[k] * rhoj[k])) * F[k];
             sx += c * rx[k];

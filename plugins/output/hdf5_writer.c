@@ -60,6 +60,14 @@ typedef struct h5w_field {
     int32_t column;
 } h5w_field;
 
+/* One snapshot in the XDMF index. */
+typedef struct h5w_record {
+    char stem[H5W_PREFIX_MAX + 32];
+    double time;
+    uint64_t count;
+    uint32_t dimensions;
+} h5w_record;
+
 /* A growable text buffer. */
 typedef struct h5w_text {
     char *data;
@@ -90,9 +98,14 @@ typedef struct h5w_state {
     /* interleaving buffer for multi-component fields */
     unsigned char *scratch;
     size_t scratch_size;
-    /* XDMF document: header and grids; the footer is appended for each write
-     * and removed again */
+    /* XDMF document, regenerated from the records after every snapshot */
     h5w_text xdmf;
+    h5w_record *records;
+    size_t record_count, record_capacity;
+    /* <prefix>_vertices.h5 holds /index = 0 .. vertex_capacity - 1: the
+     * Polyvertex connectivity every grid takes its first n entries of, so
+     * that ParaView makes one cell per particle */
+    uint64_t vertex_capacity;
 } h5w_state;
 
 static const sluice_param_spec params[] = {
@@ -254,6 +267,7 @@ static void h5w_destroy(void *state)
     free(s->plugins);
     free(s->scratch);
     free(s->xdmf.data);
+    free(s->records);
     free(s);
 }
 
@@ -797,7 +811,7 @@ static const char *xdmf_number_type(sluice_type type, int *precision)
     case SLUICE_TYPE_REAL: *precision = 8; return "Float";
     case SLUICE_TYPE_INT32: *precision = 4; return "Int";
     case SLUICE_TYPE_UINT8: *precision = 1; return "UChar";
-    case SLUICE_TYPE_ID: *precision = 8; return "UInt";
+    case SLUICE_TYPE_ID: *precision = 8; return "Int"; /* ParaView reads UInt 8 as 32-bit */
     }
     *precision = 8;
     return "Float";
@@ -818,50 +832,155 @@ static void xdmf_data_item(h5w_text *t, const h5w_field *field, size_t n, const 
     text_append(t, "</DataItem>", 11);
 }
 
-/* Adds the grid of one snapshot and rewrites the XDMF file. */
-static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v,
-                      const char *file_name, const char *stem)
+/* Writes <prefix>_vertices.h5 with /index = 0 .. capacity - 1 (int64). */
+static int write_vertex_index(h5w_state *s, sluice_host *host, uint64_t capacity)
 {
     const sluice_api *api = s->api;
-    h5w_text *t = &s->xdmf;
-    if (t->length == 0) {
-        text_printf(t, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-                       "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n"
-                       "  <Domain>\n"
-                       "    <Grid Name=\"");
-        text_xml(t, s->prefix);
-        text_printf(t, "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
+    char name[H5W_PREFIX_MAX + 16], path[H5W_PATH_MAX];
+    snprintf(name, sizeof name, "%s_vertices.h5", s->prefix);
+    if (api->output_path(host, name, path, sizeof path) != SLUICE_OK) {
+        api->error(host, "the path of '%s' in the output directory is too long", name);
+        return SLUICE_ERROR;
     }
-    const size_t n = v->count;
+    int64_t *index = malloc((size_t)capacity * sizeof *index);
+    if (!index) {
+        api->error(host, "out of memory for the vertex index (%llu entries)",
+                   (unsigned long long)capacity);
+        return SLUICE_ERROR;
+    }
+    for (uint64_t i = 0; i < capacity; i++)
+        index[i] = (int64_t)i;
+    H5E_auto2_t old_func = NULL;
+    void *old_data = NULL;
+    H5Eget_auto2(H5E_DEFAULT, &old_func, &old_data);
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+    h5w_failure f = {{0}};
+    void *image = NULL;
+    ssize_t size = -1;
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), file = -1, space = -1, set = -1;
+    hsize_t dims[1] = {capacity};
+    if (fapl < 0 || H5Pset_fapl_core(fapl, 65536 + (size_t)capacity * 8, 0) < 0)
+        fail(&f, "H5Pset_fapl_core failed");
+    if (!f.text[0] && (file = H5Fcreate(name, H5F_ACC_TRUNC, H5P_DEFAULT, fapl)) < 0)
+        fail(&f, "H5Fcreate failed");
+    if (!f.text[0] && (space = H5Screate_simple(1, dims, NULL)) < 0)
+        fail(&f, "H5Screate_simple failed");
+    if (!f.text[0] && (set = H5Dcreate2(file, "index", H5T_STD_I64LE, space, H5P_DEFAULT,
+                                        H5P_DEFAULT, H5P_DEFAULT)) < 0)
+        fail(&f, "H5Dcreate2 failed");
+    if (!f.text[0] && H5Dwrite(set, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, index) < 0)
+        fail(&f, "H5Dwrite failed");
+    if (set >= 0)
+        close_id(&set, H5Dclose, &f, "H5Dclose");
+    if (space >= 0)
+        close_id(&space, H5Sclose, &f, "H5Sclose");
+    if (!f.text[0] && H5Fflush(file, H5F_SCOPE_LOCAL) < 0)
+        fail(&f, "H5Fflush failed");
+    if (!f.text[0]) {
+        size = H5Fget_file_image(file, NULL, 0);
+        image = size > 0 ? malloc((size_t)size) : NULL;
+        if (!image || H5Fget_file_image(file, image, (size_t)size) != size)
+            fail(&f, "H5Fget_file_image failed");
+    }
+    if (file >= 0 && H5Fclose(file) < 0)
+        fail(&f, "H5Fclose failed");
+    if (fapl >= 0)
+        close_id(&fapl, H5Pclose, &f, "H5Pclose");
+    H5Eclear2(H5E_DEFAULT);
+    H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
+    free(index);
+    if (f.text[0]) {
+        free(image);
+        api->error(host, "cannot write '%s': %s", path, f.text);
+        return SLUICE_ERROR;
+    }
+    int rc = api->write_file_atomic(host, path, image, (size_t)size);
+    free(image);
+    if (rc == SLUICE_OK)
+        s->vertex_capacity = capacity;
+    return rc;
+}
+
+/* Records one snapshot and rewrites the XDMF file from all records. */
+static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v, const char *stem)
+{
+    const sluice_api *api = s->api;
+    if (v->count > s->vertex_capacity) {
+        uint64_t capacity = s->vertex_capacity * 2 > v->count ? s->vertex_capacity * 2 : v->count;
+        if (capacity < 1024)
+            capacity = 1024;
+        if (write_vertex_index(s, host, capacity) != SLUICE_OK)
+            return SLUICE_ERROR;
+    }
+    if (s->record_count == s->record_capacity) {
+        size_t cap = s->record_capacity ? 2 * s->record_capacity : 64;
+        h5w_record *r = realloc(s->records, cap * sizeof *r);
+        if (!r) {
+            api->error(host, "out of memory building the XDMF index");
+            return SLUICE_ERROR;
+        }
+        s->records = r;
+        s->record_capacity = cap;
+    }
+    h5w_record *rec = &s->records[s->record_count++];
+    snprintf(rec->stem, sizeof rec->stem, "%s", stem);
+    rec->time = v->time;
+    rec->count = v->count;
+    rec->dimensions = v->dimensions;
+
     const h5w_field *position = NULL;
     for (uint32_t i = 0; i < s->field_count; i++)
         if (strcmp(s->fields[i].name, "position") == 0)
             position = &s->fields[i];
-    text_printf(t, "      <Grid Name=\"");
-    text_xml(t, stem);
-    text_printf(t, "\" GridType=\"Uniform\">\n        <Time Value=\"%.15g\"/>\n", v->time);
-    text_printf(t,
-                "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" "
-                "NodesPerElement=\"1\"/>\n",
-                n);
-    text_printf(t, "        <Geometry GeometryType=\"%s\">\n          ",
-                v->dimensions == 3 ? "XYZ" : "XY");
-    if (position)
-        xdmf_data_item(t, position, n, file_name);
-    text_printf(t, "\n        </Geometry>\n");
-    for (uint32_t i = 0; i < s->field_count; i++) {
-        const h5w_field *field = &s->fields[i];
-        const char *kind = field->components == 1             ? "Scalar"
-                           : field->components == v->dimensions ? "Vector"
-                                                                : "Matrix";
-        text_printf(t, "        <Attribute Name=\"");
-        text_xml(t, field->name);
-        text_printf(t, "\" AttributeType=\"%s\" Center=\"Node\">\n          ", kind);
-        xdmf_data_item(t, field, n, file_name);
-        text_printf(t, "\n        </Attribute>\n");
+    h5w_text *t = &s->xdmf;
+    t->length = 0;
+    if (t->data)
+        t->data[0] = '\0';
+    text_printf(t, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+                   "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n"
+                   "  <Domain>\n"
+                   "    <Grid Name=\"");
+    text_xml(t, s->prefix);
+    text_printf(t, "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
+    char vertices[H5W_PREFIX_MAX + 16];
+    snprintf(vertices, sizeof vertices, "%s_vertices.h5", s->prefix);
+    for (size_t r = 0; r < s->record_count; r++) {
+        const h5w_record *g = &s->records[r];
+        char file_name[H5W_PREFIX_MAX + 40];
+        snprintf(file_name, sizeof file_name, "%s.h5", g->stem);
+        const size_t n = (size_t)g->count;
+        text_printf(t, "      <Grid Name=\"");
+        text_xml(t, g->stem);
+        text_printf(t, "\" GridType=\"Uniform\">\n        <Time Value=\"%.15g\"/>\n", g->time);
+        text_printf(t,
+                    "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" "
+                    "NodesPerElement=\"1\">\n"
+                    "          <DataItem ItemType=\"HyperSlab\" Dimensions=\"%zu\" "
+                    "Type=\"HyperSlab\">\n"
+                    "            <DataItem Dimensions=\"3 1\" Format=\"XML\">0 1 %zu</DataItem>\n"
+                    "            <DataItem Dimensions=\"%llu\" NumberType=\"Int\" "
+                    "Precision=\"8\" Format=\"HDF\">",
+                    n, n, n, (unsigned long long)s->vertex_capacity);
+        text_xml(t, vertices);
+        text_printf(t, ":/index</DataItem>\n          </DataItem>\n        </Topology>\n");
+        text_printf(t, "        <Geometry GeometryType=\"%s\">\n          ",
+                    g->dimensions == 3 ? "XYZ" : "XY");
+        if (position)
+            xdmf_data_item(t, position, n, file_name);
+        text_printf(t, "\n        </Geometry>\n");
+        for (uint32_t i = 0; i < s->field_count; i++) {
+            const h5w_field *field = &s->fields[i];
+            const char *kind = field->components == 1               ? "Scalar"
+                               : field->components == g->dimensions ? "Vector"
+                                                                    : "Matrix";
+            text_printf(t, "        <Attribute Name=\"");
+            text_xml(t, field->name);
+            text_printf(t, "\" AttributeType=\"%s\" Center=\"Node\">\n          ", kind);
+            xdmf_data_item(t, field, n, file_name);
+            text_printf(t, "\n        </Attribute>\n");
+        }
+        text_printf(t, "      </Grid>\n");
     }
-    text_printf(t, "      </Grid>\n");
-    const size_t body = t->length;
     text_printf(t, "    </Grid>\n  </Domain>\n</Xdmf>\n");
     if (t->failed) {
         api->error(host, "out of memory building the XDMF index");
@@ -873,10 +992,7 @@ static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v,
         api->error(host, "the path of '%s' in the output directory is too long", name);
         return SLUICE_ERROR;
     }
-    int rc = api->write_file_atomic(host, path, t->data, t->length);
-    t->length = body; /* drop the footer; the next grid goes here */
-    t->data[body] = '\0';
-    return rc;
+    return api->write_file_atomic(host, path, t->data, t->length);
 }
 
 /* ------------------------------------------------------------ snapshots -- */
@@ -928,7 +1044,7 @@ static int write_snapshot(h5w_state *s, sluice_host *host, const char *status)
     s->have_last = 1;
     s->last_step = v->step;
     s->last_time = v->time;
-    if (write_xdmf(s, host, v, name, stem) != SLUICE_OK) {
+    if (write_xdmf(s, host, v, stem) != SLUICE_OK) {
         s->broken = 1;
         return SLUICE_ERROR;
     }

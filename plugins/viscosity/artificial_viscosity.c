@@ -113,14 +113,15 @@ static inline void av_pairs(const av_state *s, const sluice_view *v, const sluic
         const sluice_index i = b->target[t];
         const sluice_real vxi = vel[0][i], vyi = vel[1][i], vzi = dims == 3 ? vel[2][i] : 0;
         const sluice_real rhoi = rho[i], ci = cs[i];
-        sluice_real sx = 0, sy = 0, sz = 0, worst = 0;
-#pragma omp simd reduction(+ : sx, sy, sz) reduction(max : worst)
+        sluice_real sx = 0, sy = 0, sz = 0;
+        int64_t worst = 0; /* bits of the largest |mu| */
+
         for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
             sluice_real dot = (vxi - vxj[k]) * rx[k] + (vyi - vyj[k]) * ry[k];
             if (dims == 3)
                 dot += (vzi - vzj[k]) * rz[k];
             const sluice_real mu = h * dot / (r[k] * r[k] + eta2);
-            const sluice_real amu = mu < 0 ? -mu : mu;
+            const int64_t amu = sluice_util_bits(mu < 0 ? -mu : mu);
             worst = amu > worst ? amu : worst;
             const sluice_real cbar = (sluice_real)0.5 * (ci + cj[k]);
             const sluice_real rhobar = (sluice_real)0.5 * (rhoi + rhoj[k]);
@@ -135,7 +136,7 @@ static inline void av_pairs(const av_state *s, const sluice_view *v, const sluic
         ay[i] -= sy;
         if (dims == 3)
             az[i] -= sz;
-        mu_max[i] = worst;
+        mu_max[i] = sluice_util_from_bits(worst);
     }
 }
 

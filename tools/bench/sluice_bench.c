@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include "diag.h"
 #include "sim.h"
@@ -53,6 +54,7 @@ typedef struct fused {
     sluice_real *x, *y, *vx, *vy, *rho, *mass, *p, *c, *ax, *ay, *drho, *mu;
     sluice_real *vx0, *vy0, *rho0s;
     sluice_real h, c0, rho0, B, alpha, g[2], courant, eta2, wendland_a, wendland_b;
+    sluice_real delta_coefficient, hydro[2]; /* delta-SPH (0: not loaded) */
     double time;
 } fused;
 
@@ -117,12 +119,13 @@ static void fused_evaluate(fused *f)
     const sluice_real support2 = s->support * s->support, ih = 1 / f->h, h = f->h;
     const sluice_real wb = f->wendland_b, eta2 = f->eta2, alpha = f->alpha;
     const sluice_real gx = f->g[0], gy = f->g[1];
+    const sluice_real dc = f->delta_coefficient, hx = f->hydro[0], hy = f->hydro[1];
 #pragma omp parallel for schedule(dynamic, 128)
     for (sluice_index i = 0; i < n; i++) {
         const int fluid = kind[i] == SLUICE_KIND_FLUID;
         const sluice_real xi = x[i], yi = y[i], vxi = vx[i], vyi = vy[i];
         const sluice_real pi = p[i] / (rho[i] * rho[i]), ci = c[i], rhoi = rho[i];
-        sluice_real sx = 0, sy = 0, sr = 0, worst = 0;
+        sluice_real sx = 0, sy = 0, sr = 0, sd = 0, worst = 0;
         for (sluice_index k = begin[i]; k < begin[i + 1]; k++) {
             const sluice_index j = list[k];
             const sluice_real dx = xi - x[j], dy = yi - y[j];
@@ -137,6 +140,8 @@ static void fused_evaluate(fused *f)
             sr += m[j] * dot * F;
             if (!fluid)
                 continue;
+            if (kind[j] == SLUICE_KIND_FLUID) /* delta-SPH, fluid pairs */
+                sd += (rho[j] - rhoi - (hx * dx + hy * dy)) * r2 * F / (r2 + eta2) * m[j] / rho[j];
             const sluice_real mu = h * dot / (r2 + eta2);
             const sluice_real amu = mu < 0 ? -mu : mu;
             worst = amu > worst ? amu : worst;
@@ -148,7 +153,7 @@ static void fused_evaluate(fused *f)
             sx += coef * dx;
             sy += coef * dy;
         }
-        drho[i] = sr;
+        drho[i] = sr - dc * sd;
         ax[i] = fluid ? gx - sx : 0;
         ay[i] = fluid ? gy - sy : 0;
         mu_max[i] = fluid ? worst : 0;
@@ -241,7 +246,7 @@ static sluice_real constant(sluice_sim *sim, const char *name)
 
 static void check_fusable(sluice_sim *sim)
 {
-    static const char *const allowed[] = {"wendland_c2",     "tait",     "continuity",
+    static const char *const allowed[] = {"wendland_c2",     "tait",     "continuity", "delta_sph",
                                           "pressure_gradient", "artificial_viscosity", "gravity",
                                           "dbc",             "time_step", "symplectic",
                                           "front_gauge",     "hdf5"};
@@ -280,6 +285,18 @@ static void fused_init(fused *f, sluice_sim *sim)
     f->eta2 = (sluice_real)0.01 * f->h * f->h;
     f->wendland_a = (sluice_real)(7.0 / (4.0 * 3.14159265358979323846) / (f->h * f->h));
     f->wendland_b = -5 * f->wendland_a / (f->h * f->h);
+    /* delta-SPH: config {delta, form} as in plugins/density_diffusion */
+    for (uint32_t k = 0; k < sim->instance_count; k++)
+        if (strcmp(sim->instances[k].name, "delta_sph") == 0) {
+            const struct {
+                sluice_real delta;
+                int form;
+            } *dc = sim->instances[k].config;
+            f->delta_coefficient = 2 * dc->delta * f->h * f->c0;
+            if (dc->form == 1) /* fourtakas: rho^H_ji = -(rho0 / c0^2) g . r_ij */
+                for (int d = 0; d < 2; d++)
+                    f->hydro[d] = -f->rho0 * g[d] / (f->c0 * f->c0);
+        }
     /* alpha: read from the artificial_viscosity config (first parameter) */
     for (uint32_t k = 0; k < sim->instance_count; k++)
         if (strcmp(sim->instances[k].name, "artificial_viscosity") == 0)
@@ -405,8 +422,29 @@ static int mode_memory(const options *o)
     return 0;
 }
 
+/* Run from the build tree (build/tools/sluice-bench): the plugins are in
+ * build/plugins unless SLUICE_PLUGIN_PATH says otherwise. */
+static void default_plugin_path(void)
+{
+    if (getenv("SLUICE_PLUGIN_PATH"))
+        return;
+    char exe[4096];
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    if (n <= 0)
+        return;
+    exe[n] = '\0';
+    char *slash = strrchr(exe, '/');
+    if (!slash)
+        return;
+    *slash = '\0';
+    char path[4200];
+    snprintf(path, sizeof path, "%s/../plugins", exe);
+    setenv("SLUICE_PLUGIN_PATH", path, 0);
+}
+
 int main(int argc, char **argv)
 {
+    default_plugin_path();
     options o = {0};
     o.steps = 200;
     o.warmup = 20;

@@ -361,9 +361,10 @@ typedef struct sluice_component {
     void (*particle)(void *state, const sluice_view *view, sluice_index begin, sluice_index end);
     void (*pair)(void *state, const sluice_view *view, const sluice_pair_batch *batch);
 
-    /* Kernel: W and F = (dW/dr)/r for n distances (w may be NULL). */
-    void (*kernel)(void *state, sluice_index n, const sluice_real *r, sluice_real *w,
-                   sluice_real *f);
+    /* Kernel: for n squared distances r2 (all below the support squared),
+     * writes the distance r, W (unless w is NULL) and F = (dW/dr)/r. */
+    void (*kernel)(void *state, sluice_index n, const sluice_real *r2, sluice_real *r,
+                   sluice_real *w, sluice_real *f);
 
     /* Equation of state inverse, used for the hydrostatic initial state. */
     void (*density_from_pressure)(void *state, sluice_index n, const sluice_real *pressure,

@@ -1,0 +1,42 @@
+#!/bin/sh
+# Builds Sluice and runs the whole test suite twice: in the optimised release
+# build, and in a build with AddressSanitizer and UndefinedBehaviorSanitizer
+# (any report fails the run). Installs the Debian 12 build dependencies first
+# when they are missing (needs root). Used by .ci/run; see README.md.
+set -eu
+cd "$(dirname "$0")/.."
+
+missing=""
+for tool in gcc make meson ninja pkg-config; do
+    command -v "$tool" >/dev/null 2>&1 || missing=yes
+done
+if [ -z "$missing" ]; then
+    pkg-config --exists yaml-0.1 hdf5 check 2>/dev/null || missing=yes
+fi
+if [ -n "$missing" ]; then
+    if [ "$(id -u)" != 0 ]; then
+        echo "run-tests: build dependencies are missing; run as root to install them" >&2
+        exit 2
+    fi
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    apt-get install -y -qq --no-install-recommends build-essential meson ninja-build \
+        pkg-config libyaml-dev libhdf5-dev check >/dev/null
+fi
+
+jobs=$(nproc 2>/dev/null || echo 2)
+export OMP_NUM_THREADS="${OMP_NUM_THREADS:-$jobs}"
+
+echo "== release build (build/)"
+[ -f build/build.ninja ] || meson setup build --buildtype=release
+meson compile -C build
+meson test -C build --print-errorlogs --num-processes "$jobs"
+
+echo "== AddressSanitizer + UndefinedBehaviorSanitizer build (build-asan/)"
+[ -f build-asan/build.ninja ] || meson setup build-asan --buildtype=debugoptimized \
+    -Db_sanitize=address,undefined -Dc_args=-fno-sanitize-recover=all
+meson compile -C build-asan
+ASAN_OPTIONS="detect_leaks=1:abort_on_error=1" \
+UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1" \
+    meson test -C build-asan --print-errorlogs --num-processes "$jobs"
+echo "== all tests passed"
