@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define TARGET_CHUNK 32
+#define TARGET_CHUNK 64
 
 static void *aligned_array(size_t count, size_t size)
 {
@@ -259,7 +259,13 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
     const uint32_t dims = view->dimensions;
     const double support2 = (double)grid->support * (double)grid->support;
     const int periodic = grid->periodic[0] || grid->periodic[1] || grid->periodic[2];
-    const sluice_index chunks = (n + TARGET_CHUNK - 1) / TARGET_CHUNK;
+    /* targets per chunk: about batch_pairs pairs at a typical 32 neighbours */
+    sluice_index chunk_targets = engine->batch_pairs / 32;
+    if (chunk_targets < 1)
+        chunk_targets = 1;
+    if (chunk_targets > TARGET_CHUNK)
+        chunk_targets = TARGET_CHUNK;
+    const sluice_index chunks = (n + chunk_targets - 1) / chunk_targets;
     int failed = 0;
 
 #pragma omp parallel num_threads(engine->thread_count) reduction(| : failed)
@@ -277,8 +283,8 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
         for (sluice_index chunk = 0; chunk < chunks; chunk++) {
             if (failed)
                 continue;
-            const sluice_index a = chunk * TARGET_CHUNK;
-            const sluice_index b = a + TARGET_CHUNK < n ? a + TARGET_CHUNK : n;
+            const sluice_index a = chunk * chunk_targets;
+            const sluice_index b = a + chunk_targets < n ? a + chunk_targets : n;
             for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
                 const uint32_t mask = pass->neighbour_mask[k];
                 if (!mask)
