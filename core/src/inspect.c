@@ -55,12 +55,14 @@ static const char *roles(const sluice_component *c, char *buffer, size_t size)
 
 static const char *access_names(uint32_t a, char *buffer, size_t size)
 {
-    snprintf(buffer, size, "%s%s%s%s", (a & SLUICE_READ) ? "read " : "",
-             (a & SLUICE_READ_NEIGHBOUR) ? "read-neighbour " : "",
-             (a & SLUICE_WRITE) ? "write " : "", (a & SLUICE_ACCUMULATE) ? "accumulate " : "");
+    snprintf(buffer, size, "%s%s%s%s", (a & SLUICE_READ) ? "read, " : "",
+             (a & SLUICE_READ_NEIGHBOUR) ? "read at neighbours, " : "",
+             (a & SLUICE_WRITE) ? "write, " : "", (a & SLUICE_ACCUMULATE) ? "accumulate, " : "");
     size_t n = strlen(buffer);
-    if (n)
-        buffer[n - 1] = '\0';
+    if (n >= 2)
+        buffer[n - 2] = '\0';
+    else
+        snprintf(buffer, size, "declares");
     return buffer;
 }
 
@@ -73,6 +75,16 @@ static const char *type_label(sluice_type t)
     case SLUICE_TYPE_ID: return "id";
     }
     return "?";
+}
+
+/* Text inside a Markdown table cell: '|' must be escaped. */
+static void md(FILE *out, const char *text)
+{
+    for (const char *c = text ? text : ""; *c; c++) {
+        if (*c == '|')
+            fputc('\\', out);
+        fputc(*c, out);
+    }
 }
 
 static void describe(FILE *out, const sluice_registry *registry, const sluice_component_entry *e,
@@ -99,23 +111,34 @@ static void describe(FILE *out, const sluice_registry *registry, const sluice_co
             fprintf(out, "\n| parameter | type | default | unit | description |\n|---|---|---|---|---|\n");
             for (uint32_t i = 0; i < c->param_count; i++) {
                 const sluice_param_spec *p = &c->params[i];
-                fprintf(out, "| `%s` | %s | %s | %s | %s |\n", p->name,
-                        sluice_schema_describe(p, buf, sizeof buf),
-                        p->default_value ? p->default_value
+                fprintf(out, "| `%s` | ", p->name);
+                md(out, sluice_schema_describe(p, buf, sizeof buf));
+                fprintf(out, " | ");
+                md(out, p->default_value ? p->default_value
                                          : (p->flags & SLUICE_PARAM_OPTIONAL) ? "(optional)"
-                                                                             : "(required)",
-                        p->unit ? p->unit : "", p->doc ? p->doc : "");
+                                                                             : "(required)");
+                fprintf(out, " | ");
+                md(out, p->unit);
+                fprintf(out, " | ");
+                md(out, p->doc);
+                fprintf(out, " |\n");
             }
         }
         if (c->field_count) {
             fprintf(out, "\n| field | type | units | access | description |\n|---|---|---|---|---|\n");
             for (uint32_t i = 0; i < c->field_count; i++) {
                 const sluice_field_spec *f = &c->fields[i];
-                fprintf(out, "| `%s` | %s[%s] | %s | %s%s%s | %s |\n", f->name, type_label(f->type),
-                        f->components == SLUICE_COMPONENTS_DIM ? "d" : (snprintf(buf2, sizeof buf2, "%u", f->components), buf2),
-                        f->units ? f->units : "", access_names(f->access, buf, sizeof buf),
-                        f->rate_of ? ", rate of " : "", f->rate_of ? f->rate_of : "",
-                        f->doc ? f->doc : "");
+                char comps[16];
+                if (f->components == SLUICE_COMPONENTS_DIM)
+                    snprintf(comps, sizeof comps, "d");
+                else
+                    snprintf(comps, sizeof comps, "%u", f->components);
+                fprintf(out, "| `%s` | %s[%s] | ", f->name, type_label(f->type), comps);
+                md(out, f->units);
+                fprintf(out, " | %s%s%s | ", access_names(f->access, buf, sizeof buf),
+                        f->rate_of ? ", rate of " : "", f->rate_of ? f->rate_of : "");
+                md(out, f->doc);
+                fprintf(out, " |\n");
             }
         }
         fprintf(out, "\n");

@@ -24,7 +24,12 @@
  * DIR/<prefix>.xdmf is rewritten atomically after every snapshot: a temporal
  * collection of every snapshot so far, each a Uniform grid with Polyvertex
  * topology, Geometry XY / XYZ from /position and one Attribute per written
- * field. File names in it are relative, so the run directory can be moved.
+ * field. The Polyvertex connectivity is the first N entries (a HyperSlab) of
+ * /index = 0, 1, 2, ... in DIR/<prefix>_vertices.h5, shared by all snapshots
+ * and grown when the particle count does: without connectivity ParaView's
+ * XDMF 3 readers make no cells and the particles only show as Point Gaussian.
+ * Ids are declared Int (ParaView reads UInt of precision 8 as 32-bit). File
+ * names in it are relative, so the run directory can be moved.
  *
  * Fields written: `fields: ""` (the default) writes every field flagged
  * SLUICE_FIELD_OUTPUT; otherwise `fields` is a comma-separated list of field
