@@ -238,6 +238,10 @@ START_TEST(plugin_failing_init)
     char *text = fixture_scene("failing_init_plugin");
     outcome o = run_case(text, NULL);
     expect_error(&o, 25, 3, "cannot open its lookup table 'missing.dat'");
+    ck_assert_msg(strstr(o.output, "library 'failing_init_plugin' 1.2.3, plugin ABI") &&
+                      strstr(o.output, "failing_init_plugin.so") &&
+                      strstr(o.output, "failed to initialise"),
+                  "the message must name the plugin, its version, ABI and path:\n%s", o.output);
     done(&o);
     free(text);
 }

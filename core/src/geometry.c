@@ -742,6 +742,20 @@ static int build_box_3d(sluice_wall_geometry *wall, const sluice_real min[3],
     return sluice_wall_build_triangles(wall, corners, 8, faces, count, reason);
 }
 
+/* Common start of the box-shaped builders: resets the wall and checks the box.
+ * Returns 0 when building may go on. */
+static int begin_box_wall(sluice_wall_geometry *wall, uint32_t dimensions,
+                          const sluice_real min[3], const sluice_real max[3], const char **reason)
+{
+    *reason = NULL;
+    if (!wall) {
+        *reason = "no wall to build";
+        return -1;
+    }
+    wall_reset(wall);
+    return box_check(dimensions, min, max, reason);
+}
+
 int sluice_wall_build_tank(sluice_wall_geometry *wall, uint32_t dimensions,
                            const sluice_real min[3], const sluice_real max[3],
                            const char **reason)
@@ -749,13 +763,7 @@ int sluice_wall_build_tank(sluice_wall_geometry *wall, uint32_t dimensions,
     const char *ignored;
     if (!reason)
         reason = &ignored;
-    *reason = NULL;
-    if (!wall) {
-        *reason = "no wall to build";
-        return -1;
-    }
-    wall_reset(wall);
-    if (box_check(dimensions, min, max, reason) != 0)
+    if (begin_box_wall(wall, dimensions, min, max, reason) != 0)
         return -1;
     if (dimensions == 2) {
         /* down the left side, along the bottom, up the right side: the fluid
@@ -774,13 +782,7 @@ int sluice_wall_build_box(sluice_wall_geometry *wall, uint32_t dimensions,
     const char *ignored;
     if (!reason)
         reason = &ignored;
-    *reason = NULL;
-    if (!wall) {
-        *reason = "no wall to build";
-        return -1;
-    }
-    wall_reset(wall);
-    if (box_check(dimensions, min, max, reason) != 0)
+    if (begin_box_wall(wall, dimensions, min, max, reason) != 0)
         return -1;
     if (dimensions == 2) {
         /* clockwise: the fluid (outside) is on the left of every segment */

@@ -179,6 +179,33 @@ static inline int64_t cell_coordinate(const sluice_grid *grid, int d, double x)
     return c;
 }
 
+/* Appends (or, with out NULL, counts) the particles j in [a, b) within the
+ * cutoff of (xi, yi, zi), minimum image applied along periodic axes. */
+static inline sluice_index scan_range(const sluice_grid *grid, sluice_real *const pos[3],
+                                      sluice_index i, double xi, double yi, double zi,
+                                      sluice_index a, sluice_index b, double cutoff2,
+                                      sluice_index *out, sluice_index found)
+{
+    const int three = grid->dimensions == 3;
+    for (sluice_index j = a; j < b; j++) {
+        double dx = xi - (double)pos[0][j];
+        double dy = yi - (double)pos[1][j];
+        double dz = three ? zi - (double)pos[2][j] : 0.0;
+        if (grid->periodic[0])
+            dx = minimum_image(dx, grid->length[0]);
+        if (grid->periodic[1])
+            dy = minimum_image(dy, grid->length[1]);
+        if (three && grid->periodic[2])
+            dz = minimum_image(dz, grid->length[2]);
+        if (dx * dx + dy * dy + dz * dz < cutoff2 && j != i) {
+            if (out)
+                out[found] = j;
+            found++;
+        }
+    }
+    return found;
+}
+
 /* Visits the candidate neighbours of particle i (sorted order) within the list
  * cutoff; with `out` NULL only counts them. Inlined into both passes. */
 static inline sluice_index visit(const sluice_grid *grid, sluice_real *const pos[3], sluice_index i,
@@ -192,17 +219,14 @@ static inline sluice_index visit(const sluice_grid *grid, sluice_real *const pos
     c[2] = (int64_t)(cell / ((uint32_t)grid->cells[0] * (uint32_t)grid->cells[1]));
     const double xi = (double)pos[0][i], yi = (double)pos[1][i];
     const double zi = dims == 3 ? (double)pos[2][i] : 0.0;
-    const int any_periodic = grid->periodic[0] || grid->periodic[1] || grid->periodic[2];
     sluice_index found = 0;
     const int64_t zr = dims == 3 ? 1 : 0;
     for (int64_t dz = -zr; dz <= zr; dz++) {
         int64_t cz = c[2] + dz;
-        if (dims == 3) {
-            if (cz < 0 || cz >= grid->cells[2]) {
-                if (!grid->periodic[2])
-                    continue;
-                cz = (cz + grid->cells[2]) % grid->cells[2];
-            }
+        if (dims == 3 && (cz < 0 || cz >= grid->cells[2])) {
+            if (!grid->periodic[2])
+                continue;
+            cz = (cz + grid->cells[2]) % grid->cells[2];
         }
         for (int64_t dy = -1; dy <= 1; dy++) {
             int64_t cy = c[1] + dy;
@@ -213,54 +237,18 @@ static inline sluice_index visit(const sluice_grid *grid, sluice_real *const pos
             }
             const size_t row = ((size_t)cz * (size_t)grid->cells[1] + (size_t)cy) *
                                (size_t)grid->cells[0];
-            /* x cells as up to three ranges (one when they are contiguous) */
-            int64_t xs[3];
-            int nx = 0;
             if (!grid->periodic[0]) {
+                /* the (up to) three x cells are contiguous in memory: one range */
                 int64_t x0 = c[0] > 0 ? c[0] - 1 : 0;
                 int64_t x1 = c[0] + 1 < grid->cells[0] ? c[0] + 1 : grid->cells[0] - 1;
-                /* the three x cells are contiguous in memory: one range */
-                sluice_index a = grid->cell_start[row + (size_t)x0];
-                sluice_index b = grid->cell_start[row + (size_t)x1 + 1];
-                for (sluice_index j = a; j < b; j++) {
-                    double dx = xi - (double)pos[0][j];
-                    double dyv = yi - (double)pos[1][j];
-                    double dzv = dims == 3 ? zi - (double)pos[2][j] : 0.0;
-                    if (any_periodic) {
-                        if (grid->periodic[1])
-                            dyv = minimum_image(dyv, grid->length[1]);
-                        if (dims == 3 && grid->periodic[2])
-                            dzv = minimum_image(dzv, grid->length[2]);
-                    }
-                    double r2 = dx * dx + dyv * dyv + dzv * dzv;
-                    if (r2 < cutoff2 && j != i) {
-                        if (out)
-                            out[found] = j;
-                        found++;
-                    }
-                }
+                found = scan_range(grid, pos, i, xi, yi, zi, grid->cell_start[row + (size_t)x0],
+                                   grid->cell_start[row + (size_t)x1 + 1], cutoff2, out, found);
                 continue;
             }
-            for (int k = -1; k <= 1; k++)
-                xs[nx++] = (c[0] + k + grid->cells[0]) % grid->cells[0];
-            for (int k = 0; k < nx; k++) {
-                sluice_index a = grid->cell_start[row + (size_t)xs[k]];
-                sluice_index b = grid->cell_start[row + (size_t)xs[k] + 1];
-                for (sluice_index j = a; j < b; j++) {
-                    double dx = minimum_image(xi - (double)pos[0][j], grid->length[0]);
-                    double dyv = yi - (double)pos[1][j];
-                    double dzv = dims == 3 ? zi - (double)pos[2][j] : 0.0;
-                    if (grid->periodic[1])
-                        dyv = minimum_image(dyv, grid->length[1]);
-                    if (dims == 3 && grid->periodic[2])
-                        dzv = minimum_image(dzv, grid->length[2]);
-                    double r2 = dx * dx + dyv * dyv + dzv * dzv;
-                    if (r2 < cutoff2 && j != i) {
-                        if (out)
-                            out[found] = j;
-                        found++;
-                    }
-                }
+            for (int64_t k = -1; k <= 1; k++) {
+                size_t cx = (size_t)((c[0] + k + grid->cells[0]) % grid->cells[0]);
+                found = scan_range(grid, pos, i, xi, yi, zi, grid->cell_start[row + cx],
+                                   grid->cell_start[row + cx + 1], cutoff2, out, found);
             }
         }
     }

@@ -341,19 +341,32 @@ static int check_box(sluice_scene *scene, const sluice_node *item, const sluice_
     return 0;
 }
 
-static int load_fluids(sluice_scene *scene, sluice_node *geometry, sluice_diag *diag)
+/* The list geometry.<key>: NULL when absent or empty, after reporting an
+ * error (*errors = 1) when it is not a list. */
+static sluice_node *geometry_list(sluice_scene *scene, sluice_node *geometry, const char *key,
+                                  const char *what, int *errors, sluice_diag *diag)
 {
-    sluice_node **slot = section_slot(geometry, "fluid", 0);
+    *errors = 0;
+    sluice_node **slot = section_slot(geometry, key, 0);
     if (!slot)
-        return 0;
+        return NULL;
     sluice_node *list = *slot;
     if (list->kind == SLUICE_NODE_SCALAR && list->plain && !*list->value)
-        return 0;
+        return NULL;
     if (list->kind != SLUICE_NODE_SEQUENCE) {
-        error_at(diag, scene, list, "geometry.fluid must be a list of regions");
-        return 1;
+        error_at(diag, scene, list, "geometry.%s must be a list of %s", key, what);
+        *errors = 1;
+        return NULL;
     }
-    int errors = 0;
+    return list;
+}
+
+static int load_fluids(sluice_scene *scene, sluice_node *geometry, sluice_diag *diag)
+{
+    int errors;
+    sluice_node *list = geometry_list(scene, geometry, "fluid", "regions", &errors, diag);
+    if (!list)
+        return errors;
     scene->fluids = sluice_arena_alloc(scene->arena, (list->count ? list->count : 1) *
                                                          sizeof *scene->fluids);
     if (!scene->fluids)
@@ -421,17 +434,10 @@ static int load_fluids(sluice_scene *scene, sluice_node *geometry, sluice_diag *
 
 static int load_walls(sluice_scene *scene, sluice_node *geometry, sluice_diag *diag)
 {
-    sluice_node **slot = section_slot(geometry, "walls", 0);
-    if (!slot)
-        return 0;
-    sluice_node *list = *slot;
-    if (list->kind == SLUICE_NODE_SCALAR && list->plain && !*list->value)
-        return 0;
-    if (list->kind != SLUICE_NODE_SEQUENCE) {
-        error_at(diag, scene, list, "geometry.walls must be a list of walls");
-        return 1;
-    }
-    int errors = 0;
+    int errors;
+    sluice_node *list = geometry_list(scene, geometry, "walls", "walls", &errors, diag);
+    if (!list)
+        return errors;
     scene->walls =
         sluice_arena_alloc(scene->arena, (list->count ? list->count : 1) * sizeof *scene->walls);
     if (!scene->walls)

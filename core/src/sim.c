@@ -62,9 +62,14 @@ static void host_message(sluice_host *host, sluice_severity severity, const char
     char text[2048];
     vsnprintf(text, sizeof text, format, ap);
     const char *name = instance_name(sim, host->instance);
-#pragma omp critical(sluice_messages)
+    omp_set_lock(&sim->message_lock);
     {
-        if (sim->diag) {
+        if (sim->diag && severity == SLUICE_SEVERITY_ERROR && sim->creating >= 0 &&
+            (uint32_t)sim->creating == host->instance) {
+            size_t used = strlen(sim->pending);
+            snprintf(sim->pending + used, sizeof sim->pending - used, "%s%s", used ? "; " : "",
+                     text);
+        } else if (sim->diag) {
             const sluice_node *key =
                 host->instance == SLUICE_CORE_INSTANCE ? NULL : sim->instances[host->instance].key;
             sluice_diag_add(sim->diag, severity, key ? key->file : sim->scene.path,
@@ -78,6 +83,7 @@ static void host_message(sluice_host *host, sluice_severity severity, const char
                     severity == SLUICE_SEVERITY_ERROR ? "error" : "warning", name, text);
         }
     }
+    omp_unset_lock(&sim->message_lock);
 }
 
 static void api_error(sluice_host *host, const char *format, ...)
@@ -1549,12 +1555,21 @@ static int load(sluice_sim *sim, const char *scene_path, const sluice_load_optio
         return errors;
     for (uint32_t k = 0; k < sim->instance_count; k++) {
         sluice_instance *in = &sim->instances[k];
-        size_t before = sluice_diag_error_count(diag);
+        sim->creating = k;
+        sim->pending[0] = '\0';
         int rc = in->component->create(&api_table, &in->host, in->config, &in->state);
-        if (rc != SLUICE_OK) {
-            if (sluice_diag_error_count(diag) == before)
-                report(sim, k, "plugin '%s' (library '%s' %s, %s) failed to initialise", in->name,
-                       in->library->name, library_version(in), in->path);
+        sim->creating = -1;
+        if (rc != SLUICE_OK || sim->pending[0]) {
+            /* one message: the plugin, its library, versions and path, and why */
+            report(sim, k,
+                   "plugin '%s' (library '%s' %s, plugin ABI %u.%u, this sluice %u.%u; %s) failed "
+                   "to initialise: %s",
+                   in->name, in->library->name ? in->library->name : "?", library_version(in),
+                   in->library->abi_major, in->library->abi_minor, SLUICE_ABI_MAJOR,
+                   SLUICE_ABI_MINOR, in->path,
+                   sim->pending[0] ? sim->pending : "its create function returned an error");
+            if (rc == SLUICE_OK)
+                in->created = 1; /* destroy what it made */
             return errors + 1;
         }
         in->created = 1;
@@ -1694,6 +1709,8 @@ sluice_sim *sluice_sim_load(const char *scene_path, const sluice_load_options *o
         return NULL;
     }
     sim->diag = diag;
+    omp_init_lock(&sim->message_lock);
+    sim->creating = -1;
     sim->kernel = sim->integrator = -1;
     sim->position.column = sim->kind.column = sim->id.column = -1;
     sim->mass.column = sim->velocity.column = sim->density.column = -1;
@@ -1761,6 +1778,7 @@ void sluice_sim_free(sluice_sim *sim)
     free(sim->output_directory);
     sluice_registry_close(&sim->registry);
     sluice_scene_free(&sim->scene);
+    omp_destroy_lock(&sim->message_lock);
     free(sim);
 }
 

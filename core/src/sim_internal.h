@@ -3,6 +3,8 @@
 #ifndef SLUICE_SIM_INTERNAL_H
 #define SLUICE_SIM_INTERNAL_H
 
+#include <omp.h>
+
 #include "diag.h"
 #include "neighbours.h"
 #include "pairs.h"
@@ -78,6 +80,10 @@ struct sluice_sim {
     sluice_scene scene;
     sluice_registry registry;
     sluice_diag *diag; /* during loading only */
+    int64_t creating;  /* instance inside create(), or -1: its errors are held in
+                          pending and reported as one message naming the plugin */
+    char pending[2048];
+    omp_lock_t message_lock; /* api->error may be called from parallel terms */
     sluice_phase phase;
     int check_only;
 

@@ -118,7 +118,10 @@ static void fused_bind(fused *f)
     f->rho0s = column(s, "density_previous", 0);
 }
 
-static void fused_evaluate_scalar(fused *f)
+/* Common start of every fused evaluation: rebuild the neighbour list when
+ * needed (rebinding the columns after the reordering), then the equation of
+ * state. */
+static void fused_prepare(fused *f)
 {
     sluice_sim *s = f->sim;
     sluice_sim_refresh_view(s);
@@ -132,7 +135,6 @@ static void fused_evaluate_scalar(fused *f)
         sluice_sim_refresh_view(s);
     }
     const sluice_index n = s->particles.count;
-    const uint8_t *kind = s->view.kind;
     const sluice_real i0 = 1 / f->rho0, B = f->B, c0 = f->c0;
     sluice_real *restrict rho = f->rho, *restrict p = f->p, *restrict c = f->c;
 #pragma omp parallel for schedule(static)
@@ -141,6 +143,15 @@ static void fused_evaluate_scalar(fused *f)
         p[i] = B * (q3 * q3 * q - 1);
         c[i] = c0 * q3;
     }
+}
+
+static void fused_evaluate_scalar(fused *f)
+{
+    fused_prepare(f);
+    sluice_sim *s = f->sim;
+    const sluice_index n = s->particles.count;
+    const uint8_t *kind = s->view.kind;
+    sluice_real *restrict rho = f->rho, *restrict p = f->p, *restrict c = f->c;
     const sluice_index *list = s->grid.list, *begin = s->grid.list_begin;
     const sluice_real *restrict x = f->x, *restrict y = f->y, *restrict vx = f->vx,
                                 *restrict vy = f->vy, *restrict m = f->mass;
@@ -194,27 +205,11 @@ static void fused_evaluate_scalar(fused *f)
 
 static void fused_evaluate_flat(fused *f)
 {
+    fused_prepare(f);
     sluice_sim *s = f->sim;
-    sluice_sim_refresh_view(s);
-    if (sluice_grid_needs_rebuild(&s->grid, &s->view)) {
-        sluice_index bad;
-        if (sluice_grid_build(&s->grid, &s->particles, (uint32_t)s->position.column, &bad) != 0) {
-            fprintf(stderr, "sluice-bench: neighbour build failed\n");
-            exit(4);
-        }
-        fused_bind(f);
-        sluice_sim_refresh_view(s);
-    }
     const sluice_index n = s->particles.count;
     const uint8_t *kind = s->view.kind;
-    const sluice_real i0 = 1 / f->rho0, B = f->B, c0 = f->c0;
     sluice_real *restrict rho = f->rho, *restrict p = f->p, *restrict c = f->c;
-#pragma omp parallel for schedule(static)
-    for (sluice_index i = 0; i < n; i++) {
-        sluice_real q = rho[i] * i0, q2 = q * q, q3 = q2 * q;
-        p[i] = B * (q3 * q3 * q - 1);
-        c[i] = c0 * q3;
-    }
     const sluice_index *list = s->grid.list, *begin = s->grid.list_begin;
     const sluice_real *restrict x = f->x, *restrict y = f->y, *restrict vx = f->vx,
                                 *restrict vy = f->vy, *restrict m = f->mass;
@@ -323,26 +318,8 @@ static void fused_term(void *state, const sluice_view *v, const sluice_pair_batc
 
 static void fused_evaluate_batched(fused *f)
 {
+    fused_prepare(f);
     sluice_sim *s = f->sim;
-    sluice_sim_refresh_view(s);
-    if (sluice_grid_needs_rebuild(&s->grid, &s->view)) {
-        sluice_index bad;
-        if (sluice_grid_build(&s->grid, &s->particles, (uint32_t)s->position.column, &bad) != 0) {
-            fprintf(stderr, "sluice-bench: neighbour build failed\n");
-            exit(4);
-        }
-        fused_bind(f);
-        sluice_sim_refresh_view(s);
-    }
-    const sluice_index n = s->particles.count;
-    const sluice_real i0 = 1 / f->rho0, B = f->B, c0 = f->c0;
-    sluice_real *restrict rho = f->rho, *restrict p = f->p, *restrict c = f->c;
-#pragma omp parallel for schedule(static)
-    for (sluice_index i = 0; i < n; i++) {
-        sluice_real q = rho[i] * i0, q2 = q * q, q3 = q2 * q;
-        p[i] = B * (q3 * q3 * q - 1);
-        c[i] = c0 * q3;
-    }
     static const sluice_component term = {.name = "fused", .pair = fused_term};
     sluice_pair_term t = {&term, f, SLUICE_KINDS_ALL, SLUICE_KINDS_ALL};
     uint32_t fluid_columns[6] = {(uint32_t)f->col_vx, (uint32_t)f->col_vy, (uint32_t)f->col_m,
