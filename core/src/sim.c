@@ -527,7 +527,9 @@ static const char *describe_particle(const sluice_sim *sim, sluice_index i, char
     return buffer;
 }
 
-int sluice_sim_evaluate(sluice_sim *sim)
+/* Rebuilds the neighbour list when a particle has moved beyond the skin or
+ * the particle count changed. */
+static int update_neighbours(sluice_sim *sim)
 {
     sluice_sim_refresh_view(sim);
     if (sluice_grid_needs_rebuild(&sim->grid, &sim->view)) {
@@ -550,6 +552,13 @@ int sluice_sim_evaluate(sluice_sim *sim)
         }
         sluice_sim_refresh_view(sim);
     }
+    return SLUICE_OK;
+}
+
+int sluice_sim_evaluate(sluice_sim *sim)
+{
+    if (update_neighbours(sim) != SLUICE_OK)
+        return SLUICE_ERROR;
     zero_accumulators(sim);
     for (uint32_t p = 0; p < sim->pass_count; p++) {
         const sluice_pass *pass = &sim->passes[p];
@@ -805,6 +814,47 @@ static int api_write_file_atomic(sluice_host *host, const char *path, const void
     return SLUICE_OK;
 }
 
+static sluice_real api_wall_distance(sluice_host *host, const sluice_real *point)
+{
+    const sluice_sim *sim = host->sim;
+    double best = INFINITY;
+    for (size_t w = 0; w < sim->scene.wall_count; w++) {
+        /* a lower bound from the wall's bounding box first */
+        const sluice_real *b = sim->wall_bounds + 6 * w;
+        double lower = 0;
+        for (uint32_t d = 0; d < sim->scene.dimensions; d++) {
+            double below = (double)b[d] - (double)point[d], above = (double)point[d] - (double)b[3 + d];
+            double gap = below > 0 ? below : above > 0 ? above : 0;
+            lower += gap * gap;
+        }
+        if (lower >= best * best)
+            continue;
+        int beyond = 0;
+        double dist = fabs((double)sluice_wall_signed_distance(&sim->scene.walls[w].geometry, point,
+                                                               &beyond, NULL));
+        if (dist < best)
+            best = dist;
+    }
+    return (sluice_real)best;
+}
+
+static int api_pair_pass(sluice_host *host)
+{
+    sluice_sim *sim = host->sim;
+    sluice_instance *in = &sim->instances[host->instance];
+    if (!in->on_demand) {
+        api_error(host, "calls api->pair_pass but is not flagged SLUICE_COMPONENT_ON_DEMAND");
+        return SLUICE_ERROR;
+    }
+    if (update_neighbours(sim) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (sluice_pair_pass_run(&sim->engine, in->on_demand, &sim->grid, &sim->view) != 0) {
+        sluice_sim_fail(sim, "out of memory in the pair pass of '%s'", in->name);
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
 static const sluice_api api_table = {
     sizeof(sluice_api),
     SLUICE_ABI_MAJOR,
@@ -837,6 +887,8 @@ static const sluice_api api_table = {
     api_table_open,
     api_table_row,
     api_write_file_atomic,
+    api_wall_distance,
+    api_pair_pass,
 };
 
 /* ------------------------------------------------------------ schedule -- */
@@ -862,7 +914,71 @@ const char *sluice_field_writers(const sluice_sim *sim, const sluice_field_entry
 
 static int is_evaluation(const sluice_component *c)
 {
-    return c->particle || c->pair;
+    return c->particle || (c->pair && !(c->flags & SLUICE_COMPONENT_ON_DEMAND));
+}
+
+/* Describes a pair pass made of the given components: the terms, the
+ * neighbour kinds per target kind, and the columns to gather at neighbours
+ * per target kind. 0, or -1 on OOM (the pass is then freed by the caller). */
+static int fill_pair_pass(sluice_sim *sim, sluice_pair_pass *p, const uint32_t *members,
+                          uint32_t count)
+{
+    p->terms = calloc(count ? count : 1, sizeof *p->terms);
+    if (!p->terms)
+        return -1;
+    for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
+        p->gathered_columns[k] = calloc(sim->column_count + 1, sizeof *p->gathered_columns[k]);
+        if (!p->gathered_columns[k])
+            return -1;
+    }
+    const size_t stride = sim->column_count + 1;
+    uint8_t *gather = calloc((size_t)SLUICE_KIND_COUNT * stride, 1);
+    if (!gather)
+        return -1;
+    for (uint32_t m = 0; m < count; m++) {
+        const uint32_t v = members[m];
+        const sluice_component *c = sim->instances[v].component;
+        sluice_pair_term *t = &p->terms[p->term_count++];
+        t->component = c;
+        t->state = sim->instances[v].state;
+        t->target_kinds = c->target_kinds;
+        t->neighbour_kinds = c->neighbour_kinds;
+        for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
+            if (!(c->target_kinds & SLUICE_KIND_MASK(k)))
+                continue;
+            p->neighbour_mask[k] |= c->neighbour_kinds;
+            if (c->flags & SLUICE_COMPONENT_NEEDS_KERNEL)
+                p->needs_kernel[k] = 1;
+            for (uint32_t f = 0; f < sim->field_count; f++) {
+                const sluice_field_entry *field = &sim->fields[f];
+                for (uint32_t d = 0; d < field->declarer_count; d++)
+                    if (field->declarers[d].instance == v &&
+                        (field->declarers[d].access & SLUICE_READ_NEIGHBOUR) &&
+                        field->type == SLUICE_TYPE_REAL)
+                        for (uint32_t comp = 0; comp < field->components; comp++)
+                            gather[(size_t)k * stride + (size_t)(field->column + (int32_t)comp)] = 1;
+            }
+        }
+    }
+    for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
+        for (uint32_t c = 0; c < sim->column_count; c++)
+            if (gather[(size_t)k * stride + c])
+                p->gathered_columns[k][p->gathered_count[k]++] = c;
+        if (p->gathered_count[k] > p->gathered_max)
+            p->gathered_max = p->gathered_count[k];
+    }
+    free(gather);
+    return 0;
+}
+
+static void free_pair_pass(sluice_pair_pass *p)
+{
+    if (!p)
+        return;
+    free(p->terms);
+    for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++)
+        free(p->gathered_columns[k]);
+    memset(p, 0, sizeof *p);
 }
 
 /* Checks the declarations and orders the evaluation components into passes. */
@@ -1031,53 +1147,17 @@ static int build_schedule(sluice_sim *sim)
             continue;
         sluice_pass *p = &sim->passes[sim->pass_count++];
         p->is_pair = 1;
-        p->pair.terms = calloc(terms, sizeof *p->pair.terms);
-        if (!p->pair.terms)
+        uint32_t *members = calloc(terms, sizeof *members);
+        if (!members)
             goto oom;
-        for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
-            p->pair.gathered_columns[k] =
-                calloc(sim->column_count + 1, sizeof *p->pair.gathered_columns[k]);
-            if (!p->pair.gathered_columns[k])
-                goto oom;
-        }
-        uint8_t *gather = calloc((size_t)SLUICE_KIND_COUNT * (sim->column_count + 1), 1);
-        if (!gather)
+        uint32_t m = 0;
+        for (uint32_t v = 0; v < n; v++)
+            if (is_evaluation(sim->instances[v].component) && slot[v] == s)
+                members[m++] = v;
+        int rc = fill_pair_pass(sim, &p->pair, members, m);
+        free(members);
+        if (rc != 0)
             goto oom;
-        for (uint32_t v = 0; v < n; v++) {
-            if (!is_evaluation(sim->instances[v].component) || slot[v] != s)
-                continue;
-            const sluice_component *c = sim->instances[v].component;
-            sluice_pair_term *t = &p->pair.terms[p->pair.term_count++];
-            t->component = c;
-            t->state = sim->instances[v].state;
-            t->target_kinds = c->target_kinds;
-            t->neighbour_kinds = c->neighbour_kinds;
-            for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
-                if (!(c->target_kinds & SLUICE_KIND_MASK(k)))
-                    continue;
-                p->pair.neighbour_mask[k] |= c->neighbour_kinds;
-                if (c->flags & SLUICE_COMPONENT_NEEDS_KERNEL)
-                    p->pair.needs_kernel[k] = 1;
-                for (uint32_t f = 0; f < sim->field_count; f++) {
-                    const sluice_field_entry *field = &sim->fields[f];
-                    for (uint32_t d = 0; d < field->declarer_count; d++)
-                        if (field->declarers[d].instance == v &&
-                            (field->declarers[d].access & SLUICE_READ_NEIGHBOUR) &&
-                            field->type == SLUICE_TYPE_REAL)
-                            for (uint32_t comp = 0; comp < field->components; comp++)
-                                gather[(size_t)k * (sim->column_count + 1) +
-                                       (size_t)(field->column + (int32_t)comp)] = 1;
-                }
-            }
-        }
-        for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
-            for (uint32_t c = 0; c < sim->column_count; c++)
-                if (gather[(size_t)k * (sim->column_count + 1) + c])
-                    p->pair.gathered_columns[k][p->pair.gathered_count[k]++] = c;
-            if (p->pair.gathered_count[k] > p->pair.gathered_max)
-                p->pair.gathered_max = p->pair.gathered_count[k];
-        }
-        free(gather);
     }
     /* accumulated columns, zeroed before every evaluation */
     sim->accumulate_columns = calloc(sim->column_count + 1, sizeof *sim->accumulate_columns);
@@ -1092,6 +1172,15 @@ static int build_schedule(sluice_sim *sim)
             for (uint32_t comp = 0; comp < field->components; comp++)
                 sim->accumulate_columns[sim->accumulate_count++] =
                     (uint32_t)field->column + comp;
+    }
+    /* on-demand pair terms: a pass of their own, run through api->pair_pass */
+    for (uint32_t v = 0; v < n; v++) {
+        sluice_instance *in = &sim->instances[v];
+        if (!(in->component->flags & SLUICE_COMPONENT_ON_DEMAND))
+            continue;
+        in->on_demand = calloc(1, sizeof *in->on_demand);
+        if (!in->on_demand || fill_pair_pass(sim, in->on_demand, &v, 1) != 0)
+            goto oom;
     }
     free(edge);
     free(slot);
@@ -1323,6 +1412,11 @@ static int check_descriptor(sluice_sim *sim, uint32_t k)
                in->name, in->path);
         errors++;
     }
+    if ((c->flags & SLUICE_COMPONENT_ON_DEMAND) && !c->pair) {
+        report(sim, k, "plugin '%s' (%s) is flagged on-demand but has no pair callback", in->name,
+               in->path);
+        errors++;
+    }
     if (c->pair && c->particle) {
         report(sim, k,
                "plugin '%s' (%s) is both a particle and a pair term; split it into two "
@@ -1513,6 +1607,26 @@ static int load(sluice_sim *sim, const char *scene_path, const sluice_load_optio
         pub->element_count = wall->geometry.element_count;
         pub->points = wall->geometry.points;
         pub->normals = wall->geometry.normals;
+    }
+    sim->wall_bounds = calloc(6 * (scene->wall_count + 1), sizeof *sim->wall_bounds);
+    if (!sim->wall_bounds)
+        return errors + 1;
+    for (size_t w = 0; w < scene->wall_count; w++) {
+        const sluice_wall_geometry *g = &scene->walls[w].geometry;
+        sluice_real *b = sim->wall_bounds + 6 * w;
+        const uint32_t per = scene->dimensions == 3 ? 3 : 2;
+        for (int d = 0; d < 3; d++) {
+            b[d] = (sluice_real)INFINITY;
+            b[3 + d] = (sluice_real)-INFINITY;
+        }
+        for (size_t q = 0; q < (size_t)g->element_count * per; q++)
+            for (int d = 0; d < 3; d++) {
+                sluice_real x = g->points[3 * q + (size_t)d];
+                if (x < b[d])
+                    b[d] = x;
+                if (x > b[3 + d])
+                    b[3 + d] = x;
+            }
     }
     if (errors)
         return errors;
@@ -1762,11 +1876,13 @@ void sluice_sim_free(sluice_sim *sim)
     free(sim->rates);
     free(sim->walls);
     if (sim->passes)
-        for (uint32_t p = 0; p < sim->pass_count; p++) {
-            free(sim->passes[p].pair.terms);
-            for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++)
-                free(sim->passes[p].pair.gathered_columns[k]);
-        }
+        for (uint32_t p = 0; p < sim->pass_count; p++)
+            free_pair_pass(&sim->passes[p].pair);
+    for (uint32_t k = 0; k < sim->instance_count; k++) {
+        free_pair_pass(sim->instances[k].on_demand);
+        free(sim->instances[k].on_demand);
+    }
+    free(sim->wall_bounds);
     free(sim->passes);
     free(sim->accumulate_columns);
     free(sim->requests);

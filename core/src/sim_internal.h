@@ -53,6 +53,7 @@ typedef struct sluice_instance {
     void *state;
     int created;
     sluice_host host;
+    sluice_pair_pass *on_demand; /* SLUICE_COMPONENT_ON_DEMAND: its own pass */
 } sluice_instance;
 
 typedef struct sluice_pass {
@@ -98,6 +99,7 @@ struct sluice_sim {
     sluice_rate *rates;
     uint32_t rate_count;
     sluice_wall *walls;
+    sluice_real *wall_bounds; /* 6 per wall: min xyz, max xyz (wall_distance) */
 
     sluice_particles particles;
     sluice_view view;

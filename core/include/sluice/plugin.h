@@ -33,7 +33,7 @@ extern "C" {
 #endif
 
 #define SLUICE_ABI_MAJOR 1
-#define SLUICE_ABI_MINOR 0
+#define SLUICE_ABI_MINOR 1
 #define SLUICE_PLUGIN_MAGIC 0x534c4349u /* "SLCI" */
 
 #if defined(__GNUC__)
@@ -319,13 +319,25 @@ typedef struct sluice_api {
     int (*table_row)(sluice_table *table, const double *values, uint32_t count);
     /* Write `size` bytes to `path` atomically (temporary file, then rename). */
     int (*write_file_atomic)(sluice_host *host, const char *path, const void *data, size_t size);
+
+    /* -- 1.1: geometry queries and on-demand pair passes. */
+    /* Distance from a point (3 reals) to the nearest wall of the scene, of any
+     * scheme, in m; INFINITY when the scene has no walls. Thread-safe. */
+    sluice_real (*wall_distance)(sluice_host *host, const sluice_real *point);
+    /* For a component flagged SLUICE_COMPONENT_ON_DEMAND: run its pair
+     * callback over every particle now, on the current state (from a hook,
+     * e.g. after_step every N steps). */
+    int (*pair_pass)(sluice_host *host);
 } sluice_api;
 
 /* ----------------------------------------------------------- components -- */
 
 enum sluice_component_flags {
     SLUICE_COMPONENT_NEEDS_KERNEL = 1u << 0, /* pair term reads batch->kernel */
-    SLUICE_COMPONENT_WALL_SCHEME = 1u << 1   /* handles the scene's walls (api->wall) */
+    SLUICE_COMPONENT_WALL_SCHEME = 1u << 1,  /* handles the scene's walls (api->wall) */
+    SLUICE_COMPONENT_ON_DEMAND = 1u << 2     /* 1.1: its pair callback is not part of every
+                                                evaluation; it runs when the component calls
+                                                api->pair_pass() */
 };
 
 enum sluice_finish_status { SLUICE_FINISH_COMPLETE = 0, SLUICE_FINISH_FAILED = 1 };
