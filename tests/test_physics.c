@@ -244,9 +244,13 @@ static double uniform(void)
     return (double)(rng >> 11) * (1.0 / 9007199254740992.0);
 }
 
-static void periodic_box(const char *kernel, int dims, double beta)
+/* Runs 100 steps of a periodic box without walls, random velocities and a
+ * random 1 % density field, with the given pair forces (YAML lines under
+ * plugins:), and checks that total linear momentum does not change beyond
+ * round-off. */
+static void periodic_box_forces(const char *kernel, int dims, const char *forces)
 {
-    char yaml[2048];
+    char yaml[4096];
     const char *lo = dims == 2 ? "[0, 0]" : "[0, 0, 0]";
     const char *hi = dims == 2 ? "[1, 1]" : "[0.6, 0.6, 0.6]";
     snprintf(yaml, sizeof yaml,
@@ -259,12 +263,11 @@ static void periodic_box(const char *kernel, int dims, double beta)
              "  %s: {}\n"
              "  tait: {speed_of_sound: 20}\n"
              "  continuity: {}\n"
-             "  pressure_gradient: {}\n"
-             "  artificial_viscosity: {alpha: 0.5, beta: %g}\n"
+             "%s"
              "  time_step: {}\n"
              "  symplectic: {}\n",
              dims, dims == 2 ? "0.04" : "0.06", lo, hi, dims == 2 ? "xy" : "xyz", lo, hi, kernel,
-             beta);
+             forces);
     sluice_sim *sim = test_load("periodic", yaml, NULL, 0);
     const sluice_view *v = sluice_sim_view(sim);
     sluice_real *rho = test_column(sim, "density", 0);
@@ -296,12 +299,21 @@ static void periodic_box(const char *kernel, int dims, double beta)
                       "%s %dD: momentum[%d] drifted by %g (scale %g)", kernel, dims, d, p - p0[d],
                       scale);
         moved += fabs(p);
-        fprintf(stderr, "%s %dD periodic box, 100 steps: momentum[%d] change %.2e (sum m|v| %.2e)\n",
-                kernel, dims, d, p - p0[d], scale);
+        fprintf(stderr, "%s %dD periodic box, 100 steps, forces {%s}: momentum[%d] change %.2e "
+                        "(sum m|v| %.2e)\n",
+                kernel, dims, forces, d, p - p0[d], scale);
     }
     (void)moved;
     ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
     sluice_sim_free(sim);
+}
+
+static void periodic_box(const char *kernel, int dims, double beta)
+{
+    char forces[256];
+    snprintf(forces, sizeof forces,
+             "  pressure_gradient: {}\n  artificial_viscosity: {alpha: 0.5, beta: %g}\n", beta);
+    periodic_box_forces(kernel, dims, forces);
 }
 
 START_TEST(momentum_2d_wendland) { periodic_box("wendland_c2", 2, 0); }
@@ -309,6 +321,76 @@ END_TEST
 START_TEST(momentum_2d_cubic) { periodic_box("cubic_spline", 2, 1.0); }
 END_TEST
 START_TEST(momentum_3d) { periodic_box("wendland_c2", 3, 0.5); }
+END_TEST
+
+/* ------------------------------------------------------- plugin swap -- */
+
+/* Two scenes that differ by one plugin: their field tables must agree except
+ * for fields declared only by the differing plugins, and shared fields must
+ * have the same type, components and units. */
+static int declared_by(const sluice_sim *sim, const sluice_field_entry *f, const char *plugin)
+{
+    for (uint32_t d = 0; d < f->declarer_count; d++)
+        if (f->declarers[d].instance != SLUICE_CORE_INSTANCE &&
+            strcmp(sim->instances[f->declarers[d].instance].name, plugin) == 0)
+            return 1;
+    return 0;
+}
+
+static void check_swap(const char *a_plugin, const char *b_plugin, const char *integrator)
+{
+    char yaml_a[1024], yaml_b[1024];
+    const char *head = "dimensions: 2\n"
+                       "particles: {spacing: 0.05}\n"
+                       "time: {end: 0.1}\n"
+                       "domain: {min: [-0.2, -0.2], max: [1.2, 1.2]}\n"
+                       "geometry:\n"
+                       "  fluid: [{shape: box, min: [0, 0], max: [0.5, 0.5]}]\n"
+                       "  walls: [{shape: tank, min: [0, 0], max: [1, 1]}]\n"
+                       "plugins:\n"
+                       "  wendland_c2: {}\n  tait: {speed_of_sound: 20}\n  continuity: {}\n"
+                       "  pressure_gradient: {}\n  gravity: {}\n  dbc: {}\n  time_step: {}\n";
+    char line_a[128] = "", line_b[128] = "";
+    if (a_plugin[0])
+        snprintf(line_a, sizeof line_a, "  %s: {}\n", a_plugin);
+    if (b_plugin[0])
+        snprintf(line_b, sizeof line_b, "  %s: {}\n", b_plugin);
+    snprintf(yaml_a, sizeof yaml_a, "%s%s  %s: {}\n", head, line_a, integrator);
+    snprintf(yaml_b, sizeof yaml_b, "%s%s  %s: {}\n", head, line_b, integrator);
+    sluice_sim *a = test_load("swap-a", yaml_a, NULL, 0), *b = test_load("swap-b", yaml_b, NULL, 0);
+    int differing = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        sluice_sim *x = pass ? b : a, *y = pass ? a : b;
+        const char *own = pass ? b_plugin : a_plugin;
+        for (uint32_t i = 0; i < x->field_count; i++) {
+            const sluice_field_entry *f = &x->fields[i];
+            const sluice_field_entry *g = NULL;
+            for (uint32_t k = 0; k < y->field_count; k++)
+                if (strcmp(y->fields[k].name, f->name) == 0)
+                    g = &y->fields[k];
+            if (!g) {
+                ck_assert_msg(own[0] && declared_by(x, f, own),
+                              "field '%s' differs between the scenes but is not owned by '%s'",
+                              f->name, own[0] ? own : "(nothing)");
+                differing++;
+                continue;
+            }
+            ck_assert_msg(f->type == g->type && f->components == g->components &&
+                              strcmp(f->units, g->units) == 0,
+                          "shared field '%s' changed its layout", f->name);
+        }
+    }
+    fprintf(stderr, "swap '%s' <-> '%s': %d fields differ, all owned by them\n",
+            a_plugin[0] ? a_plugin : "-", b_plugin[0] ? b_plugin : "-", differing);
+    sluice_sim_free(a);
+    sluice_sim_free(b);
+}
+
+START_TEST(swapping_a_plugin_changes_only_its_fields)
+{
+    check_swap("artificial_viscosity", "", "symplectic");
+    check_swap("delta_sph", "", "symplectic");
+}
 END_TEST
 
 int main(void)
@@ -332,5 +414,8 @@ int main(void)
     tcase_add_test(c, momentum_2d_cubic);
     tcase_add_test(c, momentum_3d);
     suite_add_tcase(s, c);
+    TCase *l = tcase_create("layout");
+    tcase_add_test(l, swapping_a_plugin_changes_only_its_fields);
+    suite_add_tcase(s, l);
     return test_run_suite(s);
 }

@@ -34,6 +34,24 @@ static inline int sluice_util_fields(const sluice_api *api, sluice_host *host,
     return SLUICE_OK;
 }
 
+/* Looks up a field that may legitimately be absent (no error when it is):
+ * returns 1 and fills *out when some loaded plugin declares it, else 0. */
+static inline int sluice_util_optional_field(const sluice_api *api, sluice_host *host,
+                                             const char *name, sluice_field *out)
+{
+    uint32_t count = api->field_count(host);
+    for (uint32_t f = 0; f < count; f++) {
+        sluice_field_spec spec;
+        sluice_field field;
+        if (api->field_info(host, f, &spec, &field) == SLUICE_OK && spec.name &&
+            strcmp(spec.name, name) == 0) {
+            *out = field;
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* Allocates a zeroed state struct; reports OOM. */
 static inline void *sluice_util_state(const sluice_api *api, sluice_host *host, size_t size)
 {

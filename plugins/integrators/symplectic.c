@@ -4,8 +4,9 @@
  *   corrector: q^{n+1} = q^n + dt (dq/dt)^{n+1/2},  r^{n+1} = r^{n+1/2} + dt/2 v^{n+1}
  * for every integrated field q (velocity, density, ...: each field declared as
  * the rate of another), over the kinds its rate declares. Positions of fluid
- * particles move; walls move only when a wall plugin moves them. The step size
- * comes from the rates at t^n (first evaluation). */
+ * particles move with the velocity plus, when a plugin (XSPH) declares it, the
+ * field transport_velocity_correction; walls move only when a wall plugin
+ * moves them. The step size comes from the rates at t^n (first evaluation). */
 #include <stdio.h>
 #include <string.h>
 
@@ -15,6 +16,8 @@ typedef struct symplectic_state {
     const sluice_api *api;
     uint32_t dims;
     sluice_field position, velocity;
+    int has_transport;
+    sluice_field transport; /* transport_velocity_correction (XSPH), if declared */
     uint32_t rate_count;
     sluice_rate *rates;
     sluice_field *previous;
@@ -51,6 +54,8 @@ static int symplectic_bind(void *state, sluice_host *host)
     if (api->field(host, "position", &s->position) != SLUICE_OK ||
         api->field(host, "velocity", &s->velocity) != SLUICE_OK)
         return SLUICE_ERROR;
+    s->has_transport =
+        sluice_util_optional_field(api, host, "transport_velocity_correction", &s->transport);
     s->rate_count = api->rate_count(host);
     s->rates = calloc(s->rate_count + 1, sizeof *s->rates);
     s->previous = calloc(s->rate_count + 1, sizeof *s->previous);
@@ -92,19 +97,32 @@ static void symplectic_destroy(void *state)
     free(s);
 }
 
+/* x += step (v + transport correction) for fluid particles */
+static void move(const symplectic_state *s, const sluice_view *v, sluice_index begin,
+                 sluice_index end, sluice_real step)
+{
+    const uint8_t *restrict kind = v->kind;
+    for (uint32_t d = 0; d < s->dims; d++) {
+        sluice_real *restrict x = sluice_real_column(v, s->position, d);
+        const sluice_real *restrict u = sluice_real_column(v, s->velocity, d);
+        if (s->has_transport) {
+            const sluice_real *restrict du = sluice_real_column(v, s->transport, d);
+            for (sluice_index i = begin; i < end; i++)
+                x[i] += kind[i] == SLUICE_KIND_FLUID ? step * (u[i] + du[i]) : 0;
+        } else {
+            for (sluice_index i = begin; i < end; i++)
+                x[i] += kind[i] == SLUICE_KIND_FLUID ? step * u[i] : 0;
+        }
+    }
+}
+
 static void predictor(void *context, const sluice_view *v, sluice_index begin, sluice_index end)
 {
     const symplectic_state *s = context;
     const sluice_real half = (sluice_real)(0.5 * s->dt);
     const uint8_t *restrict kind = v->kind;
     /* positions first: they use v^n */
-    for (uint32_t d = 0; d < s->dims; d++) {
-        sluice_real *restrict x = sluice_real_column(v, s->position, d);
-        const sluice_real *restrict u = sluice_real_column(v, s->velocity, d);
-#pragma omp simd
-        for (sluice_index i = begin; i < end; i++)
-            x[i] += kind[i] == SLUICE_KIND_FLUID ? half * u[i] : 0;
-    }
+    move(s, v, begin, end, half);
     for (uint32_t r = 0; r < s->rate_count; r++) {
         const sluice_rate *rate = &s->rates[r];
         const uint32_t kinds = rate->kinds;
@@ -139,13 +157,7 @@ static void corrector(void *context, const sluice_view *v, sluice_index begin, s
         }
     }
     /* positions last: they use v^{n+1} */
-    for (uint32_t d = 0; d < s->dims; d++) {
-        sluice_real *restrict x = sluice_real_column(v, s->position, d);
-        const sluice_real *restrict u = sluice_real_column(v, s->velocity, d);
-#pragma omp simd
-        for (sluice_index i = begin; i < end; i++)
-            x[i] += kind[i] == SLUICE_KIND_FLUID ? half * u[i] : 0;
-    }
+    move(s, v, begin, end, half);
 }
 
 static int symplectic_advance(void *state, sluice_host *host)
