@@ -1352,10 +1352,15 @@ static int fill_fluid(sluice_sim *sim)
                 return 1;
             }
             double g = -(double)gravity[dims - 1];
+            /* the pressure at the rest density (background or reference
+             * pressure of the equation of state), when it publishes one */
+            sluice_real reference = 0;
+            get_constant(sim, "reference_pressure", &reference, 1);
             for (size_t i = 0; i < kept; i++) {
                 double depth = level - (double)pts.xyz[3 * i + dims - 1];
-                pressure[i] =
-                    (sluice_real)(depth > 0 ? (double)sim->rest_density * g * depth : 0.0);
+                pressure[i] = (sluice_real)((double)reference +
+                                            (depth > 0 ? (double)sim->rest_density * g * depth
+                                                       : 0.0));
             }
             eos->component->density_from_pressure(eos->state, (sluice_index)kept, pressure, density);
             free(pressure);

@@ -1,13 +1,39 @@
-/* Continuity equation (seeds 002, 004; Monaghan 1992):
- *   d rho_i / dt = sum_j m_j (v_i - v_j) . grad_i W_ij
+/* Continuity equation, in the two forms of the seeds:
+ *  - form mass (seeds 002, 004; Monaghan 1992):
+ *      d rho_i / dt = sum_j m_j (v_i - v_j) . grad_i W_ij
+ *  - form volume (seed 000 eq. 6, LS-DYNA):
+ *      d rho_i / dt = rho_i sum_j (m_j / rho_j) (v_i - v_j) . grad_i W_ij
+ * With `renormalise` the kernel gradient is the renormalised one,
+ * L_i grad_i W_ij (seed 004 renormalises every term but the pressure
+ * gradient); it needs the kernel_correction plugin.
  * Targets fluid and wall particles (dynamic boundary particles obey it too).
- * Symmetric in i, j: total mass is conserved exactly. */
+ * Both forms vanish for a uniform velocity and are exact for the divergence
+ * of a linear velocity field on a lattice (with renormalisation, on any
+ * particle set). */
 #include "plugin_util.h"
+
+typedef struct continuity_config {
+    int form;
+    int renormalise;
+} continuity_config;
+
+enum { FORM_MASS = 0, FORM_VOLUME = 1 };
 
 typedef struct continuity_state {
     const sluice_api *api;
-    sluice_field velocity, mass, density_rate;
+    int form, renormalise;
+    sluice_field velocity, mass, density, density_rate, correction;
 } continuity_state;
+
+static const sluice_param_spec params[] = {
+    {"form", SLUICE_PARAM_ENUM, offsetof(continuity_config, form), "mass", 0, 0, 0, NULL,
+     "mass: sum_j m_j v_ij . grad W (seeds 002, 004); volume: rho_i sum_j V_j v_ij . grad W "
+     "(seed 000 eq. 6)",
+     "mass|volume", 0},
+    {"renormalise", SLUICE_PARAM_BOOL, offsetof(continuity_config, renormalise), "false", 0, 0, 0,
+     NULL, "use the renormalised kernel gradient L_i grad W (seed 004; needs kernel_correction)",
+     NULL, 0},
+};
 
 static const sluice_field_spec fields[] = {
     {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
@@ -25,11 +51,37 @@ static const sluice_field_spec fields[] = {
 static int continuity_create(const sluice_api *api, sluice_host *host, const void *config,
                              void **state)
 {
-    (void)config;
+    const continuity_config *c = config;
     continuity_state *s = sluice_util_state(api, host, sizeof *s);
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
+    s->form = c->form;
+    s->renormalise = c->renormalise;
+    /* only what the chosen form reads is declared (and gathered) */
+    if (s->form == FORM_VOLUME) {
+        const sluice_field_spec density = {"density", SLUICE_TYPE_REAL, 1, "kg m^-3",
+                                           SLUICE_READ | SLUICE_READ_NEIGHBOUR, 0, NULL, 0,
+                                           "mass density"};
+        if (api->declare_field(host, &density) != SLUICE_OK) {
+            free(s);
+            return SLUICE_ERROR;
+        }
+    }
+    if (s->renormalise) {
+        sluice_real dims;
+        if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+            free(s);
+            return SLUICE_ERROR;
+        }
+        const sluice_field_spec correction = {
+            "kernel_correction", SLUICE_TYPE_REAL, (uint32_t)(dims * dims), "1", SLUICE_READ, 0,
+            NULL, 0, "kernel-gradient correction matrix L_i"};
+        if (api->declare_field(host, &correction) != SLUICE_OK) {
+            free(s);
+            return SLUICE_ERROR;
+        }
+    }
     *state = s;
     return SLUICE_OK;
 }
@@ -37,13 +89,16 @@ static int continuity_create(const sluice_api *api, sluice_host *host, const voi
 static int continuity_bind(void *state, sluice_host *host)
 {
     continuity_state *s = state;
-    static const char *const names[] = {"velocity", "mass", "density_rate"};
-    sluice_field f[3];
-    if (sluice_util_fields(s->api, host, names, f, 3) != SLUICE_OK)
+    static const char *const names[] = {"velocity", "mass", "density", "density_rate"};
+    sluice_field f[4];
+    if (sluice_util_fields(s->api, host, names, f, 4) != SLUICE_OK)
         return SLUICE_ERROR;
     s->velocity = f[0];
     s->mass = f[1];
-    s->density_rate = f[2];
+    s->density = f[2];
+    s->density_rate = f[3];
+    if (s->renormalise && s->api->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
+        return SLUICE_ERROR;
     return SLUICE_OK;
 }
 
@@ -53,7 +108,8 @@ static void continuity_destroy(void *state)
 }
 
 static inline void continuity_pairs(const continuity_state *s, const sluice_view *v,
-                                    const sluice_pair_batch *b, const uint32_t dims)
+                                    const sluice_pair_batch *b, const uint32_t dims,
+                                    const int volume, const int renormalise)
 {
     const sluice_real *vel[3], *vj[3];
     for (uint32_t d = 0; d < dims; d++) {
@@ -61,6 +117,8 @@ static inline void continuity_pairs(const continuity_state *s, const sluice_view
         vj[d] = b->gathered[s->velocity.column + (int32_t)d];
     }
     const sluice_real *restrict mj = b->gathered[s->mass.column];
+    const sluice_real *restrict rho = volume ? sluice_real_column(v, s->density, 0) : NULL;
+    const sluice_real *restrict rhoj = volume ? b->gathered[s->density.column] : NULL;
     const sluice_real *restrict F = b->kernel_gradient;
     const sluice_real *restrict rx = b->offset[0], *restrict ry = b->offset[1];
     const sluice_real *restrict rz = dims == 3 ? b->offset[2] : b->offset[1];
@@ -71,30 +129,68 @@ static inline void continuity_pairs(const continuity_state *s, const sluice_view
         const sluice_index i = b->target[t];
         const sluice_real vxi = vel[0][i], vyi = vel[1][i], vzi = dims == 3 ? vel[2][i] : 0;
         sluice_real sum = 0;
-
-        for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
-            sluice_real dot = (vxi - vxj[k]) * rx[k] + (vyi - vyj[k]) * ry[k];
-            if (dims == 3)
-                dot += (vzi - vzj[k]) * rz[k];
-            sum += mj[k] * dot * F[k];
+        if (!renormalise) {
+            for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
+                const sluice_real weight = volume ? mj[k] / rhoj[k] * F[k] : mj[k] * F[k];
+                sluice_real dot = (vxi - vxj[k]) * rx[k] + (vyi - vyj[k]) * ry[k];
+                if (dims == 3)
+                    dot += (vzi - vzj[k]) * rz[k];
+                sum += weight * dot;
+            }
+        } else {
+            /* sum_j w_j v_ij . (L_i r_ij) = sum_ab L_ab M_ab with
+             * M_ab = sum_j w_j v_ij,a r_ij,b: the tensor is summed, then
+             * contracted once with L_i */
+            sluice_real m[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+            for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
+                const sluice_real weight = volume ? mj[k] / rhoj[k] * F[k] : mj[k] * F[k];
+                const sluice_real ux = (vxi - vxj[k]) * weight, uy = (vyi - vyj[k]) * weight;
+                m[0] += ux * rx[k];
+                m[1] += ux * ry[k];
+                m[3] += uy * rx[k];
+                m[4] += uy * ry[k];
+                if (dims == 3) {
+                    const sluice_real uz = (vzi - vzj[k]) * weight;
+                    m[2] += ux * rz[k];
+                    m[5] += uy * rz[k];
+                    m[6] += uz * rx[k];
+                    m[7] += uz * ry[k];
+                    m[8] += uz * rz[k];
+                }
+            }
+            for (uint32_t a = 0; a < dims; a++)
+                for (uint32_t c = 0; c < dims; c++)
+                    sum += sluice_real_column(v, s->correction, a * dims + c)[i] * m[3 * a + c];
         }
-        rate[i] += sum;
+        rate[i] += volume ? rho[i] * sum : sum;
     }
 }
 
 static void continuity_pair(void *state, const sluice_view *v, const sluice_pair_batch *b)
 {
-    if (v->dimensions == 3)
-        continuity_pairs(state, v, b, 3);
-    else
-        continuity_pairs(state, v, b, 2);
+    const continuity_state *s = state;
+    const int volume = s->form == FORM_VOLUME;
+    if (v->dimensions == 3) {
+        if (s->renormalise)
+            volume ? continuity_pairs(s, v, b, 3, 1, 1) : continuity_pairs(s, v, b, 3, 0, 1);
+        else
+            volume ? continuity_pairs(s, v, b, 3, 1, 0) : continuity_pairs(s, v, b, 3, 0, 0);
+    } else {
+        if (s->renormalise)
+            volume ? continuity_pairs(s, v, b, 2, 1, 1) : continuity_pairs(s, v, b, 2, 0, 1);
+        else
+            volume ? continuity_pairs(s, v, b, 2, 1, 0) : continuity_pairs(s, v, b, 2, 0, 0);
+    }
 }
 
 static const sluice_component components[] = {{
     .name = "continuity",
-    .summary = "continuity equation d rho/dt = sum_j m_j v_ij . grad W",
-    .reference = "Monaghan (1992); seeds 002 and 004",
+    .summary = "continuity equation d rho/dt = sum_j m_j v_ij . grad W (or seed 000's volume form)",
+    .reference = "Monaghan (1992); seeds 002 and 004; Jonsson et al. (2016) eq. 6",
     .dimensions = SLUICE_DIMS_ALL,
+    .params = params,
+    .param_count = SLUICE_COUNT(params),
+    .config_size = sizeof(continuity_config),
     .fields = fields,
     .field_count = SLUICE_COUNT(fields),
     .target_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID) | SLUICE_KIND_MASK(SLUICE_KIND_WALL),
@@ -105,4 +201,4 @@ static const sluice_component components[] = {{
     .pair = continuity_pair,
 }};
 
-SLUICE_DEFINE_LIBRARY("continuity", "1.0.0", "continuity equation", SLUICE_DIMS_ALL, components)
+SLUICE_DEFINE_LIBRARY("continuity", "1.1.0", "continuity equation", SLUICE_DIMS_ALL, components)
