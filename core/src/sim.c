@@ -855,6 +855,37 @@ static int api_pair_pass(sluice_host *host)
     return SLUICE_OK;
 }
 
+/* The scene's equation of state: the component with a density_from_pressure
+ * callback (the last one in scene order), or NULL. */
+static const sluice_instance *equation_of_state(const sluice_sim *sim)
+{
+    const sluice_instance *eos = NULL;
+    for (uint32_t k = 0; k < sim->instance_count; k++)
+        if (sim->instances[k].component->density_from_pressure)
+            eos = &sim->instances[k];
+    return eos;
+}
+
+static int api_density_from_pressure(sluice_host *host, sluice_index n,
+                                     const sluice_real *pressure, sluice_real *density)
+{
+    const sluice_instance *eos = equation_of_state(host->sim);
+    if (!eos) {
+        api_error(host, "needs the inverse of the equation of state (api->density_from_pressure), "
+                        "but no loaded plugin provides an equation of state with one (load one, "
+                        "e.g. tait)");
+        return SLUICE_ERROR;
+    }
+    if (n == 0)
+        return SLUICE_OK;
+    if (!pressure || !density) {
+        api_error(host, "api->density_from_pressure called with a NULL array");
+        return SLUICE_ERROR;
+    }
+    eos->component->density_from_pressure(eos->state, n, pressure, density);
+    return SLUICE_OK;
+}
+
 static const sluice_api api_table = {
     sizeof(sluice_api),
     SLUICE_ABI_MAJOR,
@@ -889,6 +920,7 @@ static const sluice_api api_table = {
     api_write_file_atomic,
     api_wall_distance,
     api_pair_pass,
+    api_density_from_pressure,
 };
 
 /* ------------------------------------------------------------ schedule -- */
@@ -1253,9 +1285,7 @@ static int fill_fluid(sluice_sim *sim)
                       gravity[dims - 1] != 0;
     const sluice_instance *eos = NULL;
     if (hydrostatic) {
-        for (uint32_t k = 0; k < sim->instance_count; k++)
-            if (sim->instances[k].component->density_from_pressure)
-                eos = &sim->instances[k];
+        eos = equation_of_state(sim);
         if (!eos) {
             report(sim, SLUICE_CORE_INSTANCE,
                    "initial.density is hydrostatic, but no loaded plugin provides an equation of "

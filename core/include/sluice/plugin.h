@@ -33,7 +33,7 @@ extern "C" {
 #endif
 
 #define SLUICE_ABI_MAJOR 1
-#define SLUICE_ABI_MINOR 1
+#define SLUICE_ABI_MINOR 2
 #define SLUICE_PLUGIN_MAGIC 0x534c4349u /* "SLCI" */
 
 #if defined(__GNUC__)
@@ -328,6 +328,14 @@ typedef struct sluice_api {
      * callback over every particle now, on the current state (from a hook,
      * e.g. after_step every N steps). */
     int (*pair_pass)(sluice_host *host);
+
+    /* -- 1.2: equation of state. */
+    /* density[k] for pressure[k], k < n, through the inverse of the scene's
+     * equation of state (the component with a density_from_pressure callback,
+     * the one the core uses for the hydrostatic start). Fails with a message
+     * when the scene loads none; n = 0 only checks that one is loaded. */
+    int (*density_from_pressure)(sluice_host *host, sluice_index n, const sluice_real *pressure,
+                                 sluice_real *density);
 } sluice_api;
 
 /* ----------------------------------------------------------- components -- */
@@ -378,7 +386,11 @@ typedef struct sluice_component {
     void (*kernel)(void *state, sluice_index n, const sluice_real *r2, sluice_real *r,
                    sluice_real *w, sluice_real *f);
 
-    /* Equation of state inverse, used for the hydrostatic initial state. */
+    /* Equation of state inverse: the density of each (absolute) pressure, as
+     * the equation of state itself would output it. Used for the
+     * hydrostatic initial state, where the core inverts the pressure at rest
+     * density (the constant 'reference_pressure', 0 when no plugin publishes
+     * it) plus rho0 g times the depth. */
     void (*density_from_pressure)(void *state, sluice_index n, const sluice_real *pressure,
                                   sluice_real *density);
 

@@ -1,0 +1,196 @@
+/* XSPH transport-velocity corrections, between fluid particles. The term
+ * writes transport_velocity_correction, du_i: the integrators move fluid
+ * particles with v_i + du_i, while the velocity field v itself is the
+ * solution of the momentum equation and is left untouched.
+ *
+ *  - form position (Monaghan 1989; seed 001, Wan et al. 2017, epsilon = 0.3):
+ *      dr_i/dt = v_i + epsilon sum_j (m_j / rhobar_ij) v_ji W_ij,
+ *      v_ji = v_j - v_i,  rhobar_ij = (rho_i + rho_j) / 2,
+ *    so du_i = epsilon sum_j (m_j / rhobar_ij) v_ji W_ij. The pair weight
+ *    m_i m_j W_ij / rhobar_ij is symmetric, hence sum_i m_i du_i = 0: the
+ *    correction moves no net momentum.
+ *
+ *  - form velocity_smoothing (seed 004, De Padova et al. 2017, section 3,
+ *    after Monaghan 1992's two-stage XSPH, phi_v = 0.01): each particle is
+ *    moved with
+ *      v^X_i = phi sum_j V_j v_j What_ij + (1 - phi) v_i,   V_j = m_j / rho_j,
+ *    where v_i is "the value obtained by solution of the [momentum]
+ *    equation": the paper smooths the velocity particles are moved with, not
+ *    the velocity that is integrated. What_ij = W_ij / sum_k V_k W_ik is the
+ *    Shepard-normalised kernel, both sums including the particle itself
+ *    (W_ii = W(0)), so that a uniform velocity is reproduced exactly even
+ *    where the support is incomplete (free surface, walls):
+ *      du_i = v^X_i - v_i = phi sum_{j != i} V_j W_ij (v_j - v_i)
+ *                           / (V_i W(0) + sum_{j != i} V_j W_ij).
+ *
+ * Both forms vanish identically for a uniform velocity field. */
+#include "plugin_util.h"
+
+typedef struct xsph_config {
+    int form;
+    sluice_real epsilon, phi;
+} xsph_config;
+
+enum { FORM_POSITION = 0, FORM_VELOCITY_SMOOTHING = 1 };
+
+typedef struct xsph_state {
+    const sluice_api *api;
+    int form;
+    sluice_real epsilon, phi;
+    sluice_field velocity, density, mass, correction;
+} xsph_state;
+
+static const sluice_param_spec params[] = {
+    {"form", SLUICE_PARAM_ENUM, offsetof(xsph_config, form), "position", 0, 0, 0, NULL,
+     "position: dr/dt = v + epsilon sum_j (m_j/rhobar_ij) v_ji W_ij (Monaghan 1989, seed 001); "
+     "velocity_smoothing: particles move with phi <v>_Shepard + (1 - phi) v (seed 004)",
+     "position|velocity_smoothing", 0},
+    {"epsilon", SLUICE_PARAM_REAL, offsetof(xsph_config, epsilon), "0.3", 0, 1,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
+     "XSPH coefficient of the position form (seed 001: 0.3)", NULL, 0},
+    {"phi", SLUICE_PARAM_REAL, offsetof(xsph_config, phi), "0.01", 0, 1,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
+     "velocity smoothing coefficient phi_v of the velocity_smoothing form (seed 004: 0.01)",
+     NULL, 0},
+};
+
+static const sluice_field_spec fields[] = {
+    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
+     SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
+     "velocity"},
+    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
+     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
+    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART,
+     NULL, 0, "particle mass"},
+    {"transport_velocity_correction", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
+     SLUICE_WRITE, 0, NULL, 0,
+     "XSPH correction: fluid particles move with velocity + this"},
+};
+
+static int xsph_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
+{
+    const xsph_config *c = config;
+    xsph_state *s = sluice_util_state(api, host, sizeof *s);
+    if (!s)
+        return SLUICE_ERROR;
+    s->api = api;
+    s->form = c->form;
+    s->epsilon = c->epsilon;
+    s->phi = c->phi;
+    *state = s;
+    return SLUICE_OK;
+}
+
+static int xsph_bind(void *state, sluice_host *host)
+{
+    xsph_state *s = state;
+    static const char *const names[] = {"velocity", "density", "mass",
+                                        "transport_velocity_correction"};
+    sluice_field f[4];
+    if (sluice_util_fields(s->api, host, names, f, 4) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->velocity = f[0];
+    s->density = f[1];
+    s->mass = f[2];
+    s->correction = f[3];
+    return SLUICE_OK;
+}
+
+static void xsph_destroy(void *state)
+{
+    free(state);
+}
+
+/* One specialisation per (form, dimensions, masked): `masked` is set when
+ * the batch may hold wall neighbours (the pass is shared with a term that
+ * asks for them), which this term leaves out. */
+static inline void xsph_pairs(const xsph_state *s, const sluice_view *v, const sluice_pair_batch *b,
+                              const int smoothing, const uint32_t dims, const int masked)
+{
+    const sluice_real *vel[3], *vj[3];
+    for (uint32_t d = 0; d < dims; d++) {
+        vel[d] = sluice_real_column(v, s->velocity, d);
+        vj[d] = b->gathered[s->velocity.column + (int32_t)d];
+    }
+    const sluice_real *restrict rho = sluice_real_column(v, s->density, 0);
+    const sluice_real *restrict mass = sluice_real_column(v, s->mass, 0);
+    const sluice_real *restrict rhoj = b->gathered[s->density.column];
+    const sluice_real *restrict mj = b->gathered[s->mass.column];
+    const sluice_real *restrict W = b->kernel;
+    const uint8_t *restrict kj = b->neighbour_kind;
+    const sluice_real *restrict vxj = vj[0], *restrict vyj = vj[1];
+    const sluice_real *restrict vzj = dims == 3 ? vj[2] : vj[1];
+    sluice_real *restrict ux = sluice_real_column(v, s->correction, 0);
+    sluice_real *restrict uy = sluice_real_column(v, s->correction, 1);
+    sluice_real *restrict uz = dims == 3 ? sluice_real_column(v, s->correction, 2) : uy;
+    const sluice_real w0 = b->kernel_self;
+    const sluice_real coefficient = smoothing ? s->phi : s->epsilon;
+    for (sluice_index t = 0; t < b->target_count; t++) {
+        const sluice_index i = b->target[t];
+        const sluice_real vxi = vel[0][i], vyi = vel[1][i], vzi = dims == 3 ? vel[2][i] : 0;
+        const sluice_real rhoi = rho[i];
+        sluice_real sx = 0, sy = 0, sz = 0, shepard = 0;
+        for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
+            /* weight of v_ji: (m_j / rhobar_ij) W_ij, or V_j W_ij */
+            sluice_real weight = smoothing ? mj[k] / rhoj[k] * W[k]
+                                           : 2 * mj[k] / (rhoi + rhoj[k]) * W[k];
+            if (masked)
+                weight = kj[k] == SLUICE_KIND_FLUID ? weight : 0;
+            sx += weight * (vxj[k] - vxi);
+            sy += weight * (vyj[k] - vyi);
+            if (dims == 3)
+                sz += weight * (vzj[k] - vzi);
+            if (smoothing)
+                shepard += weight;
+        }
+        /* velocity_smoothing: Shepard sum with the self term V_i W(0) > 0 */
+        const sluice_real scale =
+            smoothing ? coefficient / (mass[i] / rhoi * w0 + shepard) : coefficient;
+        ux[i] = scale * sx;
+        uy[i] = scale * sy;
+        if (dims == 3)
+            uz[i] = scale * sz;
+    }
+}
+
+static void xsph_pair(void *state, const sluice_view *v, const sluice_pair_batch *b)
+{
+    const xsph_state *s = state;
+    const int masked = b->neighbour_kinds != SLUICE_KIND_MASK(SLUICE_KIND_FLUID);
+    const int smoothing = s->form == FORM_VELOCITY_SMOOTHING;
+    const int key = (smoothing << 2) | ((v->dimensions == 3) << 1) | masked;
+    switch (key) {
+    case 0: xsph_pairs(s, v, b, 0, 2, 0); break;
+    case 1: xsph_pairs(s, v, b, 0, 2, 1); break;
+    case 2: xsph_pairs(s, v, b, 0, 3, 0); break;
+    case 3: xsph_pairs(s, v, b, 0, 3, 1); break;
+    case 4: xsph_pairs(s, v, b, 1, 2, 0); break;
+    case 5: xsph_pairs(s, v, b, 1, 2, 1); break;
+    case 6: xsph_pairs(s, v, b, 1, 3, 0); break;
+    default: xsph_pairs(s, v, b, 1, 3, 1); break;
+    }
+}
+
+static const sluice_component components[] = {{
+    .name = "xsph",
+    .summary = "XSPH transport velocity: Monaghan's position form or seed 004's Shepard velocity "
+               "smoothing",
+    .reference = "Monaghan (1989, 1992); Wan et al. (2017, seed 001, epsilon = 0.3); De Padova et "
+                 "al. (2017, seed 004, phi_v = 0.01)",
+    .dimensions = SLUICE_DIMS_ALL,
+    .flags = SLUICE_COMPONENT_NEEDS_KERNEL,
+    .params = params,
+    .param_count = SLUICE_COUNT(params),
+    .config_size = sizeof(xsph_config),
+    .fields = fields,
+    .field_count = SLUICE_COUNT(fields),
+    .target_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+    .neighbour_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+    .create = xsph_create,
+    .destroy = xsph_destroy,
+    .bind = xsph_bind,
+    .pair = xsph_pair,
+}};
+
+SLUICE_DEFINE_LIBRARY("xsph", "1.0.0", "XSPH transport-velocity corrections", SLUICE_DIMS_ALL,
+                      components)
