@@ -4,18 +4,22 @@
  *   mu_ij = h v_ij . r_ij / (r^2 + eta^2),  eta^2 = 0.01 h^2.
  * It also limits the time step with the viscous condition of Monaghan (1989)
  * as used by DualSPHysics: dt <= C h / (c_i + max_j |mu_ij|), with the
- * Courant number C published by the time-step plugin. */
+ * Courant number C published by the time-step plugin. With time_step_limit:
+ * false it sets no limit (and computes no max |mu_ij|), so that the acoustic
+ * condition alone sets the step (seed 000, eq. 18). */
 #include <math.h>
 
 #include "plugin_util.h"
 
 typedef struct av_config {
     sluice_real alpha, beta;
+    int time_step_limit;
 } av_config;
 
 typedef struct av_state {
     const sluice_api *api;
     sluice_real alpha, beta, h, eta2, courant;
+    int limit; /* the viscous time-step limit is on */
     sluice_field velocity, density, sound_speed, mass, acceleration, mu_max;
 } av_state;
 
@@ -25,6 +29,12 @@ static const sluice_param_spec params[] = {
      "linear coefficient (seed 000: 0.1, seed 002: 0.06)", NULL, 0},
     {"beta", SLUICE_PARAM_REAL, offsetof(av_config, beta), "0", 0, 10,
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1", "quadratic coefficient (seeds: 0)", NULL, 0},
+    {"time_step_limit", SLUICE_PARAM_BOOL, offsetof(av_config, time_step_limit), "true", 0, 0, 0,
+     NULL,
+     "limit the time step to C h / (c_i + max_j |mu_ij|), with max_j |mu_ij| kept in the field "
+     "viscous_mu_max (m s^-1); false leaves the step to the other conditions (seed 000: the "
+     "acoustic condition alone)",
+     NULL, 0},
 };
 
 static const sluice_field_spec fields[] = {
@@ -39,9 +49,12 @@ static const sluice_field_spec fields[] = {
      "particle mass"},
     {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0,
      "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
-    {"viscous_mu_max", SLUICE_TYPE_REAL, 1, "m s^-1", SLUICE_WRITE, 0, NULL, 0,
-     "largest |mu_ij| over the neighbours (viscous time-step condition)"},
 };
+
+/* declared only when the time-step limit is on */
+static const sluice_field_spec mu_max_field = {
+    "viscous_mu_max", SLUICE_TYPE_REAL, 1, "m s^-1", SLUICE_WRITE, 0, NULL, 0,
+    "largest |mu_ij| over the neighbours (viscous time-step condition)"};
 
 static int av_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
 {
@@ -52,7 +65,9 @@ static int av_create(const sluice_api *api, sluice_host *host, const void *confi
     s->api = api;
     s->alpha = c->alpha;
     s->beta = c->beta;
-    if (sluice_util_constant(api, host, "smoothing_length", &s->h) != SLUICE_OK) {
+    s->limit = c->time_step_limit;
+    if (sluice_util_constant(api, host, "smoothing_length", &s->h) != SLUICE_OK ||
+        (s->limit && api->declare_field(host, &mu_max_field) != SLUICE_OK)) {
         free(s);
         return SLUICE_ERROR;
     }
@@ -67,13 +82,15 @@ static int av_bind(void *state, sluice_host *host)
     static const char *const names[] = {"velocity", "density",      "sound_speed",
                                         "mass",     "acceleration", "viscous_mu_max"};
     sluice_field f[6];
-    if (sluice_util_fields(s->api, host, names, f, 6) != SLUICE_OK)
+    if (sluice_util_fields(s->api, host, names, f, s->limit ? 6 : 5) != SLUICE_OK)
         return SLUICE_ERROR;
     s->velocity = f[0];
     s->density = f[1];
     s->sound_speed = f[2];
     s->mass = f[3];
     s->acceleration = f[4];
+    if (!s->limit)
+        return SLUICE_OK;
     s->mu_max = f[5];
     if (sluice_util_constant(s->api, host, "courant_number", &s->courant) != SLUICE_OK)
         return SLUICE_ERROR;
@@ -85,8 +102,9 @@ static void av_destroy(void *state)
     free(state);
 }
 
+/* limit: also record max_j |mu_ij| for the time-step limit (specialised) */
 static inline void av_pairs(const av_state *s, const sluice_view *v, const sluice_pair_batch *b,
-                            const uint32_t dims)
+                            const uint32_t dims, const int limit)
 {
     const sluice_real *vel[3], *vj[3];
     for (uint32_t d = 0; d < dims; d++) {
@@ -107,7 +125,7 @@ static inline void av_pairs(const av_state *s, const sluice_view *v, const sluic
     sluice_real *restrict ax = sluice_real_column(v, s->acceleration, 0);
     sluice_real *restrict ay = sluice_real_column(v, s->acceleration, 1);
     sluice_real *restrict az = dims == 3 ? sluice_real_column(v, s->acceleration, 2) : ay;
-    sluice_real *restrict mu_max = sluice_real_column(v, s->mu_max, 0);
+    sluice_real *restrict mu_max = limit ? sluice_real_column(v, s->mu_max, 0) : NULL;
     const sluice_real h = s->h, eta2 = s->eta2, alpha = s->alpha, beta = s->beta;
     for (sluice_index t = 0; t < b->target_count; t++) {
         const sluice_index i = b->target[t];
@@ -121,8 +139,10 @@ static inline void av_pairs(const av_state *s, const sluice_view *v, const sluic
             if (dims == 3)
                 dot += (vzi - vzj[k]) * rz[k];
             const sluice_real mu = h * dot / (r[k] * r[k] + eta2);
-            const int64_t amu = sluice_util_bits(mu < 0 ? -mu : mu);
-            worst = amu > worst ? amu : worst;
+            if (limit) {
+                const int64_t amu = sluice_util_bits(mu < 0 ? -mu : mu);
+                worst = amu > worst ? amu : worst;
+            }
             const sluice_real cbar = (sluice_real)0.5 * (ci + cj[k]);
             const sluice_real rhobar = (sluice_real)0.5 * (rhoi + rhoj[k]);
             const sluice_real pi = dot < 0 ? (-alpha * cbar * mu + beta * mu * mu) / rhobar : 0;
@@ -136,22 +156,33 @@ static inline void av_pairs(const av_state *s, const sluice_view *v, const sluic
         ay[i] -= sy;
         if (dims == 3)
             az[i] -= sz;
-        mu_max[i] = sluice_util_from_bits(worst);
+        if (limit)
+            mu_max[i] = sluice_util_from_bits(worst);
     }
 }
 
 static void av_pair(void *state, const sluice_view *v, const sluice_pair_batch *b)
 {
-    if (v->dimensions == 3)
-        av_pairs(state, v, b, 3);
-    else
-        av_pairs(state, v, b, 2);
+    const av_state *s = state;
+    if (v->dimensions == 3) {
+        if (s->limit)
+            av_pairs(s, v, b, 3, 1);
+        else
+            av_pairs(s, v, b, 3, 0);
+    } else {
+        if (s->limit)
+            av_pairs(s, v, b, 2, 1);
+        else
+            av_pairs(s, v, b, 2, 0);
+    }
 }
 
 static sluice_real av_time_step_limit(void *state, const sluice_view *v, sluice_index begin,
                                       sluice_index end)
 {
     const av_state *s = state;
+    if (!s->limit)
+        return (sluice_real)INFINITY;
     const sluice_real *mu = sluice_real_column(v, s->mu_max, 0);
     const sluice_real *c = sluice_real_column(v, s->sound_speed, 0);
     sluice_real limit = (sluice_real)INFINITY;
@@ -184,5 +215,5 @@ static const sluice_component components[] = {{
     .time_step_limit = av_time_step_limit,
 }};
 
-SLUICE_DEFINE_LIBRARY("artificial_viscosity", "1.0.0", "Monaghan artificial viscosity",
+SLUICE_DEFINE_LIBRARY("artificial_viscosity", "1.1.0", "Monaghan artificial viscosity",
                       SLUICE_DIMS_ALL, components)

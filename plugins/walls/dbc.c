@@ -3,7 +3,8 @@
  * lattice behind it. They take part in the continuity equation and the
  * equation of state like fluid particles but keep their position and zero
  * velocity; the pressure they build up as fluid approaches repels it.
- * Optionally their density is kept >= rho0 so that walls never attract. */
+ * Optionally their density is kept >= rho0 (at every evaluation, before the
+ * equation of state) so that walls never attract. */
 #include <math.h>
 #include <string.h>
 
@@ -30,7 +31,10 @@ static const sluice_param_spec params[] = {
      "(ceil(2h/dx))",
      NULL, 0},
     {"clamp_density", SLUICE_PARAM_BOOL, offsetof(dbc_config, clamp_density), "true", 0, 0, 0,
-     NULL, "keep wall-particle density >= rest density after every step (no attraction)", NULL,
+     NULL,
+     "keep wall-particle density >= rest density at every evaluation and after every step (no "
+     "attraction)",
+     NULL,
      0},
 };
 
@@ -162,6 +166,16 @@ static void clamp(void *context, const sluice_view *v, sluice_index begin, sluic
             rho[i] = rho0;
 }
 
+/* Particle term: the clamp at every evaluation, so that the mid-step state
+ * of two-stage integrators sees the same walls as the step's start (a clamp
+ * only after the step made them first order on the dam break). */
+static void dbc_particle(void *state, const sluice_view *v, sluice_index begin, sluice_index end)
+{
+    const dbc_state *s = state;
+    if (s->clamp)
+        clamp(state, v, begin, end);
+}
+
 static int dbc_after_step(void *state, sluice_host *host)
 {
     dbc_state *s = state;
@@ -187,7 +201,9 @@ static const sluice_component components[] = {{
     .destroy = dbc_destroy,
     .bind = dbc_bind,
     .initialise = dbc_initialise,
+    .particle_kinds = SLUICE_KIND_MASK(SLUICE_KIND_WALL),
+    .particle = dbc_particle,
     .after_step = dbc_after_step,
 }};
 
-SLUICE_DEFINE_LIBRARY("dbc", "1.0.0", "dynamic boundary particles", SLUICE_DIMS_ALL, components)
+SLUICE_DEFINE_LIBRARY("dbc", "1.1.0", "dynamic boundary particles", SLUICE_DIMS_ALL, components)

@@ -1,0 +1,193 @@
+/* First-order Euler integrator (seed 000, Jonsson et al. 2016: the "first
+ * order time integration" of LS-DYNA's SPH solver), one evaluation per step:
+ *
+ *   form semi_implicit (symplectic Euler, the default):
+ *     q^{n+1} = q^n + dt (dq/dt)^n           every integrated field q
+ *     x^{n+1} = x^n + dt (v^{n+1} + dv^n)    fluid positions, with the new velocity
+ *   form explicit (forward Euler):
+ *     x^{n+1} = x^n + dt (v^n + dv^n)
+ *     q^{n+1} = q^n + dt (dq/dt)^n
+ *
+ * q is every field declared as the rate of another (velocity, density, ...),
+ * over the particle kinds its rate declares; dv is the XSPH transport-velocity
+ * correction when some plugin declares transport_velocity_correction. Wall
+ * particles do not move.
+ *
+ * Both forms are first order in dt. The semi-implicit form is symplectic: on
+ * an undamped oscillator d2x/dt2 = -omega^2 x it keeps a modified energy
+ * exactly and its energy error stays bounded, of order omega dt. The explicit
+ * form is unconditionally unstable for undamped oscillators: every step
+ * multiplies the oscillator's energy by exactly 1 + (omega dt)^2, so it only
+ * runs where dissipation (viscosity) outweighs that growth; it is offered for
+ * comparison with seed 000, not for production. */
+#include "plugin_util.h"
+
+enum { FORM_SEMI_IMPLICIT = 0, FORM_EXPLICIT = 1 };
+
+typedef struct euler_config {
+    int form;
+} euler_config;
+
+typedef struct euler_state {
+    const sluice_api *api;
+    uint32_t dims;
+    int form;
+    sluice_field position, velocity;
+    int has_transport;
+    sluice_field transport; /* transport_velocity_correction (XSPH), if declared */
+    uint32_t rate_count;
+    sluice_rate *rates;
+    double dt;
+} euler_state;
+
+static const sluice_param_spec params[] = {
+    {"form", SLUICE_PARAM_ENUM, offsetof(euler_config, form), "semi_implicit", 0, 0, 0, NULL,
+     "semi_implicit: positions move with the updated velocity (symplectic Euler, energy error "
+     "bounded); explicit: forward Euler, positions move with the old velocity (the energy of an "
+     "undamped oscillator grows by 1 + (omega dt)^2 per step)",
+     "semi_implicit|explicit", 0},
+};
+
+static const sluice_field_spec fields[] = {
+    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", SLUICE_READ | SLUICE_WRITE,
+     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
+};
+
+static int euler_create(const sluice_api *api, sluice_host *host, const void *config,
+                        void **state)
+{
+    const euler_config *c = config;
+    euler_state *s = sluice_util_state(api, host, sizeof *s);
+    if (!s)
+        return SLUICE_ERROR;
+    s->api = api;
+    s->form = c->form;
+    sluice_real dims;
+    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    s->dims = (uint32_t)dims;
+    *state = s;
+    return SLUICE_OK;
+}
+
+static int euler_bind(void *state, sluice_host *host)
+{
+    euler_state *s = state;
+    const sluice_api *api = s->api;
+    if (api->field(host, "position", &s->position) != SLUICE_OK ||
+        api->field(host, "velocity", &s->velocity) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->has_transport =
+        sluice_util_optional_field(api, host, "transport_velocity_correction", &s->transport);
+    s->rate_count = api->rate_count(host);
+    s->rates = calloc(s->rate_count + 1, sizeof *s->rates);
+    if (!s->rates) {
+        api->error(host, "out of memory");
+        return SLUICE_ERROR;
+    }
+    for (uint32_t r = 0; r < s->rate_count; r++)
+        if (api->rate(host, r, &s->rates[r]) != SLUICE_OK)
+            return SLUICE_ERROR;
+    return SLUICE_OK;
+}
+
+static void euler_destroy(void *state)
+{
+    euler_state *s = state;
+    if (!s)
+        return;
+    free(s->rates);
+    free(s);
+}
+
+/* x += dt (v + transport correction) for fluid particles */
+static void move(const euler_state *s, const sluice_view *v, sluice_index begin, sluice_index end)
+{
+    const sluice_real dt = (sluice_real)s->dt;
+    const uint8_t *restrict kind = v->kind;
+    for (uint32_t d = 0; d < s->dims; d++) {
+        sluice_real *restrict x = sluice_real_column(v, s->position, d);
+        const sluice_real *restrict u = sluice_real_column(v, s->velocity, d);
+        if (s->has_transport) {
+            const sluice_real *restrict du = sluice_real_column(v, s->transport, d);
+            for (sluice_index i = begin; i < end; i++)
+                x[i] += kind[i] == SLUICE_KIND_FLUID ? dt * (u[i] + du[i]) : 0;
+        } else {
+            for (sluice_index i = begin; i < end; i++)
+                x[i] += kind[i] == SLUICE_KIND_FLUID ? dt * u[i] : 0;
+        }
+    }
+}
+
+/* q += dt dq/dt for every integrated field, over the kinds of its rate */
+static void update(const euler_state *s, const sluice_view *v, sluice_index begin,
+                   sluice_index end)
+{
+    const sluice_real dt = (sluice_real)s->dt;
+    const uint8_t *restrict kind = v->kind;
+    for (uint32_t r = 0; r < s->rate_count; r++) {
+        const sluice_rate *rate = &s->rates[r];
+        const uint32_t kinds = rate->kinds;
+        for (uint32_t c = 0; c < rate->state.components; c++) {
+            sluice_real *restrict q = sluice_real_column(v, rate->state, c);
+            const sluice_real *restrict dq = sluice_real_column(v, rate->rate, c);
+#pragma omp simd
+            for (sluice_index i = begin; i < end; i++)
+                q[i] += ((kinds >> kind[i]) & 1u) ? dt * dq[i] : 0;
+        }
+    }
+}
+
+static void step_semi_implicit(void *context, const sluice_view *v, sluice_index begin,
+                               sluice_index end)
+{
+    const euler_state *s = context;
+    update(s, v, begin, end); /* v^{n+1} first ... */
+    move(s, v, begin, end);   /* ... then positions with it */
+}
+
+static void step_explicit(void *context, const sluice_view *v, sluice_index begin,
+                          sluice_index end)
+{
+    const euler_state *s = context;
+    move(s, v, begin, end); /* positions with v^n ... */
+    update(s, v, begin, end);
+}
+
+static int euler_advance(void *state, sluice_host *host)
+{
+    euler_state *s = state;
+    const sluice_api *api = s->api;
+    if (api->evaluate(host) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->dt = api->time_step(host);
+    if (!(s->dt > 0))
+        return SLUICE_OK; /* the core reports the collapsed step */
+    const sluice_view *v = api->view(host);
+    api->parallel_for(host, v->count,
+                      s->form == FORM_EXPLICIT ? step_explicit : step_semi_implicit, s);
+    return SLUICE_OK;
+}
+
+static const sluice_component components[] = {{
+    .name = "euler",
+    .summary = "first-order Euler, semi-implicit (symplectic) or explicit, one evaluation per "
+               "step",
+    .reference = "seed 000 (Jonsson et al. 2016, LS-DYNA first-order scheme); Hairer, Lubich & "
+                 "Wanner (2006) Geometric Numerical Integration, sec. I.1",
+    .dimensions = SLUICE_DIMS_ALL,
+    .params = params,
+    .param_count = SLUICE_COUNT(params),
+    .config_size = sizeof(euler_config),
+    .fields = fields,
+    .field_count = SLUICE_COUNT(fields),
+    .create = euler_create,
+    .destroy = euler_destroy,
+    .bind = euler_bind,
+    .advance = euler_advance,
+}};
+
+SLUICE_DEFINE_LIBRARY("euler", "1.0.0", "first-order Euler integrator", SLUICE_DIMS_ALL,
+                      components)
