@@ -1,0 +1,193 @@
+/* SPH velocity gradient (seed 004, section 3; Bonet & Lok 1999 for the
+ * renormalised form):
+ *   G_i,ab = d v_a / d x_b |_i = sum_j V_j (v_j - v_i)_a (grad^_i W_ij)_b,   V_j = m_j / rho_j,
+ * over fluid and wall neighbours (wall particles carry their own velocity:
+ * zero for fixed dynamic-boundary walls, which is how they impose no-slip).
+ *  - renormalise false: grad^_i W_ij = grad_i W_ij = r_ij F_ij. For a linear
+ *    field v = A x the result is A M_i with M_i,cb = -sum_j V_j r_ij,c r_ij,b F_ij,
+ *    the kernel's second moment over the actual neighbours (the identity in the
+ *    continuum limit; on a regular lattice it differs from the identity by a
+ *    lattice-sum error that depends only on h/dx).
+ *  - renormalise true: (grad^_i W_ij)_b = sum_c L_i,bc (r_ij F_ij)_c with L_i from
+ *    the field kernel_correction (component kernel_correction), so that G is
+ *    exact for every linear velocity field wherever L_i exists (M_i L_i^T = I).
+ * Writes the field velocity_gradient, component a*dims + b = d v_a / d x_b, for
+ * fluid particles (wall particles keep zero). */
+#include "plugin_util.h"
+
+typedef struct vg_config {
+    int renormalise;
+} vg_config;
+
+typedef struct vg_state {
+    const sluice_api *api;
+    uint32_t dims;
+    int renormalise;
+    sluice_field velocity, mass, density, gradient, correction;
+} vg_state;
+
+static const sluice_param_spec params[] = {
+    {"renormalise", SLUICE_PARAM_BOOL, offsetof(vg_config, renormalise), "false", 0, 0, 0, NULL,
+     "use the renormalised kernel gradient L_i grad_i W_ij (reads kernel_correction, written by "
+     "the kernel_correction plugin): exact for linear velocity fields, also at free surfaces",
+     NULL, 0},
+};
+
+static const sluice_field_spec fields[] = {
+    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
+     SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
+     "velocity"},
+    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
+     "particle mass"},
+    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ_NEIGHBOUR,
+     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
+};
+
+static int vg_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
+{
+    const vg_config *c = config;
+    vg_state *s = sluice_util_state(api, host, sizeof *s);
+    if (!s)
+        return SLUICE_ERROR;
+    s->api = api;
+    s->renormalise = c->renormalise;
+    sluice_real dims;
+    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    s->dims = (uint32_t)dims;
+    const sluice_field_spec gradient = {
+        "velocity_gradient", SLUICE_TYPE_REAL, s->dims * s->dims, "s^-1", SLUICE_WRITE,
+        SLUICE_FIELD_OUTPUT, NULL, 0, "velocity gradient, component a*dims+b = d v_a / d x_b"};
+    const sluice_field_spec correction = {
+        "kernel_correction", SLUICE_TYPE_REAL, s->dims * s->dims, "1", SLUICE_READ, 0, NULL, 0,
+        "kernel gradient correction matrix L, component a*dims+b = L_ab"};
+    if (api->declare_field(host, &gradient) != SLUICE_OK ||
+        (s->renormalise && api->declare_field(host, &correction) != SLUICE_OK)) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    *state = s;
+    return SLUICE_OK;
+}
+
+static int vg_bind(void *state, sluice_host *host)
+{
+    vg_state *s = state;
+    static const char *const names[] = {"velocity", "mass", "density", "velocity_gradient"};
+    sluice_field f[4];
+    if (sluice_util_fields(s->api, host, names, f, 4) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->velocity = f[0];
+    s->mass = f[1];
+    s->density = f[2];
+    s->gradient = f[3];
+    if (s->renormalise && s->api->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
+        return SLUICE_ERROR;
+    return SLUICE_OK;
+}
+
+static void vg_destroy(void *state)
+{
+    free(state);
+}
+
+/* One loop per (dims, renormalise): no test of either inside. */
+static inline void vg_pairs(const vg_state *s, const sluice_view *v, const sluice_pair_batch *b,
+                            const uint32_t dims, const int renormalise)
+{
+    const sluice_real *vel[3], *vj[3];
+    for (uint32_t d = 0; d < dims; d++) {
+        vel[d] = sluice_real_column(v, s->velocity, d);
+        vj[d] = b->gathered[s->velocity.column + (int32_t)d];
+    }
+    const sluice_real *restrict vxj = vj[0], *restrict vyj = vj[1];
+    const sluice_real *restrict vzj = dims == 3 ? vj[2] : vj[1];
+    const sluice_real *restrict mj = b->gathered[s->mass.column];
+    const sluice_real *restrict rhoj = b->gathered[s->density.column];
+    const sluice_real *restrict F = b->kernel_gradient;
+    const sluice_real *restrict rx = b->offset[0], *restrict ry = b->offset[1];
+    const sluice_real *restrict rz = dims == 3 ? b->offset[2] : b->offset[1];
+    sluice_real *out[9];
+    const sluice_real *L[9];
+    for (uint32_t c = 0; c < dims * dims; c++) {
+        out[c] = sluice_real_column(v, s->gradient, c);
+        L[c] = renormalise ? sluice_real_column(v, s->correction, c) : NULL;
+    }
+    for (sluice_index t = 0; t < b->target_count; t++) {
+        const sluice_index i = b->target[t];
+        const sluice_real vxi = vel[0][i], vyi = vel[1][i], vzi = dims == 3 ? vel[2][i] : 0;
+        /* g_ab = sum_j V_j (v_j - v_i)_a (r_ij F_ij)_b */
+        sluice_real gxx = 0, gxy = 0, gxz = 0, gyx = 0, gyy = 0, gyz = 0, gzx = 0, gzy = 0,
+                    gzz = 0;
+        for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
+            const sluice_real w = mj[k] / rhoj[k] * F[k];
+            const sluice_real du = (vxj[k] - vxi) * w, dv = (vyj[k] - vyi) * w;
+            gxx += du * rx[k];
+            gxy += du * ry[k];
+            gyx += dv * rx[k];
+            gyy += dv * ry[k];
+            if (dims == 3) {
+                const sluice_real dw = (vzj[k] - vzi) * w;
+                gxz += du * rz[k];
+                gyz += dv * rz[k];
+                gzx += dw * rx[k];
+                gzy += dw * ry[k];
+                gzz += dw * rz[k];
+            }
+        }
+        const sluice_real g[9] = {gxx, gxy, gxz, gyx, gyy, gyz, gzx, gzy, gzz};
+        for (uint32_t a = 0; a < dims; a++)
+            for (uint32_t c = 0; c < dims; c++) {
+                sluice_real value;
+                if (renormalise) {
+                    /* G_ac = sum_b g_ab L_cb: (grad^ W)_c = sum_b L_cb (r F)_b */
+                    value = 0;
+                    for (uint32_t bb = 0; bb < dims; bb++)
+                        value += g[3 * a + bb] * L[c * dims + bb][i];
+                } else {
+                    value = g[3 * a + c];
+                }
+                out[a * dims + c][i] = value;
+            }
+    }
+}
+
+static void vg_pair(void *state, const sluice_view *v, const sluice_pair_batch *b)
+{
+    const vg_state *s = state;
+    if (s->renormalise) {
+        if (v->dimensions == 3)
+            vg_pairs(s, v, b, 3, 1);
+        else
+            vg_pairs(s, v, b, 2, 1);
+    } else {
+        if (v->dimensions == 3)
+            vg_pairs(s, v, b, 3, 0);
+        else
+            vg_pairs(s, v, b, 2, 0);
+    }
+}
+
+static const sluice_component components[] = {{
+    .name = "velocity_gradient",
+    .summary = "SPH velocity gradient d v_a / d x_b (optionally with the renormalised kernel "
+               "gradient)",
+    .reference = "seed 004 (De Padova et al. 2017), section 3; Bonet & Lok (1999)",
+    .dimensions = SLUICE_DIMS_ALL,
+    .params = params,
+    .param_count = SLUICE_COUNT(params),
+    .config_size = sizeof(vg_config),
+    .fields = fields,
+    .field_count = SLUICE_COUNT(fields),
+    .target_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+    .neighbour_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID) | SLUICE_KIND_MASK(SLUICE_KIND_WALL),
+    .create = vg_create,
+    .destroy = vg_destroy,
+    .bind = vg_bind,
+    .pair = vg_pair,
+}};
+
+SLUICE_DEFINE_LIBRARY("velocity_gradient", "1.0.0", "SPH velocity gradient", SLUICE_DIMS_ALL,
+                      components)
