@@ -5,6 +5,7 @@
 # published series, for T in [0.5, 2.5].
 #
 #   tools/dam-break-study.sh [BUILD_DIR] [DX ...]     (default: build 0.04 0.02 0.01)
+#   SCENE=configs/seed001_model.yaml tools/dam-break-study.sh ...   (another model)
 #
 # Writes runs/dam-break-study/summary.csv and prints it.
 set -eu
@@ -12,13 +13,14 @@ cd "$(dirname "$0")/.."
 build=${1:-build}
 [ $# -gt 0 ] && shift
 spacings=${*:-0.04 0.02 0.01}
-out=${OUT:-runs/dam-break-study}
+scene=${SCENE:-configs/dam_break_2d.yaml}
+out=${OUT:-runs/dam-break-study/$(basename "$scene" .yaml)}
 data=tests/data/martin_moyce_1952_n2.csv
 mkdir -p "$out"
 echo "dx_m,particles,wall_s,series_a_in,worst_error,worst_at_T,mean_error,front_speed_sim,front_speed_exp" >"$out/summary.csv.tmp"
 for dx in $spacings; do
     run="$out/dx$dx"
-    "$build/sluice" run configs/dam_break_2d.yaml --out "$run" --quiet --no-progress \
+    "$build/sluice" run "$scene" --out "$run" --quiet --no-progress \
         --set time.end=0.6 --set plugins.hdf5.interval=0.3 --set particles.spacing="$dx"
     particles=$(sed -n 's/.*"particles_initial": \([0-9]*\).*/\1/p' "$run/run.json")
     wall=$(sed -n 's/.*"wall_seconds": \([0-9.]*\).*/\1/p' "$run/run.json")

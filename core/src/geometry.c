@@ -1047,7 +1047,8 @@ static int element_near(const sluice_wall_geometry *wall, uint32_t e, const doub
  * rounding tolerance) finds p beyond an open end (element_beyond); this
  * covers every triangle at an open vertex, whichever reported the minimum. */
 static double wall_query(const sluice_wall_geometry *wall, const sluice_real p[3],
-                         const uint32_t *subset, size_t n, int *beyond_end, uint32_t *element)
+                         const uint32_t *subset, size_t n, int *beyond_end, uint32_t *element,
+                         sluice_real closest_out[3], int *feature_out)
 {
     double best = HUGE_VAL;
     uint32_t best_element = UINT32_MAX;
@@ -1069,6 +1070,10 @@ static double wall_query(const sluice_wall_geometry *wall, const sluice_real p[3
         *beyond_end = 0;
     if (element)
         *element = best_element;
+    if (closest_out)
+        memcpy(closest_out, best_closest, sizeof best_closest);
+    if (feature_out)
+        *feature_out = best_feature;
     if (best_element == UINT32_MAX)
         return HUGE_VAL;
     double P[3], C[3], pc[3], nf[3];
@@ -1110,7 +1115,29 @@ sluice_real sluice_wall_signed_distance(const sluice_wall_geometry *wall, const 
             *element = UINT32_MAX;
         return (sluice_real)HUGE_VAL;
     }
-    return (sluice_real)wall_query(wall, p, NULL, wall->element_count, beyond_end, element);
+    return (sluice_real)wall_query(wall, p, NULL, wall->element_count, beyond_end, element, NULL,
+                                   NULL);
+}
+
+void sluice_wall_nearest(const sluice_wall_geometry *wall, const sluice_real p[3],
+                         sluice_wall_point *out)
+{
+    memset(out, 0, sizeof *out);
+    out->element = UINT32_MAX;
+    out->distance = (sluice_real)HUGE_VAL;
+    if (!wall || !p || (wall->dimensions != 2 && wall->dimensions != 3) ||
+        wall->element_count == 0)
+        return;
+    int beyond = 0, feature = 0;
+    uint32_t element = UINT32_MAX;
+    sluice_real closest[3];
+    double d = wall_query(wall, p, NULL, wall->element_count, &beyond, &element, closest, &feature);
+    out->distance = (sluice_real)d;
+    memcpy(out->closest, closest, sizeof closest);
+    memcpy(out->normal, feature_normal(wall, element, feature), sizeof out->normal);
+    out->element = element;
+    out->feature = feature;
+    out->beyond_end = beyond;
 }
 
 /* ----------------------------------------------------------- wall layers -- */
@@ -1351,7 +1378,7 @@ int sluice_wall_layer_points(const sluice_wall_geometry *wall, sluice_real spaci
         p[1] = (sluice_real)lattice_coordinate(origin[1], k[1], dx);
         p[2] = dims == 3 ? (sluice_real)lattice_coordinate(origin[2], k[2], dx) : 0;
         int beyond = 0;
-        double sd = wall_query(wall, p, near, j - i, &beyond, NULL);
+        double sd = wall_query(wall, p, near, j - i, &beyond, NULL, NULL, NULL);
         if (!beyond && sd >= -T - tol && sd <= tol && sluice_points_push(out, p) != 0)
             rc = -1;
         i = j;

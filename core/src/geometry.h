@@ -106,6 +106,12 @@ sluice_real sluice_triangle_closest(const sluice_real p[3], const sluice_real a[
 sluice_real sluice_wall_signed_distance(const sluice_wall_geometry *wall, const sluice_real p[3],
                                         int *beyond_end, uint32_t *element);
 
+/* The nearest point of the wall to p: signed distance (as above), closest
+ * point, the normal of the closest feature (pseudo-normal at vertices and
+ * edges), element, feature and beyond_end; out->wall is left 0. */
+void sluice_wall_nearest(const sluice_wall_geometry *wall, const sluice_real p[3],
+                         sluice_wall_point *out);
+
 /* Appends the lattice points (origin + (k + 1/2) dx) with
  * -thickness <= signed distance <= 0 and not beyond an open end. */
 int sluice_wall_layer_points(const sluice_wall_geometry *wall, sluice_real spacing,

@@ -255,6 +255,69 @@ static inline sluice_index visit(const sluice_grid *grid, sluice_real *const pos
     return found;
 }
 
+sluice_index sluice_grid_near_point(const sluice_grid *grid, sluice_real *const pos[3],
+                                    const double p[3], double radius2, sluice_index *out,
+                                    sluice_index capacity)
+{
+    const uint32_t dims = grid->dimensions;
+    int64_t c[3] = {0, 0, 0};
+    for (uint32_t d = 0; d < dims; d++) {
+        double x = p[d];
+        if (grid->periodic[d])
+            x -= grid->length[d] * floor((x - grid->lo[d]) / grid->length[d]);
+        double f = floor((x - grid->lo[d]) * grid->inverse_cell_size[d]);
+        /* outside a closed side: the nearest cells hold whatever is in reach */
+        c[d] = f < 0 ? 0 : f >= (double)grid->cells[d] ? grid->cells[d] - 1 : (int64_t)f;
+        if (!grid->periodic[d] && (f < -1 || f > (double)grid->cells[d]))
+            return 0; /* more than a cell outside: nothing within the support */
+    }
+    sluice_index found = 0;
+    const int64_t zr = dims == 3 ? 1 : 0;
+    for (int64_t dz = -zr; dz <= zr; dz++) {
+        int64_t cz = c[2] + dz;
+        if (dims == 3 && (cz < 0 || cz >= grid->cells[2])) {
+            if (!grid->periodic[2])
+                continue;
+            cz = (cz + grid->cells[2]) % grid->cells[2];
+        }
+        for (int64_t dy = -1; dy <= 1; dy++) {
+            int64_t cy = c[1] + dy;
+            if (cy < 0 || cy >= grid->cells[1]) {
+                if (!grid->periodic[1])
+                    continue;
+                cy = (cy + grid->cells[1]) % grid->cells[1];
+            }
+            for (int64_t dx = -1; dx <= 1; dx++) {
+                int64_t cx = c[0] + dx;
+                if (cx < 0 || cx >= grid->cells[0]) {
+                    if (!grid->periodic[0])
+                        continue;
+                    cx = (cx + grid->cells[0]) % grid->cells[0];
+                }
+                /* a periodic axis of 3 cells visits no cell twice: cells >= 3 */
+                size_t cell = ((size_t)cz * (size_t)grid->cells[1] + (size_t)cy) *
+                                  (size_t)grid->cells[0] +
+                              (size_t)cx;
+                for (sluice_index j = grid->cell_start[cell]; j < grid->cell_start[cell + 1]; j++) {
+                    double s = 0;
+                    for (uint32_t d = 0; d < dims; d++) {
+                        double e = p[d] - (double)pos[d][j];
+                        if (grid->periodic[d])
+                            e = minimum_image(e, grid->length[d]);
+                        s += e * e;
+                    }
+                    if (s < radius2) {
+                        if (found < capacity)
+                            out[found] = j;
+                        found++;
+                    }
+                }
+            }
+        }
+    }
+    return found;
+}
+
 int sluice_grid_build(sluice_grid *grid, sluice_particles *particles, uint32_t position_column,
                       sluice_index *bad)
 {

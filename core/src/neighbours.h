@@ -61,6 +61,16 @@ int sluice_grid_needs_rebuild(const sluice_grid *grid, const sluice_view *view);
 int sluice_grid_build(sluice_grid *grid, sluice_particles *particles, uint32_t position_column,
                       sluice_index *bad);
 
+/* Particles within sqrt(radius2) <= support of the point p (3 reals), from the
+ * last build's cells and the current positions (valid while the list is:
+ * no particle has moved more than skin/2 since). Writes at most `capacity`
+ * indices to out and returns how many there are (call again with a larger
+ * array when that exceeds capacity). p may lie anywhere; periodic axes use
+ * the minimum image. */
+sluice_index sluice_grid_near_point(const sluice_grid *grid, sluice_real *const pos[3],
+                                    const double p[3], double radius2, sluice_index *out,
+                                    sluice_index capacity);
+
 /* Wraps coordinates of periodic directions into [lo, hi). */
 void sluice_grid_wrap(const sluice_grid *grid, sluice_real *position[3], sluice_index count);
 

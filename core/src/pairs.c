@@ -324,3 +324,131 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
     }
     return failed ? -1 : 0;
 }
+
+/* ----------------------------------------------------------- point pass -- */
+
+/* Hands the batch of points in w to fn after computing W and F. */
+static void flush_points(sluice_pair_engine *engine, const sluice_view *view,
+                         sluice_pair_workspace *w, sluice_index targets, sluice_index pairs,
+                         uint32_t kinds,
+                         void (*fn)(void *, const sluice_view *, const sluice_pair_batch *),
+                         void *context)
+{
+    if (targets == 0)
+        return;
+    engine->kernel->kernel(engine->kernel_state, pairs, w->distance_squared, w->distance,
+                           w->kernel, w->gradient);
+    const uint8_t *restrict kind = view->kind;
+    for (sluice_index p = 0; p < pairs; p++)
+        w->neighbour_kind[p] = kind[w->neighbour[p]];
+    sluice_pair_batch batch;
+    memset(&batch, 0, sizeof batch);
+    batch.target_count = targets;
+    batch.target = w->target;
+    batch.pair_begin = w->pair_begin;
+    batch.pair_count = pairs;
+    batch.neighbour = w->neighbour;
+    batch.neighbour_kind = w->neighbour_kind;
+    batch.neighbour_kinds = kinds;
+    batch.offset[0] = w->offset[0];
+    batch.offset[1] = w->offset[1];
+    batch.offset[2] = view->dimensions == 3 ? w->offset[2] : NULL;
+    batch.distance = w->distance;
+    batch.kernel = w->kernel;
+    batch.kernel_gradient = w->gradient;
+    batch.gathered = NULL;
+    batch.kernel_self = engine->kernel_self;
+    fn(context, view, &batch);
+}
+
+int sluice_point_pass_run(sluice_pair_engine *engine, const sluice_grid *grid,
+                          const sluice_view *view, const sluice_real *points, sluice_index count,
+                          uint32_t kinds,
+                          void (*fn)(void *context, const sluice_view *view,
+                                     const sluice_pair_batch *batch),
+                          void *context)
+{
+    const uint32_t dims = view->dimensions;
+    const double support2 = (double)grid->support * (double)grid->support;
+    sluice_index chunk_points = engine->batch_pairs / 32;
+    if (chunk_points < 1)
+        chunk_points = 1;
+    if (chunk_points > TARGET_CHUNK)
+        chunk_points = TARGET_CHUNK;
+    const sluice_index chunks = (count + chunk_points - 1) / chunk_points;
+    sluice_real *pos[3] = {(sluice_real *)view->position[0], (sluice_real *)view->position[1],
+                           (sluice_real *)(dims == 3 ? view->position[2] : view->position[1])};
+    int failed = 0;
+
+#pragma omp parallel num_threads(engine->thread_count) reduction(| : failed)
+    {
+        sluice_pair_workspace *w = &engine->workspaces[omp_get_thread_num()];
+        if (workspace_reserve(w, engine->batch_pairs, 0) != 0)
+            failed = 1;
+        sluice_index found_capacity = 256;
+        sluice_index *found = failed ? NULL : malloc(found_capacity * sizeof *found);
+        if (!found)
+            failed = 1;
+
+#pragma omp for schedule(dynamic, 4)
+        for (sluice_index chunk = 0; chunk < chunks; chunk++) {
+            if (failed)
+                continue;
+            const sluice_index a = chunk * chunk_points;
+            const sluice_index b = a + chunk_points < count ? a + chunk_points : count;
+            sluice_index t = 0, np = 0;
+            for (sluice_index q = a; q < b && !failed; q++) {
+                const double p[3] = {(double)points[3 * (size_t)q], (double)points[3 * (size_t)q + 1],
+                                     dims == 3 ? (double)points[3 * (size_t)q + 2] : 0.0};
+                sluice_index n = sluice_grid_near_point(grid, pos, p, support2, found, found_capacity);
+                if (n > found_capacity) {
+                    sluice_index *grown = realloc(found, (size_t)n * sizeof *grown);
+                    if (!grown) {
+                        failed = 1;
+                        break;
+                    }
+                    found = grown;
+                    found_capacity = n;
+                    n = sluice_grid_near_point(grid, pos, p, support2, found, found_capacity);
+                }
+                if (np + n > w->pair_capacity && t > 0) {
+                    w->pair_begin[t] = np;
+                    flush_points(engine, view, w, t, np, kinds, fn, context);
+                    t = 0;
+                    np = 0;
+                }
+                if (n > w->pair_capacity && workspace_reserve(w, n, 0) != 0) {
+                    failed = 1;
+                    break;
+                }
+                w->target[t] = q;
+                w->pair_begin[t] = np;
+                for (sluice_index k = 0; k < n; k++) {
+                    const sluice_index j = found[k];
+                    if (!((kinds >> view->kind[j]) & 1u))
+                        continue;
+                    double e[3] = {0, 0, 0}, s = 0;
+                    for (uint32_t d = 0; d < dims; d++) {
+                        e[d] = p[d] - (double)pos[d][j];
+                        if (grid->periodic[d])
+                            e[d] = minimum_image(e[d], grid->length[d]);
+                        s += e[d] * e[d];
+                    }
+                    w->neighbour[np] = j;
+                    w->offset[0][np] = (sluice_real)e[0];
+                    w->offset[1][np] = (sluice_real)e[1];
+                    w->offset[2][np] = (sluice_real)e[2];
+                    w->distance_squared[np] = (sluice_real)s;
+                    np++;
+                }
+                t++;
+            }
+            if (!failed) {
+                w->pair_begin[t] = np;
+                flush_points(engine, view, w, t, np, kinds, fn, context);
+            }
+        }
+        free(found);
+    }
+    return failed ? -1 : 0;
+}

@@ -58,6 +58,18 @@ void sluice_pair_engine_free(sluice_pair_engine *engine);
 int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pass,
                          const sluice_grid *grid, const sluice_view *view);
 
+/* Point pass: for `count` points (3 reals each), batches of (point, particle
+ * within the support of a kind in `kinds`) with offsets point - x_j, the
+ * distance (may be 0), W and F, handed to fn; batch->target holds point
+ * indices and batch->gathered is NULL. Parallel over chunks of points.
+ * Returns 0, or -1 on OOM. */
+int sluice_point_pass_run(sluice_pair_engine *engine, const sluice_grid *grid,
+                          const sluice_view *view, const sluice_real *points, sluice_index count,
+                          uint32_t kinds,
+                          void (*fn)(void *context, const sluice_view *view,
+                                     const sluice_pair_batch *batch),
+                          void *context);
+
 /* Pairs handed to terms since the engine was created (all threads). */
 uint64_t sluice_pair_engine_pairs(const sluice_pair_engine *engine);
 size_t sluice_pair_engine_bytes(const sluice_pair_engine *engine);

@@ -114,6 +114,20 @@ static int compare_strings(const void *a, const void *b)
     return strcmp(*(char *const *)a, *(char *const *)b);
 }
 
+/* Size of sluice_component in the ABI minor a library was built for: the
+ * members appended in later minors are absent from its descriptors, so its
+ * component array has that stride. */
+static size_t component_size(uint16_t minor)
+{
+    return minor >= 3 ? sizeof(sluice_component) : offsetof(sluice_component, prepare);
+}
+
+static const sluice_component *component_at(const sluice_library *lib, uint32_t i)
+{
+    return (const sluice_component *)(const void *)((const char *)lib->components +
+                                                    (size_t)i * component_size(lib->abi_minor));
+}
+
 static const char *check_library(const sluice_library *lib, char **why)
 {
     *why = NULL;
@@ -146,13 +160,13 @@ static const char *check_library(const sluice_library *lib, char **why)
         return "descriptor";
     }
     for (uint32_t i = 0; i < lib->component_count; i++) {
-        const sluice_component *c = &lib->components[i];
+        const sluice_component *c = component_at(lib, i);
         if (!c->name || !*c->name) {
             *why = format("has a descriptor whose component %u has no name", i);
             return "descriptor";
         }
         for (uint32_t k = 0; k < i; k++)
-            if (strcmp(lib->components[k].name, c->name) == 0) {
+            if (strcmp(component_at(lib, k)->name, c->name) == 0) {
                 *why = format("has a descriptor that lists component '%s' twice", c->name);
                 return "descriptor";
             }
@@ -232,10 +246,15 @@ int sluice_registry_add_file(sluice_registry *registry, const char *path)
             return -1;
         registry->components = comps;
         for (uint32_t i = 0; i < lib->component_count; i++) {
+            /* a full-size copy: members newer than the library's ABI read as 0 */
+            sluice_component *copy = calloc(1, sizeof *copy);
+            if (!copy)
+                return -1;
+            memcpy(copy, component_at(lib, i), component_size(lib->abi_minor));
             sluice_component_entry *c = &comps[registry->component_count++];
-            c->component = &lib->components[i];
+            c->component = copy;
             c->library = index;
-            c->shadowed = sluice_registry_find(registry, lib->components[i].name) != c;
+            c->shadowed = sluice_registry_find(registry, copy->name) != c;
         }
     }
     return 0;
@@ -297,6 +316,8 @@ void sluice_registry_close(sluice_registry *registry)
         free(e->refusal);
     }
     free(registry->libraries);
+    for (size_t c = 0; c < registry->component_count; c++)
+        free((void *)registry->components[c].component);
     free(registry->components);
     for (size_t i = 0; i < registry->directory_count; i++)
         free(registry->directories[i]);
@@ -320,9 +341,12 @@ void sluice_registry_release_unused(sluice_registry *registry)
         if (e->handle && !e->used) {
             /* forget its components before closing it */
             size_t kept = 0;
-            for (size_t c = 0; c < registry->component_count; c++)
+            for (size_t c = 0; c < registry->component_count; c++) {
                 if (registry->components[c].library != i)
                     registry->components[kept++] = registry->components[c];
+                else
+                    free((void *)registry->components[c].component);
+            }
             registry->component_count = kept;
             dlclose(e->handle);
             e->handle = NULL;

@@ -559,6 +559,15 @@ int sluice_sim_evaluate(sluice_sim *sim)
 {
     if (update_neighbours(sim) != SLUICE_OK)
         return SLUICE_ERROR;
+    for (uint32_t k = 0; k < sim->prepare_count; k++) {
+        sluice_instance *in = &sim->instances[sim->prepare[k]];
+        if (in->component->prepare(in->state, &in->host) != SLUICE_OK) {
+            if (!sim->failure[0])
+                sluice_sim_fail(sim, "plugin '%s' failed to prepare an evaluation", in->name);
+            return SLUICE_ERROR;
+        }
+        sluice_sim_refresh_view(sim);
+    }
     zero_accumulators(sim);
     for (uint32_t p = 0; p < sim->pass_count; p++) {
         const sluice_pass *pass = &sim->passes[p];
@@ -886,6 +895,59 @@ static int api_density_from_pressure(sluice_host *host, sluice_index n,
     return SLUICE_OK;
 }
 
+static int api_wall_nearest(sluice_host *host, const sluice_real *point, int32_t wall,
+                            sluice_wall_point *out)
+{
+    const sluice_sim *sim = host->sim;
+    const size_t walls = sim->scene.wall_count;
+    if (walls == 0 || (wall >= 0 && (size_t)wall >= walls) || !point || !out)
+        return SLUICE_ERROR;
+    size_t first = wall >= 0 ? (size_t)wall : 0, last = wall >= 0 ? (size_t)wall + 1 : walls;
+    double best = INFINITY;
+    int found = 0;
+    for (size_t w = first; w < last; w++) {
+        const sluice_real *b = sim->wall_bounds + 6 * w;
+        double lower = 0;
+        for (uint32_t d = 0; d < sim->scene.dimensions; d++) {
+            double below = (double)b[d] - (double)point[d], above = (double)point[d] - (double)b[3 + d];
+            double gap = below > 0 ? below : above > 0 ? above : 0;
+            lower += gap * gap;
+        }
+        if (found && lower >= best * best)
+            continue;
+        sluice_wall_point candidate;
+        sluice_wall_nearest(&sim->scene.walls[w].geometry, point, &candidate);
+        if (!found || fabs((double)candidate.distance) < best) {
+            best = fabs((double)candidate.distance);
+            *out = candidate;
+            out->wall = (uint32_t)w;
+            found = 1;
+        }
+    }
+    return found ? SLUICE_OK : SLUICE_ERROR;
+}
+
+static int api_point_pass(sluice_host *host, const sluice_real *points, sluice_index count,
+                          uint32_t kinds, sluice_point_fn fn, void *context)
+{
+    sluice_sim *sim = host->sim;
+    if (!fn || (count > 0 && !points)) {
+        api_error(host, "api->point_pass called without points or without a callback");
+        return SLUICE_ERROR;
+    }
+    if (count == 0)
+        return SLUICE_OK;
+    if (update_neighbours(sim) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (sluice_point_pass_run(&sim->engine, &sim->grid, &sim->view, points, count, kinds, fn,
+                              context) != 0) {
+        sluice_sim_fail(sim, "out of memory in the point pass of '%s'",
+                        instance_name(sim, host->instance));
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
 static const sluice_api api_table = {
     sizeof(sluice_api),
     SLUICE_ABI_MAJOR,
@@ -921,6 +983,8 @@ static const sluice_api api_table = {
     api_wall_distance,
     api_pair_pass,
     api_density_from_pressure,
+    api_wall_nearest,
+    api_point_pass,
 };
 
 /* ------------------------------------------------------------ schedule -- */
@@ -1157,6 +1221,14 @@ static int build_schedule(sluice_sim *sim)
             free(done);
             return 1;
         }
+
+    /* components that prepare every evaluation, in scene order */
+    sim->prepare = calloc((size_t)n + 1, sizeof *sim->prepare);
+    if (!sim->prepare)
+        goto oom;
+    for (uint32_t v = 0; v < n; v++)
+        if (sim->instances[v].component->prepare)
+            sim->prepare[sim->prepare_count++] = v;
 
     /* passes in slot order */
     sim->passes = calloc((size_t)n + 1, sizeof *sim->passes);
@@ -1919,6 +1991,7 @@ void sluice_sim_free(sluice_sim *sim)
     }
     free(sim->wall_bounds);
     free(sim->passes);
+    free(sim->prepare);
     free(sim->accumulate_columns);
     free(sim->requests);
     sluice_particles_free(&sim->particles);

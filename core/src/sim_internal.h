@@ -111,6 +111,8 @@ struct sluice_sim {
     sluice_pair_engine engine;
     sluice_pass *passes;
     uint32_t pass_count;
+    uint32_t *prepare; /* instances with a prepare callback, scene order */
+    uint32_t prepare_count;
     uint32_t *accumulate_columns;
     uint32_t accumulate_count;
 

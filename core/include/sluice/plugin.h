@@ -33,7 +33,7 @@ extern "C" {
 #endif
 
 #define SLUICE_ABI_MAJOR 1
-#define SLUICE_ABI_MINOR 2
+#define SLUICE_ABI_MINOR 3
 #define SLUICE_PLUGIN_MAGIC 0x534c4349u /* "SLCI" */
 
 #if defined(__GNUC__)
@@ -234,6 +234,23 @@ typedef struct sluice_wall {
     const sluice_real *normals; /* unit normal into the fluid, 3 reals per element */
 } sluice_wall;
 
+/* The point of a wall nearest to a query point (api->wall_nearest, 1.3). */
+typedef struct sluice_wall_point {
+    sluice_real distance;   /* signed, m: > 0 on the fluid side, < 0 behind the wall */
+    sluice_real closest[3]; /* the nearest point of the wall */
+    sluice_real normal[3];  /* unit normal into the fluid there (at a vertex or an edge the
+                               pseudo-normal, the mean of the elements' normals) */
+    uint32_t wall;          /* index of the wall (api->wall) */
+    uint32_t element;       /* segment (2D) or triangle (3D) */
+    int32_t feature;        /* 0: interior of the element; 1..3: a vertex; 4..6: an edge (3D) */
+    int32_t beyond_end;     /* 1 when the point lies past an open end of the wall (the end
+                               of a polyline), where "behind" has no meaning */
+} sluice_wall_point;
+
+/* Called by api->point_pass with batches of (point, particle) pairs. */
+typedef void (*sluice_point_fn)(void *context, const sluice_view *view,
+                                const sluice_pair_batch *batch);
+
 /* One row of a time series. */
 typedef struct sluice_table sluice_table;
 
@@ -336,6 +353,23 @@ typedef struct sluice_api {
      * when the scene loads none; n = 0 only checks that one is loaded. */
     int (*density_from_pressure)(sluice_host *host, sluice_index n, const sluice_real *pressure,
                                  sluice_real *density);
+
+    /* -- 1.3: wall geometry and interpolation at points. */
+    /* The nearest point of wall `wall` (or of every wall when wall < 0) to
+     * `point` (3 reals). SLUICE_ERROR when the scene has no such wall.
+     * Thread-safe. */
+    int (*wall_nearest)(sluice_host *host, const sluice_real *point, int32_t wall,
+                        sluice_wall_point *out);
+    /* Interpolation at arbitrary points: calls fn with batches in which
+     * target[t] is the index of a point (3 reals each in `points`) and the
+     * pairs are the particles of a kind in `kinds` within the kernel
+     * support of it: offset = point - x_j, distance (may be 0), kernel (W)
+     * and kernel_gradient (F) always set, gathered NULL (read the view's
+     * columns at neighbour[k]). Runs in parallel over chunks of points, so fn
+     * writes only to what belongs to its points. Call from prepare() or a
+     * hook, never from a particle or pair callback. */
+    int (*point_pass)(sluice_host *host, const sluice_real *points, sluice_index count,
+                      uint32_t kinds, sluice_point_fn fn, void *context);
 } sluice_api;
 
 /* ----------------------------------------------------------- components -- */
@@ -407,6 +441,14 @@ typedef struct sluice_component {
     int (*after_step)(void *state, sluice_host *host);
     /* At the end of a run, complete or failed (final output, close files). */
     int (*finish)(void *state, sluice_host *host, int status);
+
+    /* -- 1.3 (read only from plugins built for ABI 1.3 or later) */
+    /* At every evaluation, once the neighbour search is up to date and before
+     * the first pass, in scene order: set fields the passes read that depend
+     * on the current positions and state of other particles (wall-particle
+     * values from the fluid, with api->point_pass). Must not add, remove or
+     * move particles. */
+    int (*prepare)(void *state, sluice_host *host);
 } sluice_component;
 
 /* Build signature: must equal the core's. */

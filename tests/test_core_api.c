@@ -1,0 +1,252 @@
+/* The core services of ABI 1.3, through the fixture plugins in
+ * tests/fixtures/api_probe.c and old_minor_plugin.c:
+ *  - prepare() runs at every evaluation after the neighbour update and
+ *    before the passes;
+ *  - api->point_pass finds exactly the particles within the support of
+ *    arbitrary points (brute force), of the kinds asked, across periodic
+ *    sides, with the kernel values of the scene's kernel;
+ *  - api->wall_nearest returns the signed distance, nearest point and
+ *    normal of the nearest wall;
+ *  - a plugin built for ABI 1.2 (shorter component stride) loads, with the
+ *    members appended since reading as absent. */
+#include <math.h>
+
+#include "api_probe.h"
+#include "sim_util.h"
+
+static const char *fixture_dir(void)
+{
+    const char *d = getenv("SLUICE_FIXTURE_DIR");
+    return d ? d : ".";
+}
+
+static sluice_instance *instance_named(sluice_sim *sim, const char *name)
+{
+    for (uint32_t k = 0; k < sim->instance_count; k++)
+        if (strcmp(sim->instances[k].name, name) == 0)
+            return &sim->instances[k];
+    ck_abort_msg("no instance '%s'", name);
+    return NULL;
+}
+
+START_TEST(prepare_runs_before_the_passes)
+{
+    char yaml[2048];
+    snprintf(yaml, sizeof yaml,
+             "dimensions: 2\n"
+             "plugin_path: %s\n"
+             "particles: {spacing: 0.1}\n"
+             "time: {end: 1, max_step: 0.01}\n"
+             "domain: {min: [0, 0], max: [1, 1]}\n"
+             "geometry: {fluid: [{shape: box, min: [0, 0], max: [0.5, 0.5]}]}\n"
+             "initial: {density: rest}\n"
+             "plugins: {wendland_c2: {}, prepare_probe: {}, prepare_reader: {}, symplectic: {}}\n",
+             fixture_dir());
+    sluice_sim *sim = test_load("prepare", yaml, NULL, 0);
+    for (int e = 1; e <= 3; e++) {
+        ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
+        const sluice_view *v = sluice_sim_view(sim);
+        const sluice_real *prepared = test_column(sim, "prepared_value", 0);
+        const sluice_real *reader = test_column(sim, "reader_value", 0);
+        for (sluice_index i = 0; i < v->count; i++) {
+            ck_assert_msg(prepared[i] == (sluice_real)e + v->position[0][i],
+                          "evaluation %d: prepared %g", e, prepared[i]);
+            ck_assert_msg(reader[i] == prepared[i], "evaluation %d: the pass read %g, not %g", e,
+                          reader[i], prepared[i]);
+        }
+    }
+    sluice_sim_free(sim);
+}
+END_TEST
+
+/* W of the scene's kernel at distance r. */
+static double kernel_w(sluice_sim *sim, double r)
+{
+    const sluice_instance *k = &sim->instances[sim->kernel];
+    sluice_real rr = (sluice_real)(r * r), distance = 0, w = 0, f = 0;
+    k->component->kernel(k->state, 1, &rr, &distance, &w, &f);
+    return (double)w;
+}
+
+static uint64_t rng = 5;
+static double uniform(void)
+{
+    rng = rng * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (double)(rng >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static void check_points(int periodic)
+{
+    /* fluid in a tank, particles jittered, a density field; points
+     * anywhere, including outside the fluid, near walls and (periodic)
+     * across the x sides */
+    enum { POINTS = 40 };
+    double pts[POINTS][2];
+    for (int q = 0; q < POINTS; q++) {
+        pts[q][0] = -0.05 + 1.1 * uniform();
+        pts[q][1] = -0.05 + 0.7 * uniform();
+    }
+    pts[0][0] = 0.001; /* near a periodic side */
+    pts[0][1] = 0.3;
+    pts[1][0] = 0.999;
+    pts[1][1] = 0.3;
+    char list[4096];
+    size_t used = 0;
+    for (int q = 0; q < POINTS; q++)
+        used += (size_t)snprintf(list + used, sizeof list - used, "%s[%.17g, %.17g]",
+                                 q ? ", " : "", pts[q][0], pts[q][1]);
+    for (int kinds = 1; kinds <= 3; kinds++) {
+        char yaml[8192];
+        snprintf(yaml, sizeof yaml,
+                 "dimensions: 2\n"
+                 "plugin_path: %s\n"
+                 "particles: {spacing: 0.05, smoothing_length_ratio: 1.5}\n"
+                 "time: {end: 1, max_step: 0.01}\n"
+                 "domain: {min: [0, -0.2], max: [1, 1]%s}\n"
+                 "geometry:\n"
+                 "  fluid: [{shape: box, min: [0, 0], max: [1, 0.5]}]\n"
+                 "  walls: [{shape: polyline, points: [[0, 0], [1, 0]]}]\n"
+                 "initial: {density: rest}\n"
+                 "plugins: {wendland_c2: {}, dbc: {}, point_probe: {points: [%s], kinds: %d}, "
+                 "tait: {speed_of_sound: 10}, symplectic: {}}\n",
+                 fixture_dir(), periodic ? ", periodic: x" : "", list, kinds);
+        sluice_sim *sim = test_load("points", yaml, NULL, 0);
+        const sluice_view *v = sluice_sim_view(sim);
+        sluice_real *rho = test_column(sim, "density", 0);
+        for (sluice_index i = 0; i < v->count; i++)
+            rho[i] = (sluice_real)(1000 + 10 * v->position[0][i] + 5 * v->position[1][i] +
+                                   uniform());
+        ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
+        v = sluice_sim_view(sim);
+        rho = test_column(sim, "density", 0);
+        const sluice_real *m = test_column(sim, "mass", 0);
+        const api_probe_state *s = instance_named(sim, "point_probe")->state;
+        ck_assert_int_eq(s->count, POINTS);
+        const double support = 2 * (double)sim->smoothing_length;
+        int with_neighbours = 0, across = 0;
+        for (int q = 0; q < POINTS; q++) {
+            double sum = 0, weighted = 0;
+            sluice_index n = 0;
+            for (sluice_index j = 0; j < v->count; j++) {
+                if (!((kinds >> v->kind[j]) & 1))
+                    continue;
+                double dx = pts[q][0] - v->position[0][j], dy = pts[q][1] - v->position[1][j];
+                if (periodic)
+                    dx -= nearbyint(dx);
+                double r = sqrt(dx * dx + dy * dy);
+                if (r >= support)
+                    continue;
+                n++;
+                across += periodic && fabs(pts[q][0] - v->position[0][j]) > 0.5;
+                double w = (double)m[j] / (double)rho[j] * kernel_w(sim, r);
+                sum += w;
+                weighted += w * (double)rho[j];
+            }
+            ck_assert_msg(s->neighbours[q] == n, "point %d (%g, %g), kinds %d: %u neighbours, "
+                                                 "brute force %u",
+                          q, pts[q][0], pts[q][1], kinds, s->neighbours[q], n);
+            ck_assert_msg(fabs(s->shepard[q] - sum) <= 1e-12 * (1 + sum), "point %d: %g vs %g", q,
+                          s->shepard[q], sum);
+            if (sum > 0) {
+                ck_assert_msg(fabs(s->density[q] - weighted / sum) <= 1e-9, "point %d: %g vs %g",
+                              q, s->density[q], weighted / sum);
+                with_neighbours++;
+            }
+        }
+        /* most points lie in the fluid; walls are seen only near the bed */
+        ck_assert_int_gt(with_neighbours, kinds & 1 ? POINTS / 2 : 3);
+        if (periodic)
+            ck_assert_int_gt(across, 0);
+        fprintf(stderr, "point pass (%s, kinds %d): %d of %d points have neighbours, all equal "
+                        "to brute force%s\n",
+                periodic ? "periodic x" : "open", kinds, with_neighbours, POINTS,
+                periodic ? ", some across the periodic side" : "");
+        sluice_sim_free(sim);
+    }
+}
+
+START_TEST(point_pass_matches_brute_force) { check_points(0); }
+END_TEST
+START_TEST(point_pass_periodic) { check_points(1); }
+END_TEST
+
+START_TEST(wall_nearest_in_a_tank)
+{
+    const double pts[][2] = {{0.5, 0.3}, {0.1, 0.05}, {0.03, 0.02}, {0.5, -0.1}, {1.1, 0.5}};
+    char list[1024];
+    size_t used = 0;
+    for (size_t q = 0; q < sizeof pts / sizeof pts[0]; q++)
+        used += (size_t)snprintf(list + used, sizeof list - used, "%s[%g, %g]", q ? ", " : "",
+                                 pts[q][0], pts[q][1]);
+    char yaml[4096];
+    snprintf(yaml, sizeof yaml,
+             "dimensions: 2\n"
+             "plugin_path: %s\n"
+             "particles: {spacing: 0.05}\n"
+             "time: {end: 1, max_step: 0.01}\n"
+             "domain: {min: [-0.5, -0.5], max: [1.5, 1.5]}\n"
+             "geometry:\n"
+             "  fluid: [{shape: box, min: [0, 0], max: [0.5, 0.5]}]\n"
+             "  walls: [{shape: tank, min: [0, 0], max: [1, 1]}]\n"
+             "initial: {density: rest}\n"
+             "plugins: {wendland_c2: {}, dbc: {}, point_probe: {points: [%s]}, tait: "
+             "{speed_of_sound: 10}, symplectic: {}}\n",
+             fixture_dir(), list);
+    sluice_sim *sim = test_load("nearest", yaml, NULL, 0);
+    ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
+    const api_probe_state *s = instance_named(sim, "point_probe")->state;
+    const sluice_wall_point *w = s->nearest;
+    for (int q = 0; q < 5; q++)
+        ck_assert_int_eq(s->nearest_status[q], SLUICE_OK);
+    /* inside, nearest the floor */
+    ck_assert(fabs(w[0].distance - 0.3) < 1e-12 && w[0].feature == 0);
+    ck_assert(fabs(w[0].normal[0]) < 1e-12 && fabs(w[0].normal[1] - 1) < 1e-12);
+    ck_assert(fabs(w[0].closest[0] - 0.5) < 1e-12 && fabs(w[0].closest[1]) < 1e-12);
+    /* inside, nearest the floor at 0.05 (the left wall is at 0.1) */
+    ck_assert(fabs(w[1].distance - 0.05) < 1e-12);
+    /* near the concave corner: distance 0.02 to the floor */
+    ck_assert(fabs(w[2].distance - 0.02) < 1e-12 && w[2].normal[1] > 0.99);
+    /* behind the floor: negative, same normal */
+    ck_assert(fabs(w[3].distance + 0.1) < 1e-12 && w[3].normal[1] > 0.99);
+    /* behind the right wall, outside the tank: negative, normal -x */
+    ck_assert_msg(fabs(w[4].distance + 0.1) < 1e-12 && w[4].normal[0] < -0.99,
+                  "d = %g, n = (%g, %g)", w[4].distance, w[4].normal[0], w[4].normal[1]);
+    sluice_sim_free(sim);
+}
+END_TEST
+
+START_TEST(plugin_built_for_abi_1_2_loads)
+{
+    char yaml[2048];
+    snprintf(yaml, sizeof yaml,
+             "dimensions: 2\n"
+             "plugin_path: %s\n"
+             "particles: {spacing: 0.1}\n"
+             "time: {end: 1, max_step: 0.01}\n"
+             "domain: {min: [0, 0], max: [1, 1]}\n"
+             "geometry: {fluid: [{shape: box, min: [0, 0], max: [0.5, 0.5]}]}\n"
+             "initial: {density: rest}\n"
+             "plugins: {wendland_c2: {}, old_minor_second: {}, symplectic: {}}\n",
+             fixture_dir());
+    sluice_sim *sim = test_load("old-minor", yaml, NULL, 0);
+    sluice_instance *in = instance_named(sim, "old_minor_second");
+    ck_assert_str_eq(in->component->summary, "ABI 1.2 fixture, second component");
+    ck_assert_uint_eq(in->library->abi_minor, 2);
+    ck_assert_ptr_null(in->component->prepare);
+    ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
+    sluice_sim_free(sim);
+}
+END_TEST
+
+int main(void)
+{
+    Suite *s = suite_create("core_api");
+    TCase *c = tcase_create("abi_1_3");
+    tcase_add_test(c, prepare_runs_before_the_passes);
+    tcase_add_test(c, point_pass_matches_brute_force);
+    tcase_add_test(c, point_pass_periodic);
+    tcase_add_test(c, wall_nearest_in_a_tank);
+    tcase_add_test(c, plugin_built_for_abi_1_2_loads);
+    suite_add_tcase(s, c);
+    return test_run_suite(s);
+}
