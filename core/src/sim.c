@@ -796,18 +796,29 @@ static int api_table_row(sluice_table *table, const double *values, uint32_t cou
         return SLUICE_ERROR;
     if (!table->sim->output_directory)
         return SLUICE_OK; /* sluice check: nothing is written */
-    char line[4096];
+    /* at most 24 characters a value ("%.10g" and a comma) */
+    char stack[4096];
+    size_t size = 24 * (size_t)count + 2;
+    char *line = size <= sizeof stack ? stack : malloc(size);
+    if (!line) {
+        sluice_sim_fail(table->sim, "out of memory writing a row of %s", table->path);
+        return SLUICE_ERROR;
+    }
     size_t used = 0;
     for (uint32_t i = 0; i < count; i++) {
-        int w = snprintf(line + used, sizeof line - used, "%s%.10g", i ? "," : "", values[i]);
-        if (w < 0 || (size_t)w >= sizeof line - used)
+        int w = snprintf(line + used, size - used, "%s%.10g", i ? "," : "", values[i]);
+        if (w < 0 || (size_t)w >= size - used) {
+            if (line != stack)
+                free(line);
             return SLUICE_ERROR;
+        }
         used += (size_t)w;
     }
-    if (used + 1 >= sizeof line)
-        return SLUICE_ERROR;
     line[used++] = '\n';
-    return sluice_sim_table_flush_row(table, line, used);
+    int rc = sluice_sim_table_flush_row(table, line, used);
+    if (line != stack)
+        free(line);
+    return rc;
 }
 
 int sluice_write_file_atomic(const char *path, const void *data, size_t size, char *error,

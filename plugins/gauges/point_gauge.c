@@ -1,0 +1,276 @@
+/* Point gauges: fields interpolated at fixed points, as a CSV time series.
+ *
+ * At every `interval` the gauge brings the rates and the equation of state to
+ * the current state (one evaluation), then interpolates each listed field at
+ * each point from the fluid particles with the Shepard-normalised kernel sum
+ *   f(x) = sum_j V_j f_j W(x - x_j) / sum_j V_j W(x - x_j),  V_j = m_j / rho_j,
+ * (exact for a constant field). A point whose kernel sum sum_j V_j W is below
+ * `min_kernel_sum` lies outside the fluid (or at its edge, where the estimate
+ * is biased): its values are written as nan. Columns: time, then for each
+ * point k and field f: pK_f (vectors: pK_f_x, pK_f_y[, pK_f_z]). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "plugin_util.h"
+
+#define MAX_FIELDS 16
+
+typedef struct gauge_config {
+    sluice_real_list points;
+    const char *fields;
+    sluice_real interval, min_kernel_sum;
+    const char *file;
+} gauge_config;
+
+typedef struct gauge_state {
+    const sluice_api *api;
+    uint32_t dims;
+    sluice_index count;
+    sluice_real *points;
+    sluice_real interval, min_kernel_sum;
+    const char *file;
+    char *field_text;
+    uint32_t field_count, value_count; /* value_count: columns per point */
+    char *names[MAX_FIELDS];
+    sluice_field fields[MAX_FIELDS];
+    sluice_field density, mass;
+    double *sums;   /* per point: kernel sum, then value_count weighted sums */
+    double *row;
+    sluice_table *table;
+    int64_t written;
+} gauge_state;
+
+static const sluice_param_spec params[] = {
+    {"points", SLUICE_PARAM_POINT_LIST, offsetof(gauge_config, points), NULL, 0, 0, 0, "m",
+     "where to measure", NULL, 0},
+    {"fields", SLUICE_PARAM_STRING, offsetof(gauge_config, fields), "pressure,velocity", 0, 0,
+     0, NULL, "comma-separated names of the real fields to interpolate", NULL, 0},
+    {"interval", SLUICE_PARAM_REAL, offsetof(gauge_config, interval), "0.01", 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between samples", NULL, 0},
+    {"min_kernel_sum", SLUICE_PARAM_REAL, offsetof(gauge_config, min_kernel_sum), "0.5", 0, 1,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
+     "points whose kernel sum sum_j V_j W is below this are outside the fluid (nan)", NULL, 0},
+    {"file", SLUICE_PARAM_STRING, offsetof(gauge_config, file), "points.csv", 0, 0, 0, NULL,
+     "output file in the run directory", NULL, 0},
+};
+
+static const sluice_field_spec fields[] = {
+    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", 0, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
+     NULL, 0, "mass density"},
+    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
+};
+
+static void gauge_destroy(void *state)
+{
+    gauge_state *s = state;
+    if (!s)
+        return;
+    free(s->points);
+    free(s->field_text);
+    free(s->sums);
+    free(s->row);
+    free(s);
+}
+
+static int gauge_create(const sluice_api *api, sluice_host *host, const void *config,
+                        void **state)
+{
+    const gauge_config *c = config;
+    gauge_state *s = sluice_util_state(api, host, sizeof *s);
+    if (!s)
+        return SLUICE_ERROR;
+    s->api = api;
+    sluice_real dims;
+    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    s->dims = (uint32_t)dims;
+    s->count = c->points.count;
+    s->interval = c->interval;
+    s->min_kernel_sum = c->min_kernel_sum;
+    s->file = c->file;
+    s->points = malloc((3 * (size_t)s->count + 3) * sizeof *s->points);
+    size_t text_length = strlen(c->fields);
+    s->field_text = malloc(text_length + 1);
+    if (s->field_text)
+        memcpy(s->field_text, c->fields, text_length + 1);
+    if (!s->points || !s->field_text) {
+        api->error(host, "out of memory");
+        gauge_destroy(s);
+        return SLUICE_ERROR;
+    }
+    if (s->count == 0) {
+        api->error(host, "needs at least one point");
+        gauge_destroy(s);
+        return SLUICE_ERROR;
+    }
+    memcpy(s->points, c->points.values, 3 * (size_t)s->count * sizeof *s->points);
+    /* split at commas and spaces, in place */
+    for (char *p = s->field_text; *p;) {
+        while (*p == ',' || *p == ' ')
+            *p++ = '\0';
+        if (!*p)
+            break;
+        if (s->field_count == MAX_FIELDS) {
+            api->error(host, "lists more than %d fields", MAX_FIELDS);
+            gauge_destroy(s);
+            return SLUICE_ERROR;
+        }
+        s->names[s->field_count++] = p;
+        while (*p && *p != ',' && *p != ' ')
+            p++;
+    }
+    if (s->field_count == 0) {
+        api->error(host, "lists no field");
+        gauge_destroy(s);
+        return SLUICE_ERROR;
+    }
+    *state = s;
+    return SLUICE_OK;
+}
+
+static int gauge_bind(void *state, sluice_host *host)
+{
+    gauge_state *s = state;
+    const sluice_api *api = s->api;
+    if (api->field(host, "density", &s->density) != SLUICE_OK ||
+        api->field(host, "mass", &s->mass) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->value_count = 0;
+    for (uint32_t f = 0; f < s->field_count; f++) {
+        if (!sluice_util_optional_field(api, host, s->names[f], &s->fields[f])) {
+            api->error(host, "field '%s' is not declared by any loaded plugin (`sluice inspect` "
+                             "lists each plugin's fields)",
+                       s->names[f]);
+            return SLUICE_ERROR;
+        }
+        if (s->fields[f].type != SLUICE_TYPE_REAL) {
+            api->error(host, "field '%s' is not a real field", s->names[f]);
+            return SLUICE_ERROR;
+        }
+        s->value_count += s->fields[f].components;
+    }
+    s->sums = calloc((size_t)s->count * (s->value_count + 1), sizeof *s->sums);
+    s->row = calloc((size_t)s->count * s->value_count + 1, sizeof *s->row);
+    if (!s->sums || !s->row) {
+        api->error(host, "out of memory");
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
+static int gauge_initialise(void *state, sluice_host *host)
+{
+    gauge_state *s = state;
+    size_t size = 16, used = 0;
+    char *header = malloc(size);
+    if (!header) {
+        s->api->error(host, "out of memory");
+        return SLUICE_ERROR;
+    }
+    static const char axes[] = "xyz";
+    used = (size_t)snprintf(header, size, "time");
+    for (sluice_index k = 0; k < s->count; k++)
+        for (uint32_t f = 0; f < s->field_count; f++)
+            for (uint32_t c = 0; c < s->fields[f].components; c++) {
+                char column[160];
+                int n = s->fields[f].components > 1
+                            ? snprintf(column, sizeof column, ",p%u_%s_%c", k, s->names[f],
+                                       c < 3 ? axes[c] : '?')
+                            : snprintf(column, sizeof column, ",p%u_%s", k, s->names[f]);
+                if (n < 0)
+                    continue;
+                if (used + (size_t)n + 1 > size) {
+                    size = 2 * (used + (size_t)n + 1);
+                    char *grown = realloc(header, size);
+                    if (!grown) {
+                        free(header);
+                        s->api->error(host, "out of memory");
+                        return SLUICE_ERROR;
+                    }
+                    header = grown;
+                }
+                memcpy(header + used, column, (size_t)n + 1);
+                used += (size_t)n;
+            }
+    s->table = s->api->table_open(host, s->file, header);
+    free(header);
+    return s->table ? SLUICE_OK : SLUICE_ERROR;
+}
+
+static void accumulate(void *context, const sluice_view *v, const sluice_pair_batch *b)
+{
+    gauge_state *s = context;
+    const sluice_real *rho = sluice_real_column(v, s->density, 0);
+    const sluice_real *m = sluice_real_column(v, s->mass, 0);
+    const uint32_t stride = s->value_count + 1;
+    for (sluice_index t = 0; t < b->target_count; t++) {
+        double *sum = s->sums + (size_t)b->target[t] * stride;
+        for (uint32_t c = 0; c < stride; c++)
+            sum[c] = 0;
+        for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
+            const sluice_index j = b->neighbour[k];
+            const double w = (double)m[j] / (double)rho[j] * (double)b->kernel[k];
+            sum[0] += w;
+            uint32_t slot = 1;
+            for (uint32_t f = 0; f < s->field_count; f++)
+                for (uint32_t c = 0; c < s->fields[f].components; c++)
+                    sum[slot++] += w * (double)sluice_real_column(v, s->fields[f], c)[j];
+        }
+    }
+}
+
+static int gauge_after_step(void *state, sluice_host *host)
+{
+    gauge_state *s = state;
+    const sluice_api *api = s->api;
+    const sluice_view *v = api->view(host);
+    double next = (double)s->written * (double)s->interval;
+    double tolerance = 1e-9 * (double)s->interval;
+    if (v->time + tolerance < next)
+        return SLUICE_OK;
+    /* pressure and the other derived fields of the current state */
+    if (api->evaluate(host) != SLUICE_OK)
+        return SLUICE_ERROR;
+    const uint32_t stride = s->value_count + 1;
+    memset(s->sums, 0, (size_t)s->count * stride * sizeof *s->sums);
+    if (api->point_pass(host, s->points, s->count, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+                        accumulate, s) != SLUICE_OK)
+        return SLUICE_ERROR;
+    v = api->view(host);
+    s->row[0] = v->time;
+    size_t column = 1;
+    for (sluice_index k = 0; k < s->count; k++) {
+        const double *sum = s->sums + (size_t)k * stride;
+        const int inside = sum[0] >= (double)s->min_kernel_sum;
+        for (uint32_t c = 0; c < s->value_count; c++)
+            s->row[column++] = inside ? sum[1 + c] / sum[0] : NAN;
+    }
+    if (api->table_row(s->table, s->row, (uint32_t)column) != SLUICE_OK)
+        return SLUICE_ERROR;
+    while ((double)s->written * (double)s->interval <= v->time + tolerance)
+        s->written++;
+    api->request_time(host, (double)s->written * (double)s->interval);
+    return SLUICE_OK;
+}
+
+static const sluice_component components[] = {{
+    .name = "point_gauge",
+    .summary = "fields interpolated at fixed points (Shepard kernel sum), as a CSV time series",
+    .reference = "Shepard (1968) normalised SPH interpolation",
+    .dimensions = SLUICE_DIMS_ALL,
+    .params = params,
+    .param_count = SLUICE_COUNT(params),
+    .config_size = sizeof(gauge_config),
+    .fields = fields,
+    .field_count = SLUICE_COUNT(fields),
+    .create = gauge_create,
+    .destroy = gauge_destroy,
+    .bind = gauge_bind,
+    .initialise = gauge_initialise,
+    .after_step = gauge_after_step,
+}};
+
+SLUICE_DEFINE_LIBRARY("point_gauge", "1.0.0", "point gauges", SLUICE_DIMS_ALL, components)

@@ -1,0 +1,247 @@
+/* Wall monitor: how the fluid sits against the walls, for comparing wall
+ * schemes. At every `interval`, for each fluid particle, the signed distance
+ * d to the nearest wall of the scene (api->wall_nearest; d < 0 behind a wall,
+ * ignoring points past an open end of a polyline) gives:
+ *   crossed        fluid particles behind a wall now;
+ *   crossed_total  distinct particles (ids) seen behind a wall at any sample
+ *                  so far;
+ *   gap_min        the smallest d (m; negative when a particle is behind);
+ *   gap_layer      the mean d of the first fluid layer: the particles with
+ *                  d < gap_min + dx/2 among those within 2 h of a wall (m).
+ *                  On the initial lattice it is dx/2; a wall scheme that
+ *                  pushes the fluid away from the wall (DBC) raises it.
+ *   near_wall      particles within 2 h of a wall.
+ * Written to `file` as time,crossed,crossed_total,gap_min,gap_layer,near_wall.
+ * With stop_on_crossing the run stops at the first sample with a particle
+ * behind a wall, naming the particle, its position and the wall. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "plugin_util.h"
+
+typedef struct monitor_config {
+    sluice_real interval;
+    int stop_on_crossing;
+    const char *file;
+} monitor_config;
+
+typedef struct monitor_state {
+    const sluice_api *api;
+    uint32_t dims;
+    sluice_real interval, dx, h;
+    int stop;
+    const char *file;
+    sluice_table *table;
+    int64_t written;
+    sluice_id *crossed_ids; /* sorted */
+    size_t crossed_count, crossed_capacity;
+    double *distance;
+    uint8_t *behind;
+    sluice_index capacity;
+} monitor_state;
+
+static const sluice_param_spec params[] = {
+    {"interval", SLUICE_PARAM_REAL, offsetof(monitor_config, interval), "0.01", 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between samples", NULL, 0},
+    {"stop_on_crossing", SLUICE_PARAM_BOOL, offsetof(monitor_config, stop_on_crossing), "false",
+     0, 0, 0, NULL, "stop the run when a fluid particle is found behind a wall", NULL, 0},
+    {"file", SLUICE_PARAM_STRING, offsetof(monitor_config, file), "walls.csv", 0, 0, 0, NULL,
+     "output file in the run directory", NULL, 0},
+};
+
+static int monitor_create(const sluice_api *api, sluice_host *host, const void *config,
+                          void **state)
+{
+    const monitor_config *c = config;
+    monitor_state *s = sluice_util_state(api, host, sizeof *s);
+    if (!s)
+        return SLUICE_ERROR;
+    s->api = api;
+    sluice_real dims;
+    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK ||
+        sluice_util_constant(api, host, "spacing", &s->dx) != SLUICE_OK ||
+        sluice_util_constant(api, host, "smoothing_length", &s->h) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    s->dims = (uint32_t)dims;
+    s->interval = c->interval;
+    s->stop = c->stop_on_crossing;
+    s->file = c->file;
+    *state = s;
+    return SLUICE_OK;
+}
+
+static void monitor_destroy(void *state)
+{
+    monitor_state *s = state;
+    if (!s)
+        return;
+    free(s->crossed_ids);
+    free(s->distance);
+    free(s->behind);
+    free(s);
+}
+
+static int monitor_initialise(void *state, sluice_host *host)
+{
+    monitor_state *s = state;
+    if (s->api->wall_count(host) == 0) {
+        s->api->error(host, "the scene has no walls to monitor");
+        return SLUICE_ERROR;
+    }
+    s->table = s->api->table_open(host, s->file,
+                                  "time,crossed,crossed_total,gap_min,gap_layer,near_wall");
+    return s->table ? SLUICE_OK : SLUICE_ERROR;
+}
+
+typedef struct distance_job {
+    monitor_state *s;
+    sluice_host *host;
+} distance_job;
+
+static void distances(void *context, const sluice_view *v, sluice_index begin, sluice_index end)
+{
+    const distance_job *job = context;
+    monitor_state *s = job->s;
+    for (sluice_index i = begin; i < end; i++) {
+        s->distance[i] = INFINITY;
+        s->behind[i] = 0;
+        if (v->kind[i] != SLUICE_KIND_FLUID)
+            continue;
+        sluice_real p[3] = {v->position[0][i], v->position[1][i],
+                            v->dimensions == 3 ? v->position[2][i] : 0};
+        sluice_wall_point w;
+        if (s->api->wall_nearest(job->host, p, -1, &w) != SLUICE_OK)
+            continue;
+        s->distance[i] = (double)w.distance;
+        s->behind[i] = w.distance < 0 && !w.beyond_end;
+    }
+}
+
+static int compare_ids(const void *a, const void *b)
+{
+    sluice_id x = *(const sluice_id *)a, y = *(const sluice_id *)b;
+    return x < y ? -1 : x > y;
+}
+
+static int remember(monitor_state *s, sluice_id id)
+{
+    if (bsearch(&id, s->crossed_ids, s->crossed_count, sizeof id, compare_ids))
+        return 0;
+    if (s->crossed_count == s->crossed_capacity) {
+        size_t capacity = s->crossed_capacity ? 2 * s->crossed_capacity : 64;
+        sluice_id *grown = realloc(s->crossed_ids, capacity * sizeof *grown);
+        if (!grown)
+            return -1;
+        s->crossed_ids = grown;
+        s->crossed_capacity = capacity;
+    }
+    size_t k = s->crossed_count;
+    while (k > 0 && s->crossed_ids[k - 1] > id) {
+        s->crossed_ids[k] = s->crossed_ids[k - 1];
+        k--;
+    }
+    s->crossed_ids[k] = id;
+    s->crossed_count++;
+    return 0;
+}
+
+static int monitor_after_step(void *state, sluice_host *host)
+{
+    monitor_state *s = state;
+    const sluice_api *api = s->api;
+    const sluice_view *v = api->view(host);
+    double next = (double)s->written * (double)s->interval;
+    double tolerance = 1e-9 * (double)s->interval;
+    if (v->time + tolerance < next)
+        return SLUICE_OK;
+    if (v->count > s->capacity) {
+        double *d = realloc(s->distance, (size_t)v->count * sizeof *d);
+        if (d)
+            s->distance = d;
+        uint8_t *b = realloc(s->behind, (size_t)v->count);
+        if (b)
+            s->behind = b;
+        if (!d || !b) {
+            api->error(host, "out of memory");
+            return SLUICE_ERROR;
+        }
+        s->capacity = v->count;
+    }
+    distance_job job = {s, host};
+    api->parallel_for(host, v->count, distances, &job);
+    double gap_min = INFINITY;
+    sluice_index crossed = 0, near = 0, first_bad = v->count;
+    for (sluice_index i = 0; i < v->count; i++) {
+        if (v->kind[i] != SLUICE_KIND_FLUID)
+            continue;
+        if (s->distance[i] < gap_min)
+            gap_min = s->distance[i];
+        if (s->behind[i]) {
+            crossed++;
+            if (first_bad == v->count)
+                first_bad = i;
+            if (remember(s, v->id[i]) != 0) {
+                api->error(host, "out of memory");
+                return SLUICE_ERROR;
+            }
+        }
+    }
+    const double band = 2 * (double)s->h;
+    double layer_sum = 0;
+    sluice_index layer = 0;
+    for (sluice_index i = 0; i < v->count; i++) {
+        if (v->kind[i] != SLUICE_KIND_FLUID || !(s->distance[i] < band))
+            continue;
+        near++;
+        if (s->distance[i] < gap_min + 0.5 * (double)s->dx) {
+            layer_sum += s->distance[i];
+            layer++;
+        }
+    }
+    double row[6] = {v->time,
+                     (double)crossed,
+                     (double)s->crossed_count,
+                     isfinite(gap_min) ? gap_min : NAN,
+                     layer ? layer_sum / (double)layer : NAN,
+                     (double)near};
+    if (api->table_row(s->table, row, 6) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (s->stop && crossed > 0) {
+        const sluice_index i = first_bad;
+        sluice_real p[3] = {v->position[0][i], v->position[1][i],
+                            v->dimensions == 3 ? v->position[2][i] : 0};
+        sluice_wall_point w;
+        api->wall_nearest(host, p, -1, &w);
+        const sluice_wall *wall = api->wall(host, w.wall);
+        api->error(host,
+                   "step %lld, t = %.9g s: fluid particle id %llu at (%g, %g, %g) m is %.3g m "
+                   "behind wall %u%s%s%s (scheme %s); %u fluid particles are behind walls",
+                   (long long)v->step, v->time, (unsigned long long)v->id[i], (double)p[0],
+                   (double)p[1], (double)p[2], -(double)w.distance, w.wall,
+                   wall && wall->name[0] ? " '" : "", wall ? wall->name : "",
+                   wall && wall->name[0] ? "'" : "", wall ? wall->scheme : "?", crossed);
+        return SLUICE_ERROR;
+    }
+    while ((double)s->written * (double)s->interval <= v->time + tolerance)
+        s->written++;
+    api->request_time(host, (double)s->written * (double)s->interval);
+    return SLUICE_OK;
+}
+
+static const sluice_component components[] = {{
+    .name = "wall_monitor",
+    .summary = "fluid against the walls: particles behind walls, smallest gap, first-layer gap",
+    .dimensions = SLUICE_DIMS_ALL,
+    .params = params,
+    .param_count = SLUICE_COUNT(params),
+    .config_size = sizeof(monitor_config),
+    .create = monitor_create,
+    .destroy = monitor_destroy,
+    .initialise = monitor_initialise,
+    .after_step = monitor_after_step,
+}};
+
+SLUICE_DEFINE_LIBRARY("wall_monitor", "1.0.0", "wall monitor", SLUICE_DIMS_ALL, components)

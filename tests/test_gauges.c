@@ -1,0 +1,223 @@
+/* Gauges: point_gauge (fields interpolated at points) and wall_monitor
+ * (particles behind walls, fluid-wall gap), on states whose answer is known:
+ *  - the hydrostatic start: p = rho0 g (H - y) (the equation of state
+ *    inverted exactly), which the Shepard interpolation reproduces in the
+ *    interior up to the small variation of V_j = m_j / rho_j across the
+ *    support (derived bound below); a uniform velocity exactly; nan outside
+ *    the fluid; an unknown field refused at its line in the scene;
+ *  - the lattice start of a tank: no particle behind a wall, smallest gap and
+ *    first-layer gap dx/2; a particle moved behind the floor is counted, and
+ *    with stop_on_crossing the run stops naming it. */
+#include <math.h>
+
+#include "sim_util.h"
+
+static const char *tank_scene =
+    "dimensions: 2\n"
+    "particles: {spacing: 0.02, smoothing_length_ratio: 1.5}\n"
+    "time: {end: 0.01}\n"
+    "domain: {min: [-0.2, -0.2], max: [1.2, 1.2]}\n"
+    "geometry:\n"
+    "  fluid: [{shape: box, min: [0, 0], max: [1.0, 0.5]}]\n"
+    "  walls: [{shape: tank, min: [0, 0], max: [1.0, 1.0]}]\n"
+    "plugins:\n"
+    "  wendland_c2: {}\n"
+    "  tait: {speed_of_sound: 22.1}\n"
+    "  continuity: {}\n"
+    "  pressure_gradient: {}\n"
+    "  gravity: {acceleration: [0, -9.81]}\n"
+    "  dbc: {}\n"
+    "  time_step: {}\n"
+    "  symplectic: {}\n"
+    "%s";
+
+/* Reads the first data row of a CSV into values; returns the count. */
+static int first_row(const char *path, double *values, int max)
+{
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return -1;
+    char line[16384];
+    int n = 0;
+    if (fgets(line, sizeof line, f) && fgets(line, sizeof line, f)) {
+        char *p = line;
+        while (*p && n < max) {
+            char *end;
+            double value = strtod(p, &end);
+            if (end == p)
+                break;
+            values[n++] = value;
+            p = *end == ',' ? end + 1 : end;
+        }
+    }
+    fclose(f);
+    return n;
+}
+
+START_TEST(point_gauge_hydrostatic_start)
+{
+    const double pts[][2] = {{0.5, 0.1}, {0.3, 0.25}, {0.7, 0.4}, {0.5, 0.8}};
+    char gauge[512], yaml[4096];
+    snprintf(gauge, sizeof gauge,
+             "  point_gauge: {points: [[%g, %g], [%g, %g], [%g, %g], [%g, %g]], fields: "
+             "\"pressure, velocity\"}\n",
+             pts[0][0], pts[0][1], pts[1][0], pts[1][1], pts[2][0], pts[2][1], pts[3][0],
+             pts[3][1]);
+    snprintf(yaml, sizeof yaml, tank_scene, gauge);
+    sluice_sim *sim = test_load("point-gauge", yaml, NULL, 0);
+    /* a uniform velocity, which the interpolation must return exactly */
+    const sluice_view *v = sluice_sim_view(sim);
+    sluice_real *u = test_column(sim, "velocity", 0), *w = test_column(sim, "velocity", 1);
+    for (sluice_index i = 0; i < v->count; i++)
+        if (v->kind[i] == SLUICE_KIND_FLUID) {
+            u[i] = 0.75;
+            w[i] = -0.5;
+        }
+    char *dir = test_scratch("point-gauge-out");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    char *path = NULL;
+    ck_assert_int_ge(asprintf(&path, "%s/points.csv", dir), 0);
+    double row[64];
+    ck_assert_int_eq(first_row(path, row, 64), 13);
+    ck_assert(row[0] == 0);
+    const double rho0 = 1000, g = 9.81, H = 0.5;
+    for (int k = 0; k < 3; k++) {
+        double expected = rho0 * g * (H - pts[k][1]);
+        double p = row[1 + 3 * k];
+        /* Shepard interpolation of a linear field is exact for symmetric
+         * weights; V_j varies by rho0 g 2h / c0^2 / rho0 = 1.2e-3 relative
+         * across the support, which biases the estimate by at most that
+         * fraction of the pressure change over the support, 2 h rho0 g */
+        double bound = 1.2e-3 * 2 * 0.03 * rho0 * g + 1e-9 * expected;
+        ck_assert_msg(fabs(p - expected) <= bound, "point %d: p = %.6f, expected %.6f (bound %g)",
+                      k, p, expected, bound);
+        ck_assert_msg(fabs(row[2 + 3 * k] - 0.75) <= 1e-12 && fabs(row[3 + 3 * k] + 0.5) <= 1e-12,
+                      "point %d: velocity (%g, %g)", k, row[2 + 3 * k], row[3 + 3 * k]);
+        fprintf(stderr, "point gauge at (%g, %g): p = %.4f Pa, rho g (H - y) = %.4f Pa\n",
+                pts[k][0], pts[k][1], p, expected);
+    }
+    /* above the free surface: outside the fluid */
+    ck_assert(isnan(row[10]) && isnan(row[11]) && isnan(row[12]));
+    free(path);
+    free(dir);
+    sluice_sim_free(sim);
+}
+END_TEST
+
+START_TEST(point_gauge_unknown_field)
+{
+    char yaml[4096];
+    snprintf(yaml, sizeof yaml, tank_scene,
+             "  point_gauge: {points: [[0.5, 0.1]], fields: \"pressure, vorticity\"}\n");
+    char *dir = test_scratch("point-gauge-bad");
+    char *path = test_write_file(dir, "scene.yaml", yaml);
+    char *args = NULL, *out = NULL;
+    ck_assert_int_ge(asprintf(&args, "check %s", path), 0);
+    int status = test_sluice(args, &out);
+    ck_assert_msg(status == 2 && strstr(out, "field 'vorticity' is not declared") &&
+                      strstr(out, "scene.yaml:17:"),
+                  "exit %d:\n%s", status, out);
+    free(args);
+    free(out);
+    free(path);
+    free(dir);
+}
+END_TEST
+
+static int read_monitor(const char *dir, double rows[][6], int max)
+{
+    char *path = NULL;
+    if (asprintf(&path, "%s/walls.csv", dir) < 0)
+        return -1;
+    FILE *f = fopen(path, "r");
+    free(path);
+    if (!f)
+        return -1;
+    char line[1024];
+    int n = 0;
+    if (!fgets(line, sizeof line, f)) {
+        fclose(f);
+        return 0;
+    }
+    while (n < max && fgets(line, sizeof line, f))
+        if (sscanf(line, "%lf,%lf,%lf,%lf,%lf,%lf", &rows[n][0], &rows[n][1], &rows[n][2],
+                   &rows[n][3], &rows[n][4], &rows[n][5]) == 6)
+            n++;
+    fclose(f);
+    return n;
+}
+
+START_TEST(wall_monitor_lattice_and_crossing)
+{
+    char yaml[4096];
+    snprintf(yaml, sizeof yaml, tank_scene, "  wall_monitor: {interval: 0.001}\n");
+    sluice_sim *sim = test_load("wall-monitor", yaml, NULL, 0);
+    char *dir = test_scratch("wall-monitor-out");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    /* push one fluid particle 1 mm behind the floor */
+    const sluice_view *v = sluice_sim_view(sim);
+    sluice_real *y = (sluice_real *)v->position[1];
+    sluice_index moved = v->count;
+    for (sluice_index i = 0; i < v->count && moved == v->count; i++)
+        if (v->kind[i] == SLUICE_KIND_FLUID && fabs(v->position[0][i] - 0.51) < 1e-9 &&
+            fabs(v->position[1][i] - 0.01) < 1e-9)
+            moved = i;
+    ck_assert_uint_lt(moved, v->count);
+    y[moved] = -0.001;
+    while (sluice_sim_time(sim) < 0.001 - 1e-12)
+        ck_assert_int_eq(sluice_sim_step(sim), SLUICE_RUN_COMPLETE);
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    double rows[16][6];
+    int n = read_monitor(dir, rows, 16);
+    ck_assert_int_ge(n, 2);
+    /* t = 0: the lattice, dx/2 from every wall */
+    ck_assert(rows[0][1] == 0 && rows[0][2] == 0);
+    ck_assert_msg(fabs(rows[0][3] - 0.01) < 1e-12 && fabs(rows[0][4] - 0.01) < 1e-12,
+                  "gaps %g %g", rows[0][3], rows[0][4]);
+    /* the moved particle is behind the floor at the next sample */
+    ck_assert_msg(rows[1][1] == 1 && rows[1][2] == 1 && rows[1][3] < 0, "crossed %g, total %g, gap %g",
+                  rows[1][1], rows[1][2], rows[1][3]);
+    free(dir);
+    sluice_sim_free(sim);
+
+    /* with stop_on_crossing the run stops and names the particle */
+    snprintf(yaml, sizeof yaml, tank_scene,
+             "  wall_monitor: {interval: 0.001, stop_on_crossing: true}\n");
+    sim = test_load("wall-monitor-stop", yaml, NULL, 0);
+    dir = test_scratch("wall-monitor-stop-out");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    v = sluice_sim_view(sim);
+    y = (sluice_real *)v->position[1];
+    sluice_id id = 0;
+    for (sluice_index i = 0; i < v->count; i++)
+        if (v->kind[i] == SLUICE_KIND_FLUID && fabs(v->position[1][i] - 0.01) < 1e-9) {
+            y[i] = -0.001;
+            id = v->id[i];
+            break;
+        }
+    int status = SLUICE_RUN_COMPLETE;
+    while (status == SLUICE_RUN_COMPLETE && sluice_sim_time(sim) < 0.01)
+        status = sluice_sim_step(sim);
+    ck_assert_int_ne(status, SLUICE_RUN_COMPLETE);
+    char expected[64];
+    snprintf(expected, sizeof expected, "fluid particle id %llu", (unsigned long long)id);
+    ck_assert_msg(strstr(sluice_sim_failure(sim), expected) &&
+                      strstr(sluice_sim_failure(sim), "behind wall"),
+                  "failure: %s", sluice_sim_failure(sim));
+    sluice_sim_end(sim, SLUICE_RUN_FAILED);
+    free(dir);
+    sluice_sim_free(sim);
+}
+END_TEST
+
+int main(void)
+{
+    Suite *s = suite_create("gauges");
+    TCase *c = tcase_create("gauges");
+    tcase_add_test(c, point_gauge_hydrostatic_start);
+    tcase_add_test(c, point_gauge_unknown_field);
+    tcase_add_test(c, wall_monitor_lattice_and_crossing);
+    suite_add_tcase(s, c);
+    return test_run_suite(s);
+}
