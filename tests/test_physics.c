@@ -390,6 +390,14 @@ START_TEST(swapping_a_plugin_changes_only_its_fields)
 {
     check_swap("artificial_viscosity", "", "symplectic");
     check_swap("delta_sph", "", "symplectic");
+    /* the seeds' menu (issue 3), also under the other integrators */
+    check_swap("xsph", "", "symplectic");
+    check_swap("laminar_viscosity", "", "symplectic");
+    check_swap("kernel_correction", "", "symplectic");
+    check_swap("pressure_smoothing", "", "symplectic");
+    check_swap("xsph", "laminar_viscosity", "verlet");
+    check_swap("delta_sph", "artificial_viscosity", "predictor_corrector");
+    check_swap("artificial_viscosity", "laminar_viscosity", "euler");
 }
 END_TEST
 
