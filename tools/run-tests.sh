@@ -36,7 +36,13 @@ echo "== AddressSanitizer + UndefinedBehaviorSanitizer build (build-asan/)"
 [ -f build-asan/build.ninja ] || meson setup build-asan --buildtype=debugoptimized \
     -Db_sanitize=address,undefined -Dc_args=-fno-sanitize-recover=all
 meson compile -C build-asan
-ASAN_OPTIONS="detect_leaks=1:abort_on_error=1" \
+# intercept_tls_get_addr=0: GCC 12's sanitizer runtime misreads a dynamic TLS
+# block (of a dlopen'ed library) as a glibc 2.19 header when it happens to land
+# at one offset in a page, and LeakSanitizer's tracer then crashes ("Tracer
+# caught signal 11") after a test has passed (google/sanitizers#1322; fixed
+# in later runtimes). Leaks are still detected; only dynamic TLS is not
+# scanned for pointers, and no Sluice code keeps heap pointers in TLS.
+ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:intercept_tls_get_addr=0" \
 UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1" \
     meson test -C build-asan --print-errorlogs --num-processes "$jobs"
 echo "== all tests passed"
