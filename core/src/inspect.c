@@ -35,7 +35,9 @@ static const char *roles(const sluice_component *c, char *buffer, size_t size)
     } list[] = {
         {c->kernel != NULL, "kernel"},
         {c->particle != NULL, "particle term"},
-        {c->pair != NULL, "pair term"},
+        {c->pair != NULL && !(c->flags & SLUICE_COMPONENT_ON_DEMAND), "pair term"},
+        {c->pair != NULL && (c->flags & SLUICE_COMPONENT_ON_DEMAND), "on-demand pair term"},
+        {c->prepare != NULL, "prepare (every evaluation)"},
         {c->density_from_pressure != NULL, "equation of state"},
         {c->advance != NULL, "integrator"},
         {c->time_step_limit != NULL, "time-step limit"},
