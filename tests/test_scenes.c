@@ -212,7 +212,11 @@ START_TEST(dam_break_3d_runs)
     char *dir = test_scratch("dambreak3d");
     char *scene = test_config("dam_break_3d.yaml");
     char *args = NULL, *output = NULL;
-    ck_assert_int_ge(asprintf(&args, "run %s --out %s --quiet --no-progress --set time.end=0.3",
+    /* at twice the default spacing (1,000 fluid and 11,000 wall particles),
+     * which keeps the sanitizer run of the suite short; the default runs in
+     * the README's and performance.md's commands */
+    ck_assert_int_ge(asprintf(&args, "run %s --out %s --quiet --no-progress --set time.end=0.3 "
+                                     "--set particles.spacing=0.1 --set plugins.hdf5.interval=0.15",
                               scene, dir),
                      0);
     int status = test_sluice(args, &output);
@@ -223,7 +227,7 @@ START_TEST(dam_break_3d_runs)
     ck_assert_ptr_nonnull(json);
     ck_assert(json_number(json, "dimensions") == 3);
     ck_assert(json_number(json, "particles_final") == json_number(json, "particles_initial"));
-    ck_assert(json_number(json, "particles_initial") > 8000);
+    ck_assert(json_number(json, "particles_initial") > 1000);
     /* the front has moved out along x: Ritter's front speed bounds it above */
     double *t = NULL, *x = NULL;
     char *csv = NULL;
