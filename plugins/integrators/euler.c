@@ -20,7 +20,7 @@
  * multiplies the oscillator's energy by exactly 1 + (omega dt)^2, so it only
  * runs where dissipation (viscosity) outweighs that growth; it is offered for
  * comparison with seed 000, not for production. */
-#include "plugin_util.h"
+#include "integrator_util.h"
 
 enum { FORM_SEMI_IMPLICIT = 0, FORM_EXPLICIT = 1 };
 
@@ -32,11 +32,7 @@ typedef struct euler_state {
     const sluice_api *api;
     uint32_t dims;
     int form;
-    sluice_field position, velocity;
-    int has_transport;
-    sluice_field transport; /* transport_velocity_correction (XSPH), if declared */
-    uint32_t rate_count;
-    sluice_rate *rates;
+    sluice_integrand in;
     double dt;
 } euler_state;
 
@@ -75,22 +71,7 @@ static int euler_create(const sluice_api *api, sluice_host *host, const void *co
 static int euler_bind(void *state, sluice_host *host)
 {
     euler_state *s = state;
-    const sluice_api *api = s->api;
-    if (api->field(host, "position", &s->position) != SLUICE_OK ||
-        api->field(host, "velocity", &s->velocity) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->has_transport =
-        sluice_util_optional_field(api, host, "transport_velocity_correction", &s->transport);
-    s->rate_count = api->rate_count(host);
-    s->rates = calloc(s->rate_count + 1, sizeof *s->rates);
-    if (!s->rates) {
-        api->error(host, "out of memory");
-        return SLUICE_ERROR;
-    }
-    for (uint32_t r = 0; r < s->rate_count; r++)
-        if (api->rate(host, r, &s->rates[r]) != SLUICE_OK)
-            return SLUICE_ERROR;
-    return SLUICE_OK;
+    return sluice_integrand_bind(&s->in, s->api, host, s->dims, NULL);
 }
 
 static void euler_destroy(void *state)
@@ -98,27 +79,14 @@ static void euler_destroy(void *state)
     euler_state *s = state;
     if (!s)
         return;
-    free(s->rates);
+    sluice_integrand_free(&s->in);
     free(s);
 }
 
 /* x += dt (v + transport correction) for fluid particles */
 static void move(const euler_state *s, const sluice_view *v, sluice_index begin, sluice_index end)
 {
-    const sluice_real dt = (sluice_real)s->dt;
-    const uint8_t *restrict kind = v->kind;
-    for (uint32_t d = 0; d < s->dims; d++) {
-        sluice_real *restrict x = sluice_real_column(v, s->position, d);
-        const sluice_real *restrict u = sluice_real_column(v, s->velocity, d);
-        if (s->has_transport) {
-            const sluice_real *restrict du = sluice_real_column(v, s->transport, d);
-            for (sluice_index i = begin; i < end; i++)
-                x[i] += kind[i] == SLUICE_KIND_FLUID ? dt * (u[i] + du[i]) : 0;
-        } else {
-            for (sluice_index i = begin; i < end; i++)
-                x[i] += kind[i] == SLUICE_KIND_FLUID ? dt * u[i] : 0;
-        }
-    }
+    sluice_integrand_move(&s->in, v, begin, end, (sluice_real)s->dt, s->in.position);
 }
 
 /* q += dt dq/dt for every integrated field, over the kinds of its rate */
@@ -127,8 +95,8 @@ static void update(const euler_state *s, const sluice_view *v, sluice_index begi
 {
     const sluice_real dt = (sluice_real)s->dt;
     const uint8_t *restrict kind = v->kind;
-    for (uint32_t r = 0; r < s->rate_count; r++) {
-        const sluice_rate *rate = &s->rates[r];
+    for (uint32_t r = 0; r < s->in.rate_count; r++) {
+        const sluice_rate *rate = &s->in.rates[r];
         const uint32_t kinds = rate->kinds;
         for (uint32_t c = 0; c < rate->state.components; c++) {
             sluice_real *restrict q = sluice_real_column(v, rate->state, c);

@@ -23,20 +23,13 @@
  * Energy: not symplectic. On an undamped oscillator every step multiplies the
  * energy by exactly 1 + (omega dt)^4 / 4, a slow secular growth; dissipation
  * (viscosity) in a real flow outweighs it. */
-#include <stdio.h>
-#include <string.h>
-
-#include "plugin_util.h"
+#include "integrator_util.h"
 
 typedef struct pc_state {
     const sluice_api *api;
     uint32_t dims;
-    sluice_field position, velocity, position_start;
-    int has_transport;
-    sluice_field transport; /* transport_velocity_correction (XSPH), if declared */
-    uint32_t rate_count;
-    sluice_rate *rates;
-    sluice_field *start; /* q^n of every rate */
+    sluice_field position_start; /* x^n */
+    sluice_integrand in;         /* stored: q^n of every rate */
     double dt;
 } pc_state;
 
@@ -68,41 +61,10 @@ static int pc_create(const sluice_api *api, sluice_host *host, const void *confi
 static int pc_bind(void *state, sluice_host *host)
 {
     pc_state *s = state;
-    const sluice_api *api = s->api;
-    if (api->field(host, "position", &s->position) != SLUICE_OK ||
-        api->field(host, "velocity", &s->velocity) != SLUICE_OK ||
-        api->field(host, "position_previous", &s->position_start) != SLUICE_OK)
+    if (s->api->field(host, "position_previous", &s->position_start) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->has_transport =
-        sluice_util_optional_field(api, host, "transport_velocity_correction", &s->transport);
-    s->rate_count = api->rate_count(host);
-    s->rates = calloc(s->rate_count + 1, sizeof *s->rates);
-    s->start = calloc(s->rate_count + 1, sizeof *s->start);
-    if (!s->rates || !s->start) {
-        api->error(host, "out of memory");
-        return SLUICE_ERROR;
-    }
-    for (uint32_t r = 0; r < s->rate_count; r++) {
-        if (api->rate(host, r, &s->rates[r]) != SLUICE_OK)
-            return SLUICE_ERROR;
-        /* q^n, kept across the two stages and reordered with the particles */
-        char name[256];
-        snprintf(name, sizeof name, "%s_previous", s->rates[r].state_name);
-        sluice_field_spec spec = {name, SLUICE_TYPE_REAL, s->rates[r].state.components, "",
-                                  SLUICE_READ | SLUICE_WRITE, SLUICE_FIELD_RESTART, NULL, 0,
-                                  "value at the start of the step (predictor-corrector)"};
-        uint32_t count = api->field_count(host);
-        for (uint32_t f = 0; f < count; f++) {
-            sluice_field_spec info;
-            if (api->field_info(host, f, &info, NULL) == SLUICE_OK &&
-                strcmp(info.name, s->rates[r].state_name) == 0)
-                spec.units = info.units;
-        }
-        if (api->declare_field(host, &spec) != SLUICE_OK ||
-            api->field(host, name, &s->start[r]) != SLUICE_OK)
-            return SLUICE_ERROR;
-    }
-    return SLUICE_OK;
+    return sluice_integrand_bind(&s->in, s->api, host, s->dims,
+                                 "value at the start of the step (predictor-corrector)");
 }
 
 static void pc_destroy(void *state)
@@ -110,8 +72,7 @@ static void pc_destroy(void *state)
     pc_state *s = state;
     if (!s)
         return;
-    free(s->rates);
-    free(s->start);
+    sluice_integrand_free(&s->in);
     free(s);
 }
 
@@ -119,20 +80,7 @@ static void pc_destroy(void *state)
 static void move(const pc_state *s, const sluice_view *v, sluice_index begin, sluice_index end,
                  sluice_real step)
 {
-    const uint8_t *restrict kind = v->kind;
-    for (uint32_t d = 0; d < s->dims; d++) {
-        sluice_real *restrict x = sluice_real_column(v, s->position, d);
-        const sluice_real *restrict x0 = sluice_real_column(v, s->position_start, d);
-        const sluice_real *restrict u = sluice_real_column(v, s->velocity, d);
-        if (s->has_transport) {
-            const sluice_real *restrict du = sluice_real_column(v, s->transport, d);
-            for (sluice_index i = begin; i < end; i++)
-                x[i] = kind[i] == SLUICE_KIND_FLUID ? x0[i] + step * (u[i] + du[i]) : x[i];
-        } else {
-            for (sluice_index i = begin; i < end; i++)
-                x[i] = kind[i] == SLUICE_KIND_FLUID ? x0[i] + step * u[i] : x[i];
-        }
-    }
+    sluice_integrand_move(&s->in, v, begin, end, step, s->position_start);
 }
 
 /* q = q0 + step dq/dt over the kinds of each rate, q0 = q^n */
@@ -140,12 +88,12 @@ static void update(const pc_state *s, const sluice_view *v, sluice_index begin, 
                    sluice_real step)
 {
     const uint8_t *restrict kind = v->kind;
-    for (uint32_t r = 0; r < s->rate_count; r++) {
-        const sluice_rate *rate = &s->rates[r];
+    for (uint32_t r = 0; r < s->in.rate_count; r++) {
+        const sluice_rate *rate = &s->in.rates[r];
         const uint32_t kinds = rate->kinds;
         for (uint32_t c = 0; c < rate->state.components; c++) {
             sluice_real *restrict q = sluice_real_column(v, rate->state, c);
-            const sluice_real *restrict q0 = sluice_real_column(v, s->start[r], c);
+            const sluice_real *restrict q0 = sluice_real_column(v, s->in.stored[r], c);
             const sluice_real *restrict dq = sluice_real_column(v, rate->rate, c);
 #pragma omp simd
             for (sluice_index i = begin; i < end; i++)
@@ -161,12 +109,12 @@ static void predictor(void *context, const sluice_view *v, sluice_index begin, s
     /* keep x^n and q^n */
     for (uint32_t d = 0; d < s->dims; d++)
         memcpy(sluice_real_column(v, s->position_start, d) + begin,
-               sluice_real_column(v, s->position, d) + begin,
+               sluice_real_column(v, s->in.position, d) + begin,
                (size_t)(end - begin) * sizeof(sluice_real));
-    for (uint32_t r = 0; r < s->rate_count; r++)
-        for (uint32_t c = 0; c < s->rates[r].state.components; c++)
-            memcpy(sluice_real_column(v, s->start[r], c) + begin,
-                   sluice_real_column(v, s->rates[r].state, c) + begin,
+    for (uint32_t r = 0; r < s->in.rate_count; r++)
+        for (uint32_t c = 0; c < s->in.rates[r].state.components; c++)
+            memcpy(sluice_real_column(v, s->in.stored[r], c) + begin,
+                   sluice_real_column(v, s->in.rates[r].state, c) + begin,
                    (size_t)(end - begin) * sizeof(sluice_real));
     move(s, v, begin, end, half); /* with V^n, before v changes */
     update(s, v, begin, end, half);

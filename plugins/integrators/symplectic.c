@@ -7,20 +7,12 @@
  * particles move with the velocity plus, when a plugin (XSPH) declares it, the
  * field transport_velocity_correction; walls move only when a wall plugin
  * moves them. The step size comes from the rates at t^n (first evaluation). */
-#include <stdio.h>
-#include <string.h>
-
-#include "plugin_util.h"
+#include "integrator_util.h"
 
 typedef struct symplectic_state {
     const sluice_api *api;
     uint32_t dims;
-    sluice_field position, velocity;
-    int has_transport;
-    sluice_field transport; /* transport_velocity_correction (XSPH), if declared */
-    uint32_t rate_count;
-    sluice_rate *rates;
-    sluice_field *previous;
+    sluice_integrand in; /* stored: the value at the start of the step */
     double dt;
 } symplectic_state;
 
@@ -50,41 +42,8 @@ static int symplectic_create(const sluice_api *api, sluice_host *host, const voi
 static int symplectic_bind(void *state, sluice_host *host)
 {
     symplectic_state *s = state;
-    const sluice_api *api = s->api;
-    if (api->field(host, "position", &s->position) != SLUICE_OK ||
-        api->field(host, "velocity", &s->velocity) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->has_transport =
-        sluice_util_optional_field(api, host, "transport_velocity_correction", &s->transport);
-    s->rate_count = api->rate_count(host);
-    s->rates = calloc(s->rate_count + 1, sizeof *s->rates);
-    s->previous = calloc(s->rate_count + 1, sizeof *s->previous);
-    if (!s->rates || !s->previous) {
-        api->error(host, "out of memory");
-        return SLUICE_ERROR;
-    }
-    for (uint32_t r = 0; r < s->rate_count; r++) {
-        if (api->rate(host, r, &s->rates[r]) != SLUICE_OK)
-            return SLUICE_ERROR;
-        /* the value at the start of the step, kept across the two stages */
-        char name[256];
-        snprintf(name, sizeof name, "%s_previous", s->rates[r].state_name);
-        sluice_field_spec spec = {name, SLUICE_TYPE_REAL, s->rates[r].state.components, "",
-                                  0, SLUICE_FIELD_RESTART, NULL, 0,
-                                  "value at the start of the step (symplectic integrator)"};
-        uint32_t count = api->field_count(host);
-        for (uint32_t f = 0; f < count; f++) {
-            sluice_field_spec info;
-            if (api->field_info(host, f, &info, NULL) == SLUICE_OK &&
-                strcmp(info.name, s->rates[r].state_name) == 0)
-                spec.units = info.units;
-        }
-        spec.access = SLUICE_READ | SLUICE_WRITE;
-        if (api->declare_field(host, &spec) != SLUICE_OK ||
-            api->field(host, name, &s->previous[r]) != SLUICE_OK)
-            return SLUICE_ERROR;
-    }
-    return SLUICE_OK;
+    return sluice_integrand_bind(&s->in, s->api, host, s->dims,
+                                 "value at the start of the step (symplectic integrator)");
 }
 
 static void symplectic_destroy(void *state)
@@ -92,28 +51,8 @@ static void symplectic_destroy(void *state)
     symplectic_state *s = state;
     if (!s)
         return;
-    free(s->rates);
-    free(s->previous);
+    sluice_integrand_free(&s->in);
     free(s);
-}
-
-/* x += step (v + transport correction) for fluid particles */
-static void move(const symplectic_state *s, const sluice_view *v, sluice_index begin,
-                 sluice_index end, sluice_real step)
-{
-    const uint8_t *restrict kind = v->kind;
-    for (uint32_t d = 0; d < s->dims; d++) {
-        sluice_real *restrict x = sluice_real_column(v, s->position, d);
-        const sluice_real *restrict u = sluice_real_column(v, s->velocity, d);
-        if (s->has_transport) {
-            const sluice_real *restrict du = sluice_real_column(v, s->transport, d);
-            for (sluice_index i = begin; i < end; i++)
-                x[i] += kind[i] == SLUICE_KIND_FLUID ? step * (u[i] + du[i]) : 0;
-        } else {
-            for (sluice_index i = begin; i < end; i++)
-                x[i] += kind[i] == SLUICE_KIND_FLUID ? step * u[i] : 0;
-        }
-    }
 }
 
 static void predictor(void *context, const sluice_view *v, sluice_index begin, sluice_index end)
@@ -122,13 +61,13 @@ static void predictor(void *context, const sluice_view *v, sluice_index begin, s
     const sluice_real half = (sluice_real)(0.5 * s->dt);
     const uint8_t *restrict kind = v->kind;
     /* positions first: they use v^n */
-    move(s, v, begin, end, half);
-    for (uint32_t r = 0; r < s->rate_count; r++) {
-        const sluice_rate *rate = &s->rates[r];
+    sluice_integrand_move(&s->in, v, begin, end, half, s->in.position);
+    for (uint32_t r = 0; r < s->in.rate_count; r++) {
+        const sluice_rate *rate = &s->in.rates[r];
         const uint32_t kinds = rate->kinds;
         for (uint32_t c = 0; c < rate->state.components; c++) {
             sluice_real *restrict q = sluice_real_column(v, rate->state, c);
-            sluice_real *restrict q0 = sluice_real_column(v, s->previous[r], c);
+            sluice_real *restrict q0 = sluice_real_column(v, s->in.stored[r], c);
             const sluice_real *restrict dq = sluice_real_column(v, rate->rate, c);
 #pragma omp simd
             for (sluice_index i = begin; i < end; i++) {
@@ -144,12 +83,12 @@ static void corrector(void *context, const sluice_view *v, sluice_index begin, s
     const symplectic_state *s = context;
     const sluice_real dt = (sluice_real)s->dt, half = (sluice_real)(0.5 * s->dt);
     const uint8_t *restrict kind = v->kind;
-    for (uint32_t r = 0; r < s->rate_count; r++) {
-        const sluice_rate *rate = &s->rates[r];
+    for (uint32_t r = 0; r < s->in.rate_count; r++) {
+        const sluice_rate *rate = &s->in.rates[r];
         const uint32_t kinds = rate->kinds;
         for (uint32_t c = 0; c < rate->state.components; c++) {
             sluice_real *restrict q = sluice_real_column(v, rate->state, c);
-            const sluice_real *restrict q0 = sluice_real_column(v, s->previous[r], c);
+            const sluice_real *restrict q0 = sluice_real_column(v, s->in.stored[r], c);
             const sluice_real *restrict dq = sluice_real_column(v, rate->rate, c);
 #pragma omp simd
             for (sluice_index i = begin; i < end; i++)
@@ -157,7 +96,7 @@ static void corrector(void *context, const sluice_view *v, sluice_index begin, s
         }
     }
     /* positions last: they use v^{n+1} */
-    move(s, v, begin, end, half);
+    sluice_integrand_move(&s->in, v, begin, end, half, s->in.position);
 }
 
 static int symplectic_advance(void *state, sluice_host *host)

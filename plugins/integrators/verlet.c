@@ -35,10 +35,7 @@
  * symplectic: on an undamped oscillator its energy grows secularly, at the
  * rate given by the spectral radius of its per-cycle amplification matrix
  * (x1.0068 per period at omega dt = 2 pi / 64 with euler_every 40). */
-#include <stdio.h>
-#include <string.h>
-
-#include "plugin_util.h"
+#include "integrator_util.h"
 
 typedef struct verlet_config {
     int64_t euler_every;
@@ -48,14 +45,7 @@ typedef struct verlet_state {
     const sluice_api *api;
     uint32_t dims;
     int64_t euler_every;
-    sluice_field position, velocity;
-    int has_transport;
-    sluice_field transport;    /* transport_velocity_correction (XSPH), if declared */
-    int has_acceleration;
-    sluice_field acceleration; /* the rate of the velocity */
-    uint32_t rate_count;
-    sluice_rate *rates;
-    sluice_field *previous;    /* q^{n-1} of every rate */
+    sluice_integrand in;       /* stored: q^{n-1} of every rate */
     int64_t steps;             /* steps taken */
     double dt, dt_previous;
     int euler;                 /* this step is an Euler step */
@@ -97,44 +87,8 @@ static int verlet_create(const sluice_api *api, sluice_host *host, const void *c
 static int verlet_bind(void *state, sluice_host *host)
 {
     verlet_state *s = state;
-    const sluice_api *api = s->api;
-    if (api->field(host, "position", &s->position) != SLUICE_OK ||
-        api->field(host, "velocity", &s->velocity) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->has_transport =
-        sluice_util_optional_field(api, host, "transport_velocity_correction", &s->transport);
-    s->rate_count = api->rate_count(host);
-    s->rates = calloc(s->rate_count + 1, sizeof *s->rates);
-    s->previous = calloc(s->rate_count + 1, sizeof *s->previous);
-    if (!s->rates || !s->previous) {
-        api->error(host, "out of memory");
-        return SLUICE_ERROR;
-    }
-    for (uint32_t r = 0; r < s->rate_count; r++) {
-        if (api->rate(host, r, &s->rates[r]) != SLUICE_OK)
-            return SLUICE_ERROR;
-        if (strcmp(s->rates[r].state_name, "velocity") == 0) {
-            s->has_acceleration = 1;
-            s->acceleration = s->rates[r].rate;
-        }
-        /* q^{n-1}, reordered with the particles */
-        char name[256];
-        snprintf(name, sizeof name, "%s_previous", s->rates[r].state_name);
-        sluice_field_spec spec = {name, SLUICE_TYPE_REAL, s->rates[r].state.components, "",
-                                  SLUICE_READ | SLUICE_WRITE, SLUICE_FIELD_RESTART, NULL, 0,
-                                  "value one step back (Verlet integrator)"};
-        uint32_t count = api->field_count(host);
-        for (uint32_t f = 0; f < count; f++) {
-            sluice_field_spec info;
-            if (api->field_info(host, f, &info, NULL) == SLUICE_OK &&
-                strcmp(info.name, s->rates[r].state_name) == 0)
-                spec.units = info.units;
-        }
-        if (api->declare_field(host, &spec) != SLUICE_OK ||
-            api->field(host, name, &s->previous[r]) != SLUICE_OK)
-            return SLUICE_ERROR;
-    }
-    return SLUICE_OK;
+    return sluice_integrand_bind(&s->in, s->api, host, s->dims,
+                                 "value one step back (Verlet integrator)");
 }
 
 static void verlet_destroy(void *state)
@@ -142,8 +96,7 @@ static void verlet_destroy(void *state)
     verlet_state *s = state;
     if (!s)
         return;
-    free(s->rates);
-    free(s->previous);
+    sluice_integrand_free(&s->in);
     free(s);
 }
 
@@ -151,24 +104,16 @@ static void verlet_destroy(void *state)
 static void move(const verlet_state *s, const sluice_view *v, sluice_index begin,
                  sluice_index end)
 {
-    const sluice_real dt = (sluice_real)s->dt, half_dt2 = (sluice_real)(0.5 * s->dt * s->dt);
+    sluice_integrand_move(&s->in, v, begin, end, (sluice_real)s->dt, s->in.position);
+    if (!s->in.has_acceleration)
+        return;
+    const sluice_real half_dt2 = (sluice_real)(0.5 * s->dt * s->dt);
     const uint8_t *restrict kind = v->kind;
     for (uint32_t d = 0; d < s->dims; d++) {
-        sluice_real *restrict x = sluice_real_column(v, s->position, d);
-        const sluice_real *restrict u = sluice_real_column(v, s->velocity, d);
-        if (s->has_transport) {
-            const sluice_real *restrict du = sluice_real_column(v, s->transport, d);
-            for (sluice_index i = begin; i < end; i++)
-                x[i] += kind[i] == SLUICE_KIND_FLUID ? dt * (u[i] + du[i]) : 0;
-        } else {
-            for (sluice_index i = begin; i < end; i++)
-                x[i] += kind[i] == SLUICE_KIND_FLUID ? dt * u[i] : 0;
-        }
-        if (s->has_acceleration) {
-            const sluice_real *restrict a = sluice_real_column(v, s->acceleration, d);
-            for (sluice_index i = begin; i < end; i++)
-                x[i] += kind[i] == SLUICE_KIND_FLUID ? half_dt2 * a[i] : 0;
-        }
+        sluice_real *restrict x = sluice_real_column(v, s->in.position, d);
+        const sluice_real *restrict a = sluice_real_column(v, s->in.acceleration, d);
+        for (sluice_index i = begin; i < end; i++)
+            x[i] += kind[i] == SLUICE_KIND_FLUID ? half_dt2 * a[i] : 0;
     }
 }
 
@@ -177,12 +122,12 @@ static void step(void *context, const sluice_view *v, sluice_index begin, sluice
     const verlet_state *s = context;
     const uint8_t *restrict kind = v->kind;
     move(s, v, begin, end);
-    for (uint32_t r = 0; r < s->rate_count; r++) {
-        const sluice_rate *rate = &s->rates[r];
+    for (uint32_t r = 0; r < s->in.rate_count; r++) {
+        const sluice_rate *rate = &s->in.rates[r];
         const uint32_t kinds = rate->kinds;
         for (uint32_t c = 0; c < rate->state.components; c++) {
             sluice_real *restrict q = sluice_real_column(v, rate->state, c);
-            sluice_real *restrict q1 = sluice_real_column(v, s->previous[r], c);
+            sluice_real *restrict q1 = sluice_real_column(v, s->in.stored[r], c);
             const sluice_real *restrict dq = sluice_real_column(v, rate->rate, c);
             if (s->euler) {
                 const sluice_real dt = (sluice_real)s->dt;
