@@ -128,7 +128,7 @@ static int compare_ids(const void *a, const void *b)
 
 static int remember(monitor_state *s, sluice_id id)
 {
-    if (bsearch(&id, s->crossed_ids, s->crossed_count, sizeof id, compare_ids))
+    if (s->crossed_count && bsearch(&id, s->crossed_ids, s->crossed_count, sizeof id, compare_ids))
         return 0;
     if (s->crossed_count == s->crossed_capacity) {
         size_t capacity = s->crossed_capacity ? 2 * s->crossed_capacity : 64;
