@@ -9,10 +9,13 @@
  *  - 2D Poiseuille flow between DBC plates driven by a body force
  *    (configs/poiseuille_2d.yaml): the particles reach the steady state of the
  *    same discrete equations, and the transient and steady profiles converge
- *    to the analytic solution (Morris et al. 1997) under refinement;
+ *    to the analytic solution (Morris et al. 1997) under refinement; between
+ *    ghost-particle walls (no-slip) the steady profile is within 2 % of it
+ *    at 40 particles across;
  *  - the viscous time-step limit 0.125 h^2 / nu, and the published constant.
  * Setting SLUICE_POISEUILLE_STUDY="10 20 40 80" adds a test case `study`
- * that runs the Poiseuille flow at those resolutions (tools/poiseuille-study.sh). */
+ * that runs the Poiseuille flow at those resolutions (tools/poiseuille-study.sh);
+ * SLUICE_POISEUILLE_WALLS replaces the scene's `dbc: {}` line in it. */
 #include <math.h>
 
 #include "sim_util.h"
@@ -241,7 +244,10 @@ static double poiseuille_steady(double y)
  * wall rows (DBC layers at y = -(k + 1/2) dx and L + (k + 1/2) dx) have
  * u = 0. Steady state: nu sum_j K_ij (u_i - u_j) + F = 0, an N x N linear
  * system. `shift` offsets the neighbouring rows along x (sheared rows slide
- * past each other): the spread between shifts bounds that effect. */
+ * past each other): the spread between shifts bounds that effect. With
+ * `mirrored` the wall rows carry the mirrored velocity of ghost particles
+ * instead (wall row k behind a wall: u = -u of fluid row k from that wall;
+ * the ideal mirror, without the interpolation at the mirror points). */
 static double row_sum(sluice_sim *sim, double dy, double shift, double dx)
 {
     const double h = (double)sim->smoothing_length, support = (double)sim->support;
@@ -257,7 +263,8 @@ static double row_sum(sluice_sim *sim, double dy, double shift, double dx)
     return sum;
 }
 
-static void discrete_steady(sluice_sim *sim, int n, double dx, double shift, double *u)
+static void discrete_steady(sluice_sim *sim, int n, double dx, double shift, int mirrored,
+                            double *u)
 {
     double *a = calloc((size_t)n * (size_t)n, sizeof *a);
     ck_assert_ptr_nonnull(a);
@@ -272,13 +279,19 @@ static void discrete_steady(sluice_sim *sim, int n, double dx, double shift, dou
             a[(size_t)i * n + j] = -k;
         }
         for (int w = 0; (w + 1) * dx < support; w++) { /* rows within reach */
-            diagonal += row_sum(sim, yi + (w + 0.5) * dx, shift, dx);
-            diagonal += row_sum(sim, yi - P_L - (w + 0.5) * dx, shift, dx);
+            double bottom = row_sum(sim, yi + (w + 0.5) * dx, shift, dx);
+            double top = row_sum(sim, yi - P_L - (w + 0.5) * dx, shift, dx);
+            diagonal += bottom + top;
+            if (mirrored && w < n) { /* K (u_i - (-u_w)) */
+                a[(size_t)i * n + w] += bottom;
+                a[(size_t)i * n + (n - 1 - w)] += top;
+            }
         }
-        a[(size_t)i * n + i] = diagonal;
+        a[(size_t)i * n + i] += diagonal; /* the mirrored rows may include row i */
         u[i] = -P_F / P_NU;
     }
-    /* Gaussian elimination; the matrix is symmetric negative definite */
+    /* Gaussian elimination; the matrix is diagonally dominant (symmetric
+     * negative definite with walls at rest) */
     for (int k = 0; k < n; k++)
         for (int i = k + 1; i < n; i++) {
             double f = a[(size_t)i * n + k] / a[(size_t)k * n + k];
@@ -361,8 +374,10 @@ static double profile_error(sluice_sim *sim, int steady, double *max_vy, double 
     return sqrt(num / den);
 }
 
+/* `walls`: NULL for the scene's dbc, else the line that replaces `dbc: {}`
+ * (one line of YAML switches the wall scheme) */
 static poiseuille_result run_poiseuille(int across, const char *form, double t_end,
-                                        double t_transient)
+                                        double t_transient, const char *walls)
 {
     const double L = P_L, dx = L / across, Lx = P_COLUMNS * dx;
     /* configs/poiseuille_2d.yaml with this resolution, form and end time */
@@ -371,6 +386,16 @@ static poiseuille_result run_poiseuille(int across, const char *form, double t_e
     char *yaml = test_read_file(path);
     ck_assert_msg(yaml != NULL, "cannot read %s", path);
     free(path);
+    if (walls) {
+        const char *at = strstr(yaml, "  dbc: {}\n");
+        ck_assert_ptr_nonnull(at);
+        char *switched = NULL;
+        ck_assert_int_ge(asprintf(&switched, "%.*s  %s\n%s", (int)(at - yaml), yaml, walls,
+                                  at + strlen("  dbc: {}\n")),
+                         0);
+        free(yaml);
+        yaml = switched;
+    }
     char sets[10][160];
     snprintf(sets[0], sizeof sets[0], "particles.spacing=%.17g", dx);
     snprintf(sets[1], sizeof sets[1], "particles.smoothing_length_ratio=%g", h_ratio());
@@ -402,8 +427,8 @@ static poiseuille_result run_poiseuille(int across, const char *form, double t_e
     double *rows = malloc((size_t)across * sizeof *rows);
     double *parabola = malloc((size_t)across * sizeof *parabola);
     ck_assert(model && shifted && rows && parabola);
-    discrete_steady(sim, across, dx, 0, model);
-    discrete_steady(sim, across, dx, 0.5, shifted);
+    discrete_steady(sim, across, dx, 0, walls != NULL, model);
+    discrete_steady(sim, across, dx, 0.5, walls != NULL, shifted);
     for (int l = 0; l < across; l++)
         parabola[l] = poiseuille_steady((l + 0.5) * dx);
     res.model_error = row_difference(model, parabola, across);
@@ -434,15 +459,15 @@ static poiseuille_result run_poiseuille(int across, const char *form, double t_e
     ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
     sluice_sim_free(sim);
     fprintf(stderr,
-            "poiseuille %s, %d across, h = %g dx: %u particles, %lld steps, %.1f s\n"
+            "poiseuille %s, %s, %d across, h = %g dx: %u particles, %lld steps, %.1f s\n"
             "  L2 error vs series at t = %.3f s: %.4f; vs steady parabola at t = %.2f s: %.4f\n"
             "  discrete steady state of the same equations: %.4f from the parabola; the "
             "simulation differs from it by %.1e (row shift spread %.1e, transient left %.1e)\n"
             "  near-wall profile extrapolates to zero at y = %+.3f dx; max |v_y| = %.1e u_max\n",
-            form, across, h_ratio(), res.particles, (long long)res.steps, res.seconds,
-            res.transient_time, res.transient_error, t_end, res.steady_error, res.model_error,
-            res.model_difference, res.model_spread, res.transient_bound, res.wall_zero,
-            res.max_vy);
+            form, walls ? walls : "dbc walls", across, h_ratio(), res.particles,
+            (long long)res.steps, res.seconds, res.transient_time, res.transient_error, t_end,
+            res.steady_error, res.model_error, res.model_difference, res.model_spread,
+            res.transient_bound, res.wall_zero, res.max_vy);
     free(model);
     free(shifted);
     free(rows);
@@ -457,7 +482,7 @@ static void check_poiseuille(const char *form)
     const int across[3] = {10, 20, 40};
     poiseuille_result r[3];
     for (int k = 0; k < 3; k++)
-        r[k] = run_poiseuille(across[k], form, 1.5, 0.1);
+        r[k] = run_poiseuille(across[k], form, 1.5, 0.1, NULL);
     for (int k = 1; k < 3; k++)
         fprintf(stderr, "poiseuille %s: observed order from %d to %d across: steady %.2f, "
                         "transient %.2f\n",
@@ -483,7 +508,8 @@ static void check_poiseuille(const char *form)
      * fixed h/dx (1.6 %, see shear_wave). A ratio above 1.5 per halving of dx
      * (order > 0.58) is what the discrete model guarantees with margin (1.99
      * and 1.88 for h = 1.5 dx). The issue's 2 % at 40 across is not reachable
-     * with these walls (9.7 %): it is not asserted; see docs/validation.md. */
+     * with these walls (9.7 %): it is asserted with ghost-particle walls
+     * (poiseuille_ghost_walls); see docs/validation.md. */
     for (int k = 1; k < 3; k++) {
         ck_assert_msg(r[k - 1].steady_error / r[k].steady_error > 1.5,
                       "%s: no convergence from %d to %d across (%g, %g)", form, across[k - 1],
@@ -495,6 +521,44 @@ static void check_poiseuille(const char *form)
 }
 
 START_TEST(poiseuille) { check_poiseuille(forms[_i]); }
+END_TEST
+
+/* Issue 3's 2 % at 40 across, with the walls of seed 004: ghost particles
+ * (plugins/walls/mirror_walls.c) carrying the mirrored no-slip velocity
+ * v_b = -v_m put the no-slip on the wall line itself instead of O(dx) behind
+ * it (DBC), which removes the first-order wall error. What remains is the
+ * lattice error of the viscous term at fixed h/dx (1.6 % for h = 1.5 dx, see
+ * shear_wave) plus a wall error that falls with dx: the discrete steady state
+ * of ideal mirrored walls is 3.7, 2.1 and 1.7 % from the parabola at 10, 20
+ * and 40 across, so 2 % is reachable at 40 across and the observed order
+ * falls from about 1 towards 0 as the error approaches that floor. Asserted:
+ * the 2 %, an error that decreases with every refinement, and a layered flow.
+ * The order over three resolutions is printed (and 80 across in
+ * tools/poiseuille-study.sh with SCHEME=ghost_particles). */
+START_TEST(poiseuille_ghost_walls)
+{
+    const int across[3] = {10, 20, 40};
+    const char *walls = "ghost_particles: {slip: no_slip}";
+    poiseuille_result r[3];
+    for (int k = 0; k < 3; k++)
+        r[k] = run_poiseuille(across[k], "morris", 1.5, 0.1, walls);
+    for (int k = 1; k < 3; k++)
+        fprintf(stderr,
+                "poiseuille morris, ghost walls: observed order from %d to %d across: steady "
+                "%.2f, transient %.2f\n",
+                across[k - 1], across[k], log(r[k - 1].steady_error / r[k].steady_error) / log(2.0),
+                log(r[k - 1].transient_error / r[k].transient_error) / log(2.0));
+    for (int k = 0; k < 3; k++) {
+        ck_assert_msg(r[k].max_vy < 0.01, "ghost walls, %d across: |v_y| up to %g u_max",
+                      across[k], r[k].max_vy);
+        if (k > 0)
+            ck_assert_msg(r[k].steady_error < r[k - 1].steady_error,
+                          "ghost walls: no convergence from %d to %d across (%g, %g)",
+                          across[k - 1], across[k], r[k - 1].steady_error, r[k].steady_error);
+    }
+    ck_assert_msg(r[2].steady_error <= 0.02, "ghost walls, 40 across: L2 error %g",
+                  r[2].steady_error);
+}
 END_TEST
 
 /* tools/poiseuille-study.sh: the resolutions in SLUICE_POISEUILLE_STUDY,
@@ -514,7 +578,8 @@ START_TEST(poiseuille_study)
     }
     ck_assert_int_gt(n, 0);
     for (int k = 0; k < n; k++) {
-        poiseuille_result r = run_poiseuille(across[k], forms[_i], 1.5, 0.1);
+        poiseuille_result r =
+            run_poiseuille(across[k], forms[_i], 1.5, 0.1, getenv("SLUICE_POISEUILLE_WALLS"));
         fprintf(stdout, "study,%s,%g,%d,%u,%lld,%.1f,%.5f,%.5f,%.5f,%.2e,%.3f\n", forms[_i],
                 h_ratio(), across[k], r.particles, (long long)r.steps, r.seconds,
                 r.transient_error, r.steady_error, r.model_error, r.model_difference,
@@ -695,6 +760,7 @@ int main(void)
     tcase_set_timeout(p, 300);
     tcase_add_loop_test(p, shear_wave, 0, 2);
     tcase_add_loop_test(p, poiseuille, 0, 2);
+    tcase_add_test(p, poiseuille_ghost_walls);
     suite_add_tcase(s, p);
     TCase *t = tcase_create("time step");
     tcase_add_test(t, viscous_time_step);

@@ -11,16 +11,34 @@
 #
 #   tools/poiseuille-study.sh [BUILD_DIR] [ACROSS ...]   (default: build 10 20 40 80)
 #   H_RATIO=1.3 tools/poiseuille-study.sh ...            (h/dx; default 1.5)
+#   SCHEME=ghost_particles tools/poiseuille-study.sh ... (walls; default dbc)
 #
-# Writes runs/poiseuille-study/summary.csv (one line per form and resolution,
-# with the observed order against the previous resolution) and prints it.
+# SCHEME switches the walls' line of the scene: dbc (the scene's), or the
+# no-slip form of a mirror scheme: ghost_particles (slip: no_slip) or mdbc
+# (velocity: no_slip). With a mirror scheme the "discrete steady state" is
+# that of ideal mirrored walls (wall row k: u = -u of fluid row k).
+#
+# Writes runs/poiseuille-study/summary.csv (runs/poiseuille-study-SCHEME/ for
+# another SCHEME; one line per form and resolution, with the observed order
+# against the previous resolution) and prints it.
 set -eu
 cd "$(dirname "$0")/.."
 build=${1:-build}
 [ $# -gt 0 ] && shift
 across=${*:-10 20 40 80}
-out=${OUT:-runs/poiseuille-study}
+scheme=${SCHEME:-dbc}
+out=${OUT:-runs/poiseuille-study-$scheme}
+case $scheme in
+dbc) walls= ; out=${OUT:-runs/poiseuille-study} ;;
+ghost_particles) walls="ghost_particles: {slip: no_slip}" ;;
+mdbc) walls="mdbc: {velocity: no_slip}" ;;
+*) echo "SCHEME must be dbc, ghost_particles or mdbc" >&2; exit 2 ;;
+esac
 mkdir -p "$out"
+if [ -n "$walls" ]; then
+    SLUICE_POISEUILLE_WALLS=$walls
+    export SLUICE_POISEUILLE_WALLS
+fi
 SLUICE_POISEUILLE_STUDY="$across" SLUICE_POISEUILLE_H_RATIO="${H_RATIO:-1.5}" \
     SLUICE_PLUGIN_PATH="$PWD/$build/plugins" SLUICE_BUILD_DIR="$PWD/$build" \
     SLUICE_SOURCE_DIR="$PWD" CK_RUN_CASE=study \

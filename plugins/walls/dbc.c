@@ -1,27 +1,55 @@
 /* Dynamic boundary particles (DBC; Crespo et al. 2007, seed 002): each wall of
  * the scene that uses this scheme becomes layers of wall particles on the
- * lattice behind it. They take part in the continuity equation and the
- * equation of state like fluid particles but keep their position and zero
- * velocity; the pressure they build up as fluid approaches repels it.
- * Optionally their density is kept >= rho0 (at every evaluation, before the
- * equation of state) so that walls never attract. */
+ * lattice behind it (wall_layers.h). They take part in the continuity
+ * equation and the equation of state like fluid particles but keep their
+ * position and zero velocity; the pressure they build up as fluid approaches
+ * repels it. Optionally their density is kept >= rho0 (at every evaluation,
+ * before the equation of state) so that walls never attract. The clamp acts
+ * only on this scheme's own particles (recognised by id), so that a scene can
+ * mix dbc with other particle wall schemes.
+ *
+ * Prescribed motion (issue 4): one wall of the scheme, named by `moving_wall`
+ * (the wall's `name` in the scene), moves as a rigid body:
+ *     tau = t - start,
+ *     x(t) = x_rest + U tau + A (sin(2 pi f tau + phi) - sin(phi)),
+ *     v(t) = U + 2 pi f A cos(2 pi f tau + phi)        for t >= start,
+ *     x = x_rest, v = 0                                  before,
+ * with x_rest the particle's position from the scene's wall geometry. This is
+ * the law x0 + U tau + A sin(2 pi f tau + phi) with x0 = x_rest - A sin(phi),
+ * so that the wall does not jump at t = start. Positions and velocities are
+ * set from the law in before_step (right at the step's start whatever the
+ * hook order) and again in after_step (so that outputs, gauges and the state
+ * between steps are at the new time). The integrators never move wall
+ * particles; within a step the wall stays where it was at the step's start
+ * (the mid-step evaluation of two-stage integrators sees it there). */
 #include <math.h>
 #include <string.h>
 
 #include "plugin_util.h"
+#include "wall_layers.h"
 
 typedef struct dbc_config {
     int64_t layers;
     int clamp_density;
+    const char *moving_wall;
+    sluice_real velocity[3], amplitude[3];
+    sluice_real frequency, phase, start;
 } dbc_config;
 
 typedef struct dbc_state {
     const sluice_api *api;
-    const char *name;
     int64_t layers;
     int clamp;
+    uint32_t dims;
     sluice_real rho0, dx, h;
-    sluice_field density;
+    sluice_field density, position, velocity;
+    /* own particles: ids [first_id, first_id + count); the moving wall's are
+     * the last moving_count of them */
+    sluice_id first_id;
+    sluice_index count, fixed_count, moving_count;
+    sluice_real *rest; /* moving wall: rest positions, 3 reals per particle */
+    const char *moving_wall;
+    double velocity_law[3], amplitude[3], frequency, phase, start;
 } dbc_state;
 
 static const sluice_param_spec params[] = {
@@ -30,12 +58,26 @@ static const sluice_param_spec params[] = {
      "layers of wall particles behind each wall; 0: enough to cover the kernel support "
      "(ceil(2h/dx))",
      NULL, 0},
-    {"clamp_density", SLUICE_PARAM_BOOL, offsetof(dbc_config, clamp_density), "true", 0, 0, 0,
-     NULL,
+    {"clamp_density", SLUICE_PARAM_BOOL, offsetof(dbc_config, clamp_density), "true", 0, 0, 0, NULL,
      "keep wall-particle density >= rest density at every evaluation and after every step (no "
      "attraction)",
-     NULL,
-     0},
+     NULL, 0},
+    {"moving_wall", SLUICE_PARAM_STRING, offsetof(dbc_config, moving_wall), NULL, 0, 0,
+     SLUICE_PARAM_OPTIONAL, NULL,
+     "name of the one wall (geometry.walls[k].name, scheme dbc) that moves with the prescribed "
+     "law x_rest + U tau + A (sin(2 pi f tau + phase) - sin(phase)), tau = t - start; absent: "
+     "no wall moves",
+     NULL, 0},
+    {"velocity", SLUICE_PARAM_VECTOR, offsetof(dbc_config, velocity), "[0, 0] | [0, 0, 0]", 0, 0, 0,
+     "m s^-1", "U: constant velocity of the moving wall from t = start", NULL, SLUICE_LENGTH_DIM},
+    {"amplitude", SLUICE_PARAM_VECTOR, offsetof(dbc_config, amplitude), "[0, 0] | [0, 0, 0]", 0, 0,
+     0, "m", "A: displacement amplitude of the moving wall's oscillation", NULL, SLUICE_LENGTH_DIM},
+    {"frequency", SLUICE_PARAM_REAL, offsetof(dbc_config, frequency), "0", 0, 0,
+     SLUICE_PARAM_HAS_MIN, "Hz", "f: frequency of the oscillation", NULL, 0},
+    {"phase", SLUICE_PARAM_REAL, offsetof(dbc_config, phase), "0", 0, 0, 0, "rad",
+     "phase of the oscillation at t = start", NULL, 0},
+    {"start", SLUICE_PARAM_REAL, offsetof(dbc_config, start), "0", 0, 0, 0, "s",
+     "time the motion starts; the wall is at rest before", NULL, 0},
 };
 
 static const sluice_field_spec fields[] = {
@@ -52,11 +94,42 @@ static int dbc_create(const sluice_api *api, sluice_host *host, const void *conf
     s->api = api;
     s->layers = c->layers;
     s->clamp = c->clamp_density;
+    sluice_real dims = 0;
     if (sluice_util_constant(api, host, "rest_density", &s->rho0) != SLUICE_OK ||
         sluice_util_constant(api, host, "spacing", &s->dx) != SLUICE_OK ||
-        sluice_util_constant(api, host, "smoothing_length", &s->h) != SLUICE_OK) {
+        sluice_util_constant(api, host, "smoothing_length", &s->h) != SLUICE_OK ||
+        sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
+    }
+    s->dims = (uint32_t)dims;
+    int moves = 0;
+    for (uint32_t d = 0; d < s->dims; d++) {
+        s->velocity_law[d] = (double)c->velocity[d];
+        s->amplitude[d] = (double)c->amplitude[d];
+        moves |= c->velocity[d] != 0 || c->amplitude[d] != 0;
+    }
+    s->frequency = (double)c->frequency;
+    s->phase = (double)c->phase;
+    s->start = (double)c->start;
+    s->moving_wall = c->moving_wall && c->moving_wall[0] ? c->moving_wall : NULL;
+    if (moves && !s->moving_wall) {
+        api->error(host, "'velocity' or 'amplitude' is set but no 'moving_wall' names the wall "
+                         "that moves");
+        free(s);
+        return SLUICE_ERROR;
+    }
+    if (s->moving_wall) {
+        /* the moving wall's particles carry its velocity (continuity and
+         * viscosity read it); written in the hooks, not during evaluation */
+        const sluice_field_spec velocity = {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM,
+                                            "m s^-1", 0,
+                                            SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
+                                            "velocity"};
+        if (api->declare_field(host, &velocity) != SLUICE_OK) {
+            free(s);
+            return SLUICE_ERROR;
+        }
     }
     *state = s;
     return SLUICE_OK;
@@ -65,104 +138,120 @@ static int dbc_create(const sluice_api *api, sluice_host *host, const void *conf
 static int dbc_bind(void *state, sluice_host *host)
 {
     dbc_state *s = state;
-    sluice_real support = 2;
-    s->api->constant(host, "kernel_support", &support, 1);
     if (s->layers == 0)
-        s->layers = (int64_t)ceil(support * s->h / s->dx - 1e-9);
-    return s->api->field(host, "density", &s->density);
+        s->layers = sluice_wall_layers_default(s->api, host, s->h, s->dx);
+    if (s->api->field(host, "density", &s->density) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (s->moving_wall && (s->api->field(host, "position", &s->position) != SLUICE_OK ||
+                           s->api->field(host, "velocity", &s->velocity) != SLUICE_OK))
+        return SLUICE_ERROR;
+    return SLUICE_OK;
 }
 
 static void dbc_destroy(void *state)
 {
-    free(state);
+    dbc_state *s = state;
+    if (!s)
+        return;
+    free(s->rest);
+    free(s);
 }
 
-typedef struct point_key {
-    int64_t k[3];
-    uint32_t index;
-} point_key;
-
-static int compare_points(const void *a, const void *b)
+/* Sets the moving wall's particles to the law at time t. */
+static void apply_motion(const dbc_state *s, const sluice_view *v, double t)
 {
-    const point_key *x = a, *y = b;
-    for (int d = 0; d < 3; d++)
-        if (x->k[d] != y->k[d])
-            return x->k[d] < y->k[d] ? -1 : 1;
-    return 0;
+    const double tau = t - s->start, omega = 2 * SLUICE_PI * s->frequency;
+    double dx[3] = {0, 0, 0}, u[3] = {0, 0, 0};
+    if (tau >= 0) {
+        const double sine = sin(omega * tau + s->phase) - sin(s->phase);
+        const double cosine = omega * cos(omega * tau + s->phase);
+        for (uint32_t d = 0; d < s->dims; d++) {
+            dx[d] = s->velocity_law[d] * tau + s->amplitude[d] * sine;
+            u[d] = s->velocity_law[d] + s->amplitude[d] * cosine;
+        }
+    }
+    const sluice_id first = s->first_id + s->fixed_count;
+    for (uint32_t d = 0; d < s->dims; d++) {
+        sluice_real *restrict x = sluice_real_column(v, s->position, d);
+        sluice_real *restrict vel = sluice_real_column(v, s->velocity, d);
+        for (sluice_index i = 0; i < v->count; i++) {
+            const sluice_id k = v->id[i] - first; /* wraps for ids below first */
+            if (k < s->moving_count) {
+                x[i] = (sluice_real)((double)s->rest[3 * k + d] + dx[d]);
+                vel[i] = (sluice_real)u[d];
+            }
+        }
+    }
 }
 
 static int dbc_initialise(void *state, sluice_host *host)
 {
     dbc_state *s = state;
     const sluice_api *api = s->api;
-    sluice_real *all = NULL;
-    size_t count = 0;
-    uint32_t walls = api->wall_count(host);
-    for (uint32_t w = 0; w < walls; w++) {
-        const sluice_wall *wall = api->wall(host, w);
-        if (!wall || strcmp(wall->scheme, "dbc") != 0)
-            continue;
-        sluice_real *points = NULL;
-        sluice_index n = 0;
-        if (api->wall_layer_points(host, w, (sluice_real)s->layers * s->dx, &points, &n) !=
-            SLUICE_OK) {
-            free(all);
+    int64_t moving = -1;
+    if (s->moving_wall) {
+        uint32_t walls = api->wall_count(host);
+        for (uint32_t w = 0; w < walls; w++) {
+            const sluice_wall *wall = api->wall(host, w);
+            if (!wall || !wall->name || strcmp(wall->name, s->moving_wall) != 0)
+                continue;
+            if (moving >= 0) {
+                api->error(host,
+                           "moving_wall: several walls are named '%s' (one moving wall per "
+                           "scene)",
+                           s->moving_wall);
+                return SLUICE_ERROR;
+            }
+            if (strcmp(wall->scheme, "dbc") != 0) {
+                api->error(host, "moving_wall: wall '%s' uses the scheme '%s', not dbc",
+                           s->moving_wall, wall->scheme);
+                return SLUICE_ERROR;
+            }
+            moving = w;
+        }
+        if (moving < 0) {
+            api->error(host, "moving_wall: no wall is named '%s' (geometry.walls[k].name)",
+                       s->moving_wall);
             return SLUICE_ERROR;
         }
-        sluice_real *grown = realloc(all, (count + n) * 3 * sizeof *grown + 1);
-        if (!grown) {
-            api->release(points);
-            free(all);
+    }
+    sluice_wall_layers layers;
+    if (sluice_wall_layers_add(api, host, "dbc", (sluice_real)s->layers * s->dx, s->dx, moving,
+                               &layers) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->first_id = layers.first_id;
+    s->fixed_count = layers.fixed_count;
+    s->moving_count = layers.moving_count;
+    s->count = layers.fixed_count + layers.moving_count;
+    if (s->moving_wall) {
+        if (s->moving_count == 0) {
+            free(layers.positions);
+            api->error(host, "moving_wall: wall '%s' has no wall particles", s->moving_wall);
+            return SLUICE_ERROR;
+        }
+        s->rest = malloc((size_t)s->moving_count * 3 * sizeof *s->rest);
+        if (!s->rest) {
+            free(layers.positions);
             api->error(host, "out of memory");
             return SLUICE_ERROR;
         }
-        all = grown;
-        memcpy(all + 3 * count, points, (size_t)n * 3 * sizeof *points);
-        count += n;
-        api->release(points);
+        memcpy(s->rest, layers.positions + 3 * (size_t)s->fixed_count,
+               (size_t)s->moving_count * 3 * sizeof *s->rest);
+        apply_motion(s, api->view(host), api->view(host)->time);
     }
-    if (count == 0) {
-        free(all);
-        return SLUICE_OK;
-    }
-    /* walls that meet share lattice points: keep each once */
-    point_key *keys = malloc(count * sizeof *keys);
-    sluice_real *unique = malloc(count * 3 * sizeof *unique);
-    if (!keys || !unique) {
-        free(keys);
-        free(unique);
-        free(all);
-        api->error(host, "out of memory");
-        return SLUICE_ERROR;
-    }
-    const double q = 0.01 * (double)s->dx;
-    for (size_t i = 0; i < count; i++) {
-        for (int d = 0; d < 3; d++)
-            keys[i].k[d] = llround((double)all[3 * i + d] / q);
-        keys[i].index = (uint32_t)i;
-    }
-    qsort(keys, count, sizeof *keys, compare_points);
-    size_t kept = 0;
-    for (size_t i = 0; i < count; i++) {
-        if (i > 0 && compare_points(&keys[i - 1], &keys[i]) == 0)
-            continue;
-        memcpy(unique + 3 * kept, all + 3 * (size_t)keys[i].index, 3 * sizeof *unique);
-        kept++;
-    }
-    int rc = api->add_particles(host, SLUICE_KIND_WALL, unique, (sluice_index)kept, NULL);
-    free(keys);
-    free(unique);
-    free(all);
-    return rc;
+    free(layers.positions);
+    return SLUICE_OK;
 }
 
 static void clamp(void *context, const sluice_view *v, sluice_index begin, sluice_index end)
 {
     const dbc_state *s = context;
     sluice_real *restrict rho = sluice_real_column(v, s->density, 0);
+    const sluice_id *restrict id = v->id;
     const sluice_real rho0 = s->rho0;
+    const sluice_id first = s->first_id, count = s->count;
     for (sluice_index i = begin; i < end; i++)
-        if (v->kind[i] == SLUICE_KIND_WALL && rho[i] < rho0)
+        if (id[i] - first < count && rho[i] < rho0)
             rho[i] = rho0;
 }
 
@@ -176,19 +265,31 @@ static void dbc_particle(void *state, const sluice_view *v, sluice_index begin, 
         clamp(state, v, begin, end);
 }
 
+static int dbc_before_step(void *state, sluice_host *host)
+{
+    dbc_state *s = state;
+    if (s->moving_count) {
+        const sluice_view *v = s->api->view(host);
+        apply_motion(s, v, v->time);
+    }
+    return SLUICE_OK;
+}
+
 static int dbc_after_step(void *state, sluice_host *host)
 {
     dbc_state *s = state;
-    if (s->clamp) {
-        const sluice_view *v = s->api->view(host);
+    const sluice_view *v = s->api->view(host);
+    if (s->moving_count)
+        apply_motion(s, v, v->time);
+    if (s->clamp)
         s->api->parallel_for(host, v->count, clamp, s);
-    }
     return SLUICE_OK;
 }
 
 static const sluice_component components[] = {{
     .name = "dbc",
-    .summary = "dynamic boundary particles: layers of wall particles obeying continuity and EOS",
+    .summary = "dynamic boundary particles: layers of wall particles obeying continuity and EOS, "
+               "optionally one wall with prescribed motion",
     .reference = "Crespo, Gomez-Gesteira & Dalrymple (2007); seed 002",
     .dimensions = SLUICE_DIMS_ALL,
     .flags = SLUICE_COMPONENT_WALL_SCHEME,
@@ -203,7 +304,8 @@ static const sluice_component components[] = {{
     .initialise = dbc_initialise,
     .particle_kinds = SLUICE_KIND_MASK(SLUICE_KIND_WALL),
     .particle = dbc_particle,
+    .before_step = dbc_before_step,
     .after_step = dbc_after_step,
 }};
 
-SLUICE_DEFINE_LIBRARY("dbc", "1.1.0", "dynamic boundary particles", SLUICE_DIMS_ALL, components)
+SLUICE_DEFINE_LIBRARY("dbc", "1.2.0", "dynamic boundary particles", SLUICE_DIMS_ALL, components)
