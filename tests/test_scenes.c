@@ -289,12 +289,18 @@ END_TEST
 int main(void)
 {
     Suite *s = suite_create("scenes");
+    /* long physics runs: the release pass asserts them; the sanitizer pass
+     * skips the tag (tools/run-tests.sh) */
     TCase *tc = tcase_create("validation");
+    tcase_set_tags(tc, "validation");
     tcase_set_timeout(tc, 1800);
     tcase_add_test(tc, dam_break_2d_martin_moyce);
     tcase_add_test(tc, still_water_2d);
-    tcase_add_test(tc, dam_break_3d_runs);
-    tcase_add_test(tc, unstable_run_stops_with_diagnostic);
     suite_add_tcase(s, tc);
+    TCase *runs = tcase_create("runs");
+    tcase_set_timeout(runs, 1800);
+    tcase_add_test(runs, dam_break_3d_runs);
+    tcase_add_test(runs, unstable_run_stops_with_diagnostic);
+    suite_add_tcase(s, runs);
     return test_run_suite(s);
 }

@@ -1098,6 +1098,7 @@ int main(void)
     tcase_add_test(w, wall_shear_stress);
     suite_add_tcase(s, w);
     TCase *oc = tcase_create("open channel");
+    tcase_set_tags(oc, "validation"); /* long: release pass only */
     tcase_set_timeout(oc, 600);
     tcase_add_test(oc, open_channel);
     suite_add_tcase(s, oc);

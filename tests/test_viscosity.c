@@ -757,6 +757,7 @@ int main(void)
     tcase_add_loop_test(c, momentum_3d, 0, 2);
     suite_add_tcase(s, c);
     TCase *p = tcase_create("poiseuille");
+    tcase_set_tags(p, "validation"); /* long: release pass only */
     tcase_set_timeout(p, 300);
     tcase_add_loop_test(p, shear_wave, 0, 2);
     tcase_add_loop_test(p, poiseuille, 0, 2);

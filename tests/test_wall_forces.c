@@ -976,6 +976,7 @@ int main(void)
     tcase_add_test(single, time_step_limits);
     suite_add_tcase(s, single);
     TCase *still = tcase_create("still_water");
+    tcase_set_tags(still, "validation"); /* long: release pass only */
     tcase_add_test(still, still_water_penalty);
     tcase_add_test(still, still_water_repulsive);
     suite_add_tcase(s, still);

@@ -1002,6 +1002,7 @@ int main(void)
     tcase_add_test(motion, dbc_motion_errors);
     suite_add_tcase(s, motion);
     TCase *tank = tcase_create("still water");
+    tcase_set_tags(tank, "validation"); /* long: release pass only */
     tcase_set_timeout(tank, 300);
     tcase_add_test(tank, still_water_ghost_no_slip);
     tcase_add_test(tank, still_water_ghost_free_slip);

@@ -132,17 +132,22 @@ int sluice_particles_permute(sluice_particles *p, const sluice_index *order)
 
 void sluice_particles_compact(sluice_particles *p, const uint8_t *remove)
 {
-    sluice_index kept = 0;
-    for (sluice_index i = 0; i < p->count; i++) {
-        if (remove[i])
-            continue;
-        if (kept != i)
-            for (uint32_t c = 0; c < p->column_count; c++) {
-                size_t s = p->element_size[c];
-                memcpy((char *)p->columns[c] + (size_t)kept * s,
-                       (const char *)p->columns[c] + (size_t)i * s, s);
+    sluice_index first = 0;
+    while (first < p->count && !remove[first])
+        first++;
+    if (first == p->count)
+        return;
+    sluice_index kept = first;
+    /* column by column: one pass of element copies of a fixed size each */
+    for (uint32_t c = 0; c < p->column_count; c++) {
+        const size_t s = p->element_size[c];
+        char *base = p->columns[c];
+        kept = first;
+        for (sluice_index i = first; i < p->count; i++)
+            if (!remove[i]) {
+                memcpy(base + (size_t)kept * s, base + (size_t)i * s, s);
+                kept++;
             }
-        kept++;
     }
     p->count = kept;
 }

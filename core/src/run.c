@@ -254,11 +254,11 @@ static int watchdog(sluice_sim *sim)
     const sluice_index i = first;
     if (v->dimensions == 3)
         snprintf(who, sizeof who, "particle id %llu (%s, index %u) at (%.6g, %.6g, %.6g) m",
-                 (unsigned long long)v->id[i], v->kind[i] == SLUICE_KIND_FLUID ? "fluid" : "wall",
+                 (unsigned long long)v->id[i], sluice_kind_name(v->kind[i]),
                  i, (double)v->position[0][i], (double)v->position[1][i], (double)v->position[2][i]);
     else
         snprintf(who, sizeof who, "particle id %llu (%s, index %u) at (%.6g, %.6g) m",
-                 (unsigned long long)v->id[i], v->kind[i] == SLUICE_KIND_FLUID ? "fluid" : "wall",
+                 (unsigned long long)v->id[i], sluice_kind_name(v->kind[i]),
                  i, (double)v->position[0][i], (double)v->position[1][i]);
     if (what == 1) {
         const sluice_real *x = v->columns[bad_field->column + (int32_t)bad_component];
@@ -407,6 +407,9 @@ static int write_run_json(sluice_sim *sim, int status)
     fprintf(f, "  \"dimensions\": %u,\n", sim->scene.dimensions);
     fprintf(f, "  \"particles_initial\": %u,\n", sim->particles_initial);
     fprintf(f, "  \"particles_final\": %u,\n", sim->particles.count);
+    fprintf(f, "  \"particles_added\": %llu,\n",
+            (unsigned long long)(sim->next_id - sim->particles_initial));
+    fprintf(f, "  \"particles_removed\": %llu,\n", (unsigned long long)sim->removed);
     fprintf(f, "  \"steps\": %lld,\n", (long long)sim->step);
     fprintf(f, "  \"simulated_time\": %.12g,\n", sim->time);
     fprintf(f, "  \"end_time\": %.12g,\n", sim->end);

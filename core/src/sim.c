@@ -436,11 +436,85 @@ static int api_add_particles(sluice_host *host, uint8_t kind, const sluice_real 
         api_error(host, "adds particles of unknown kind %u", kind);
         return SLUICE_ERROR;
     }
+    if (sim->evaluating) {
+        api_error(host, "adds particles inside an evaluation; add them in a before-step or "
+                        "after-step hook");
+        return SLUICE_ERROR;
+    }
     if (add_particles(sim, kind, positions, NULL, NULL, count, first) != 0) {
         api_error(host, "cannot add %u particles: out of memory", count);
         return SLUICE_ERROR;
     }
     return SLUICE_OK;
+}
+
+static int check_indices(sluice_host *host, const char *what, const sluice_index *indices,
+                         sluice_index count)
+{
+    sluice_sim *sim = host->sim;
+    if (sim->phase < SLUICE_PHASE_INITIALISE || sim->evaluating) {
+        api_error(host, "%s outside a before-step or after-step hook", what);
+        return SLUICE_ERROR;
+    }
+    if (count > 0 && !indices) {
+        api_error(host, "%s without a list of particles", what);
+        return SLUICE_ERROR;
+    }
+    for (sluice_index k = 0; k < count; k++)
+        if (indices[k] >= sim->particles.count) {
+            api_error(host, "%s: particle index %u is out of range (%u particles)", what,
+                      indices[k], sim->particles.count);
+            return SLUICE_ERROR;
+        }
+    return SLUICE_OK;
+}
+
+static int api_remove_particles(sluice_host *host, const sluice_index *indices, sluice_index count)
+{
+    sluice_sim *sim = host->sim;
+    if (check_indices(host, "removes particles", indices, count) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (count == 0)
+        return SLUICE_OK;
+    uint8_t *remove = calloc(sim->particles.count, 1);
+    if (!remove) {
+        api_error(host, "cannot remove %u particles: out of memory", count);
+        return SLUICE_ERROR;
+    }
+    sluice_index distinct = 0;
+    for (sluice_index k = 0; k < count; k++) {
+        distinct += !remove[indices[k]];
+        remove[indices[k]] = 1;
+    }
+    sluice_particles_compact(&sim->particles, remove);
+    free(remove);
+    sim->removed += distinct;
+    sim->grid.valid = 0;
+    sluice_sim_refresh_view(sim);
+    return SLUICE_OK;
+}
+
+static int api_set_kind(sluice_host *host, const sluice_index *indices, sluice_index count,
+                        uint8_t kind)
+{
+    sluice_sim *sim = host->sim;
+    if (kind >= SLUICE_KIND_COUNT) {
+        api_error(host, "sets the unknown particle kind %u", kind);
+        return SLUICE_ERROR;
+    }
+    if (check_indices(host, "changes particle kinds", indices, count) != SLUICE_OK)
+        return SLUICE_ERROR;
+    uint8_t *k = sim->particles.columns[sim->kind.column];
+    for (sluice_index n = 0; n < count; n++)
+        k[indices[n]] = kind;
+    if (count > 0)
+        sim->grid.valid = 0;
+    return SLUICE_OK;
+}
+
+static uint64_t api_removed_count(sluice_host *host)
+{
+    return host->sim->removed;
 }
 
 static uint32_t api_wall_count(sluice_host *host)
@@ -518,11 +592,11 @@ static const char *describe_particle(const sluice_sim *sim, sluice_index i, char
     const sluice_view *v = &sim->view;
     if (v->dimensions == 3)
         snprintf(buffer, size, "particle id %llu (%s) at (%.6g, %.6g, %.6g) m",
-                 (unsigned long long)v->id[i], v->kind[i] == SLUICE_KIND_FLUID ? "fluid" : "wall",
+                 (unsigned long long)v->id[i], sluice_kind_name(v->kind[i]),
                  (double)v->position[0][i], (double)v->position[1][i], (double)v->position[2][i]);
     else
         snprintf(buffer, size, "particle id %llu (%s) at (%.6g, %.6g) m",
-                 (unsigned long long)v->id[i], v->kind[i] == SLUICE_KIND_FLUID ? "fluid" : "wall",
+                 (unsigned long long)v->id[i], sluice_kind_name(v->kind[i]),
                  (double)v->position[0][i], (double)v->position[1][i]);
     return buffer;
 }
@@ -555,7 +629,17 @@ static int update_neighbours(sluice_sim *sim)
     return SLUICE_OK;
 }
 
+static int evaluate(sluice_sim *sim);
+
 int sluice_sim_evaluate(sluice_sim *sim)
+{
+    sim->evaluating++;
+    int status = evaluate(sim);
+    sim->evaluating--;
+    return status;
+}
+
+static int evaluate(sluice_sim *sim)
 {
     if (update_neighbours(sim) != SLUICE_OK)
         return SLUICE_ERROR;
@@ -868,7 +952,10 @@ static int api_pair_pass(sluice_host *host)
     }
     if (update_neighbours(sim) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (sluice_pair_pass_run(&sim->engine, in->on_demand, &sim->grid, &sim->view) != 0) {
+    sim->evaluating++;
+    int failed = sluice_pair_pass_run(&sim->engine, in->on_demand, &sim->grid, &sim->view) != 0;
+    sim->evaluating--;
+    if (failed) {
         sluice_sim_fail(sim, "out of memory in the pair pass of '%s'", in->name);
         return SLUICE_ERROR;
     }
@@ -950,8 +1037,11 @@ static int api_point_pass(sluice_host *host, const sluice_real *points, sluice_i
         return SLUICE_OK;
     if (update_neighbours(sim) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (sluice_point_pass_run(&sim->engine, &sim->grid, &sim->view, points, count, kinds, fn,
-                              context) != 0) {
+    sim->evaluating++;
+    int failed = sluice_point_pass_run(&sim->engine, &sim->grid, &sim->view, points, count,
+                                       sluice_neighbour_kinds(kinds), fn, context) != 0;
+    sim->evaluating--;
+    if (failed) {
         sluice_sim_fail(sim, "out of memory in the point pass of '%s'",
                         instance_name(sim, host->instance));
         return SLUICE_ERROR;
@@ -996,6 +1086,9 @@ static const sluice_api api_table = {
     api_density_from_pressure,
     api_wall_nearest,
     api_point_pass,
+    api_remove_particles,
+    api_set_kind,
+    api_removed_count,
 };
 
 /* ------------------------------------------------------------ schedule -- */
@@ -1049,11 +1142,11 @@ static int fill_pair_pass(sluice_sim *sim, sluice_pair_pass *p, const uint32_t *
         t->component = c;
         t->state = sim->instances[v].state;
         t->target_kinds = c->target_kinds;
-        t->neighbour_kinds = c->neighbour_kinds;
+        t->neighbour_kinds = sluice_neighbour_kinds(c->neighbour_kinds);
         for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
             if (!(c->target_kinds & SLUICE_KIND_MASK(k)))
                 continue;
-            p->neighbour_mask[k] |= c->neighbour_kinds;
+            p->neighbour_mask[k] |= t->neighbour_kinds;
             if (c->flags & SLUICE_COMPONENT_NEEDS_KERNEL)
                 p->needs_kernel[k] = 1;
             for (uint32_t f = 0; f < sim->field_count; f++) {
@@ -1772,6 +1865,13 @@ static int load(sluice_sim *sim, const char *scene_path, const sluice_load_optio
                       "m") != 0;
     errors += publish(sim, SLUICE_CORE_INSTANCE, "rest_density", &sim->rest_density, 1,
                       "kg m^-3") != 0;
+    /* 1.4: the run's end time and the domain box */
+    sluice_real end_time = (sluice_real)scene->time.end;
+    errors += publish(sim, SLUICE_CORE_INSTANCE, "end_time", &end_time, 1, "s") != 0;
+    errors += publish(sim, SLUICE_CORE_INSTANCE, "domain_min", scene->domain.min,
+                      scene->dimensions, "m") != 0;
+    errors += publish(sim, SLUICE_CORE_INSTANCE, "domain_max", scene->domain.max,
+                      scene->dimensions, "m") != 0;
     if (errors)
         return errors;
 
@@ -1891,7 +1991,7 @@ static int load(sluice_sim *sim, const char *scene_path, const sluice_load_optio
                                 domain ? domain->column : 1,
                                 "a %s particle at %c = %g m lies outside the domain [%g, %g): "
                                 "enlarge domain.min/max to hold the geometry and its walls",
-                                sim->view.kind[i] == SLUICE_KIND_FLUID ? "fluid" : "wall", "xyz"[d],
+                                sluice_kind_name(sim->view.kind[i]), "xyz"[d],
                                 x, (double)scene->domain.min[d], (double)scene->domain.max[d]);
                 return 1;
             }

@@ -134,7 +134,25 @@ struct sluice_sim {
     size_t table_count;
     int progress, quiet;
     double last_progress;
+    int evaluating;   /* inside an evaluation or a pass: particles may not come or go */
+    uint64_t removed; /* particles removed since the start (api->remove_particles) */
 };
+
+/* The kinds a term that asked for `kinds` as neighbours receives: fluid
+ * includes the open-boundary buffers (plugin.h, SLUICE_KIND_OPEN). */
+static inline uint32_t sluice_neighbour_kinds(uint32_t kinds)
+{
+    return (kinds & SLUICE_KIND_MASK(SLUICE_KIND_FLUID)) ? kinds | SLUICE_KIND_MASK(SLUICE_KIND_OPEN)
+                                                         : kinds;
+}
+
+static inline const char *sluice_kind_name(uint8_t kind)
+{
+    return kind == SLUICE_KIND_FLUID ? "fluid"
+           : kind == SLUICE_KIND_WALL ? "wall"
+           : kind == SLUICE_KIND_OPEN ? "open-boundary"
+                                      : "unknown";
+}
 
 /* sim.c */
 void sluice_sim_refresh_view(sluice_sim *sim);

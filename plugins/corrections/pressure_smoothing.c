@@ -197,7 +197,7 @@ static inline void ps_pairs(const ps_state *s, const sluice_view *v, const sluic
         for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
             sluice_real weight = mj[k] / rhoj[k] * W[k];
             if (masked)
-                weight = kj[k] == SLUICE_KIND_FLUID ? weight : 0;
+                weight = kj[k] != SLUICE_KIND_WALL ? weight : 0;
             weights += weight;
             sum += weight * (pj[k] - phj[k]);
         }

@@ -135,7 +135,7 @@ static inline void xsph_pairs(const xsph_state *s, const sluice_view *v, const s
             sluice_real weight = smoothing ? mj[k] / rhoj[k] * W[k]
                                            : 2 * mj[k] / (rhoi + rhoj[k]) * W[k];
             if (masked)
-                weight = kj[k] == SLUICE_KIND_FLUID ? weight : 0;
+                weight = kj[k] != SLUICE_KIND_WALL ? weight : 0;
             sx += weight * (vxj[k] - vxi);
             sy += weight * (vyj[k] - vyi);
             if (dims == 3)

@@ -141,7 +141,7 @@ static inline void delta_pairs(const delta_state *s, const sluice_view *v,
             }
             const sluice_real r2 = r[k] * r[k];
             const sluice_real term = difference * r2 * F[k] / (r2 + eta2) * mj[k] / rhoj[k];
-            sum += kj[k] == SLUICE_KIND_FLUID ? term : 0;
+            sum += kj[k] != SLUICE_KIND_WALL ? term : 0;
         }
         rate[i] -= coefficient * sum;
     }

@@ -248,7 +248,7 @@ static inline void ts_tensor(const ts_state *s, const sluice_view *v, const slui
                 ez = dims == 3 ? Lzx * rx[k] + Lzy * ry[k] + Lzz * rz[k] : 0;
             }
             const sluice_real w = mj[k] * F[k];
-            const int wall = mirror && kj[k] != SLUICE_KIND_FLUID;
+            const int wall = mirror && kj[k] == SLUICE_KIND_WALL;
             const sluice_real wi = wall ? 2 * w : w;
             const sluice_real cj = wall ? 0 : 2 * nuj[k] / rhoj[k] * w;
             const sluice_real trj = (gxx[k] + gyy[k] + (dims == 3 ? gzz[k] : 0)) * third;
@@ -309,7 +309,7 @@ static inline void ts_eddy(const ts_state *s, const sluice_view *v, const sluice
             /* m_j 4 nubar_ij / (rho_i + rho_j) (r_ij . grad W) / (r^2 + eta^2),
              * 4 nubar_ij = 2 (nu_i + nu_j), r_ij . grad W = r^2 F */
             const sluice_real r2 = r[k] * r[k];
-            const sluice_real nu_j = mirror && kj[k] != SLUICE_KIND_FLUID ? nui : nuj[k];
+            const sluice_real nu_j = mirror && kj[k] == SLUICE_KIND_WALL ? nui : nuj[k];
             const sluice_real c =
                 2 * mj[k] * (nui + nu_j) / (rhoi + rhoj[k]) * r2 * F[k] / (r2 + eta2);
             sx += c * (vxi - vxj[k]);

@@ -33,7 +33,7 @@ extern "C" {
 #endif
 
 #define SLUICE_ABI_MAJOR 1
-#define SLUICE_ABI_MINOR 3
+#define SLUICE_ABI_MINOR 4
 #define SLUICE_PLUGIN_MAGIC 0x534c4349u /* "SLCI" */
 
 #if defined(__GNUC__)
@@ -56,11 +56,20 @@ enum { SLUICE_OK = 0, SLUICE_ERROR = -1 };
 
 /* ---------------------------------------------------------------- kinds -- */
 
-/* Every particle has a kind, owned by the core. Masks are (1u << kind). */
+/* Every particle has a kind, owned by the core. Masks are (1u << kind).
+ *
+ * SLUICE_KIND_OPEN (1.4) is fluid in an inlet or outlet buffer whose state
+ * (position, velocity, density) an open-boundary plugin imposes: the
+ * integrators do not move it and no term targets it unless it asks for the
+ * kind, but it is fluid to its neighbours. A component whose neighbour_kinds
+ * (or a point_pass whose kinds) include SLUICE_KIND_FLUID also receives
+ * SLUICE_KIND_OPEN neighbours: test a neighbour with `kind != SLUICE_KIND_WALL`
+ * (not `== SLUICE_KIND_FLUID`) where fluid is meant. */
 enum sluice_kind {
     SLUICE_KIND_FLUID = 0, /* moves with the flow, integrated */
     SLUICE_KIND_WALL = 1,  /* wall particle (dynamic boundary), fixed or prescribed motion */
-    SLUICE_KIND_COUNT = 2
+    SLUICE_KIND_OPEN = 2,  /* 1.4: fluid with an imposed state in an open-boundary buffer */
+    SLUICE_KIND_COUNT = 3
 };
 #define SLUICE_KIND_MASK(k) (1u << (k))
 #define SLUICE_KINDS_ALL ((1u << SLUICE_KIND_COUNT) - 1u)
@@ -294,8 +303,10 @@ typedef struct sluice_api {
     /* -- 1.0: particles and geometry. */
     const sluice_view *(*view)(sluice_host *host);
     /* Add `count` particles of `kind` at positions (3 reals each); mass,
-     * density (rest density) and id are set by the core, other fields are zero.
-     * Only in bind() or initialise(). Returns the index of the first one. */
+     * density (rest density) and a new id are set by the core, other fields
+     * are zero. In initialise(), and (1.4) between steps: in before_step or
+     * after_step hooks, never inside an evaluation. *first receives the index
+     * of the first one; indices of existing particles do not change. */
     int (*add_particles)(sluice_host *host, uint8_t kind, const sluice_real *positions,
                          sluice_index count, sluice_index *first);
     uint32_t (*wall_count)(sluice_host *host);
@@ -370,6 +381,20 @@ typedef struct sluice_api {
      * hook, never from a particle or pair callback. */
     int (*point_pass)(sluice_host *host, const sluice_real *points, sluice_index count,
                       uint32_t kinds, sluice_point_fn fn, void *context);
+
+    /* -- 1.4: particles that come and go (open boundaries). Only between
+     * steps (before_step / after_step hooks), never inside an evaluation.
+     * remove_particles: removes the particles at the listed indices (any
+     * order, no duplicates); the others keep their ids and order but move
+     * to lower indices, so indices held before the call are stale after it.
+     * Their ids are never reused. set_kind: changes the kind of the listed
+     * particles (e.g. SLUICE_KIND_OPEN -> SLUICE_KIND_FLUID when an inflow
+     * particle leaves the inlet buffer). Both fail on an index out of range. */
+    int (*remove_particles)(sluice_host *host, const sluice_index *indices, sluice_index count);
+    int (*set_kind)(sluice_host *host, const sluice_index *indices, sluice_index count,
+                    uint8_t kind);
+    /* Particles removed since the start of the run (all kinds). */
+    uint64_t (*removed_count)(sluice_host *host);
 } sluice_api;
 
 /* ----------------------------------------------------------- components -- */

@@ -1,0 +1,685 @@
+/* Open boundaries for channel flows along +x: `inlet` and `outlet`.
+ *
+ * Both work between steps (after_step hooks) on particles of the core's kind
+ * SLUICE_KIND_OPEN: fluid whose state the boundary imposes, which the
+ * integrators do not move and which every term sees as a fluid neighbour, so
+ * the fluid next to a boundary keeps a full kernel support.
+ *
+ * inlet (x < position): a lattice of open particles, spacing dx, `width`
+ * long (default: the kernel support rounded up to whole spacings), rows
+ * from the bed up to the inflow depth d1 (the vertical axis is the last one;
+ * in 3D the lateral axis y spans `span`). They move at the inflow velocity
+ * V1 (given, or q / d1 from the discharge q) with the hydrostatic density of
+ * depth d1 (through the scene's equation of state), and with k = 1.5 (I V1)^2
+ * and eps = c_mu^(3/4) k^(3/2) / (l_f d1) when a k-epsilon model is loaded
+ * (seed 004: I = 10 %, l = 0.5 d1). A particle that passes x = position
+ * becomes fluid with that state.
+ *   form buffer (seed 004, De Padova et al. 2017): the layer stays `width`
+ *     long: a new column enters at its back every dx / V1.
+ *   form block (seed 000, Jonsson et al. 2016): the whole inflow of the run
+ *     is placed at the start, V1 x end time (+ width) long, upstream of the
+ *     inlet (the domain must hold it); nothing is created later.
+ *
+ * outlet (x >= position): fluid that passes x = position
+ *   form free (seed 002, Lin et al. 2025): is removed;
+ *   form frozen (seed 000): becomes open with its velocity and density
+ *     frozen, moves on with that velocity, and is removed `width` past the
+ *     outlet or at the domain's edge;
+ *   form buffer (seed 004): becomes open with the imposed tailwater velocity
+ *     Vt and the hydrostatic density of the tailwater depth yt, moves at Vt,
+ *     and is removed `width` past the outlet.
+ *
+ * Each boundary writes the mass and x-momentum flux through its plane to a
+ * CSV (`inlet.csv`, `outlet.csv`): time, mass_flux (kg s^-1; per metre of
+ * width in 2D), discharge (mass_flux / rho0: m^2 s^-1 in 2D, m^3 s^-1 in 3D),
+ * momentum_flux (sum of m u_x crossing per second: N, per metre in 2D),
+ * mass_total (kg since the start), open_particles (in its buffer), averaged
+ * over each `interval`. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "plugin_util.h"
+
+enum { INLET_BUFFER = 0, INLET_BLOCK = 1 };
+enum { OUTLET_FREE = 0, OUTLET_FROZEN = 1, OUTLET_BUFFER = 2 };
+
+typedef struct boundary_config {
+    int form;
+    sluice_real position, bed, depth, velocity, discharge, width;
+    sluice_real span[3];
+    sluice_real turbulence_intensity, mixing_length_factor;
+    sluice_real interval;
+    const char *file;
+} boundary_config;
+
+typedef struct boundary_state {
+    const sluice_api *api;
+    int inlet, form;
+    uint32_t dims, vertical;
+    double position, bed, depth, velocity, width, dx, rho0, g, p_ref;
+    double span[2];
+    double turbulence_k, turbulence_epsilon, mixing_length;
+    double interval;
+    const char *file;
+    double domain_min[3], domain_max[3];
+    sluice_field velocity_field, density_field, mass_field, pressure_field;
+    int has_k, has_pressure;
+    sluice_field k_field, epsilon_field;
+    /* inlet lattice */
+    uint32_t rows, lanes;   /* vertical rows, lateral lanes (3D) */
+    double newest_column;   /* x of the last column created */
+    double *column_density; /* hydrostatic density per row */
+    sluice_real *scratch;   /* positions of a new column */
+    /* outlet tailwater density by height: computed per particle */
+    /* between-step bookkeeping */
+    double last_time;
+    sluice_index *to_convert, *to_remove;
+    sluice_index capacity;
+    /* fluxes */
+    double mass_interval, momentum_interval, mass_total, row_time;
+    int64_t written;
+    sluice_index open_count;
+    sluice_table *table;
+} boundary_state;
+
+static const sluice_param_spec inlet_params[] = {
+    {"form", SLUICE_PARAM_ENUM, offsetof(boundary_config, form), "buffer", 0, 0, 0, NULL,
+     "buffer: a 2h layer renewed every dx/V1 (seed 004); block: the run's whole inflow placed "
+     "upstream at the start (seed 000)",
+     "buffer|block", 0},
+    {"position", SLUICE_PARAM_REAL, offsetof(boundary_config, position), NULL, 0, 0, 0, "m",
+     "x of the inlet plane: fluid starts here, the buffer lies upstream of it", NULL, 0},
+    {"bed", SLUICE_PARAM_REAL, offsetof(boundary_config, bed), "0", 0, 0, 0, "m",
+     "elevation of the bed under the inlet (vertical axis: the last one)", NULL, 0},
+    {"depth", SLUICE_PARAM_REAL, offsetof(boundary_config, depth), NULL, 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "m", "inflow depth d1", NULL, 0},
+    {"velocity", SLUICE_PARAM_REAL, offsetof(boundary_config, velocity), NULL, 0, 0,
+     SLUICE_PARAM_OPTIONAL | SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "m s^-1",
+     "inflow velocity V1 (give this or discharge)", NULL, 0},
+    {"discharge", SLUICE_PARAM_REAL, offsetof(boundary_config, discharge), NULL, 0, 0,
+     SLUICE_PARAM_OPTIONAL | SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "m^2 s^-1",
+     "discharge per unit width q = V1 d1 (give this or velocity)", NULL, 0},
+    {"width", SLUICE_PARAM_REAL, offsetof(boundary_config, width), "0", 0, 0,
+     SLUICE_PARAM_HAS_MIN, "m",
+     "buffer length along x (0: the kernel support 2h rounded up to whole spacings)", NULL, 0},
+    {"span", SLUICE_PARAM_VECTOR, offsetof(boundary_config, span), "[0, 0]", 0, 0, 0, "m",
+     "3D: the lateral (y) extent [y_min, y_max] of the inflow", NULL, 2},
+    {"turbulence_intensity", SLUICE_PARAM_REAL, offsetof(boundary_config, turbulence_intensity),
+     "0.1", 0, 1, SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
+     "with k-epsilon: k = 1.5 (I V1)^2 at the inflow (seed 004: 10 %)", NULL, 0},
+    {"mixing_length_factor", SLUICE_PARAM_REAL,
+     offsetof(boundary_config, mixing_length_factor), "0.5", 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "1",
+     "with k-epsilon: eps = c_mu^(3/4) k^(3/2) / (factor d1) (seed 004: 0.5)", NULL, 0},
+    {"interval", SLUICE_PARAM_REAL, offsetof(boundary_config, interval), "0.05", 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between flux rows", NULL, 0},
+    {"file", SLUICE_PARAM_STRING, offsetof(boundary_config, file), "inlet.csv", 0, 0, 0, NULL,
+     "flux time series in the run directory", NULL, 0},
+};
+
+static const sluice_param_spec outlet_params[] = {
+    {"form", SLUICE_PARAM_ENUM, offsetof(boundary_config, form), "free", 0, 0, 0, NULL,
+     "free: removed past the plane (seed 002); frozen: state frozen, moves on, removed `width` "
+     "later (seed 000); buffer: tailwater velocity and depth imposed over `width` (seed 004)",
+     "free|frozen|buffer", 0},
+    {"position", SLUICE_PARAM_REAL, offsetof(boundary_config, position), NULL, 0, 0, 0, "m",
+     "x of the outlet plane", NULL, 0},
+    {"bed", SLUICE_PARAM_REAL, offsetof(boundary_config, bed), "0", 0, 0, 0, "m",
+     "buffer: elevation of the bed under the outlet", NULL, 0},
+    {"depth", SLUICE_PARAM_REAL, offsetof(boundary_config, depth), "0", 0, 0,
+     SLUICE_PARAM_HAS_MIN, "m", "buffer: tailwater depth yt", NULL, 0},
+    {"velocity", SLUICE_PARAM_REAL, offsetof(boundary_config, velocity), "0", 0, 0, 0,
+     "m s^-1", "buffer: tailwater velocity Vt", NULL, 0},
+    {"width", SLUICE_PARAM_REAL, offsetof(boundary_config, width), "0", 0, 0,
+     SLUICE_PARAM_HAS_MIN, "m",
+     "frozen, buffer: length of the outlet layer (0: the kernel support rounded up to whole "
+     "spacings)",
+     NULL, 0},
+    {"span", SLUICE_PARAM_VECTOR, offsetof(boundary_config, span), "[0, 0]", 0, 0, 0, "m",
+     "buffer, 3D: the lateral (y) extent [y_min, y_max] of the tailwater layer", NULL, 2},
+    {"interval", SLUICE_PARAM_REAL, offsetof(boundary_config, interval), "0.05", 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between flux rows", NULL, 0},
+    {"file", SLUICE_PARAM_STRING, offsetof(boundary_config, file), "outlet.csv", 0, 0, 0, NULL,
+     "flux time series in the run directory", NULL, 0},
+};
+
+static const sluice_field_spec boundary_fields[] = {
+    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", SLUICE_READ,
+     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity (imposed on open particles)"},
+    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ,
+     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "density (imposed on open particles)"},
+    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ, SLUICE_FIELD_RESTART, NULL, 0,
+     "particle mass"},
+};
+
+static int boundary_create(const sluice_api *api, sluice_host *host, const void *config,
+                           void **state, int inlet)
+{
+    const boundary_config *c = config;
+    boundary_state *s = sluice_util_state(api, host, sizeof *s);
+    if (!s)
+        return SLUICE_ERROR;
+    s->api = api;
+    s->inlet = inlet;
+    s->form = c->form;
+    sluice_real value;
+    if (sluice_util_constant(api, host, "dimensions", &value) != SLUICE_OK)
+        goto fail;
+    s->dims = (uint32_t)value;
+    s->vertical = s->dims - 1;
+    s->position = c->position;
+    s->bed = c->bed;
+    s->depth = c->depth;
+    s->width = c->width;
+    s->interval = c->interval;
+    s->file = c->file;
+    s->span[0] = c->span[0];
+    s->span[1] = c->span[1];
+    if (inlet) {
+        const int has_velocity = c->velocity > 0, has_discharge = c->discharge > 0;
+        if (has_velocity == has_discharge) {
+            api->error(host, "give exactly one of 'velocity' (V1, m/s) and 'discharge' (q, m^2/s)");
+            goto fail;
+        }
+        s->velocity = has_velocity ? c->velocity : c->discharge / c->depth;
+        if (s->dims == 3 && !(c->span[1] > c->span[0])) {
+            api->error(host, "a 3D inlet needs 'span: [y_min, y_max]' with y_max > y_min");
+            goto fail;
+        }
+        s->turbulence_k = 1.5 * pow(c->turbulence_intensity * s->velocity, 2);
+        s->mixing_length = c->mixing_length_factor * s->depth;
+        sluice_real x = c->position;
+        if (api->publish_constant(host, "inlet_position", &x, 1, "m") != SLUICE_OK)
+            goto fail;
+    } else {
+        s->velocity = c->velocity;
+        if (s->form == OUTLET_BUFFER && !(c->depth > 0)) {
+            api->error(host, "form 'buffer' needs the tailwater 'depth' (yt, m) > 0");
+            goto fail;
+        }
+        if (s->form == OUTLET_BUFFER && s->dims == 3 && !(c->span[1] > c->span[0])) {
+            api->error(host, "a 3D buffer outlet needs 'span: [y_min, y_max]' with y_max > y_min");
+            goto fail;
+        }
+    }
+    *state = s;
+    return SLUICE_OK;
+fail:
+    free(s);
+    return SLUICE_ERROR;
+}
+
+static int inlet_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
+{
+    return boundary_create(api, host, config, state, 1);
+}
+
+static int outlet_create(const sluice_api *api, sluice_host *host, const void *config,
+                         void **state)
+{
+    return boundary_create(api, host, config, state, 0);
+}
+
+static void boundary_destroy(void *state)
+{
+    boundary_state *s = state;
+    if (!s)
+        return;
+    free(s->column_density);
+    free(s->scratch);
+    free(s->to_convert);
+    free(s->to_remove);
+    free(s);
+}
+
+/* The density of the hydrostatic pressure at `depth_below` (m, clamped at 0)
+ * under a free surface, through the scene's equation of state. */
+static int hydrostatic_density(boundary_state *s, sluice_host *host, sluice_index n,
+                               const double *depth_below, double *density)
+{
+    for (sluice_index k = 0; k < n; k++) {
+        sluice_real p = (sluice_real)(s->p_ref + s->rho0 * s->g * fmax(depth_below[k], 0.0));
+        sluice_real rho;
+        if (s->api->density_from_pressure(host, 1, &p, &rho) != SLUICE_OK)
+            return SLUICE_ERROR;
+        density[k] = rho;
+    }
+    return SLUICE_OK;
+}
+
+static int boundary_bind(void *state, sluice_host *host)
+{
+    boundary_state *s = state;
+    const sluice_api *api = s->api;
+    static const char *const names[] = {"velocity", "density", "mass"};
+    sluice_field f[3];
+    if (sluice_util_fields(api, host, names, f, 3) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->velocity_field = f[0];
+    s->density_field = f[1];
+    s->mass_field = f[2];
+    s->has_pressure = sluice_util_optional_field(api, host, "pressure", &s->pressure_field);
+    sluice_real value, vec[3] = {0, 0, 0};
+    if (sluice_util_constant(api, host, "spacing", &value) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->dx = value;
+    if (sluice_util_constant(api, host, "rest_density", &value) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->rho0 = value;
+    sluice_real h, support_ratio;
+    if (sluice_util_constant(api, host, "smoothing_length", &h) != SLUICE_OK ||
+        sluice_util_constant(api, host, "kernel_support", &support_ratio) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (!(s->width > 0))
+        s->width = ceil((double)(support_ratio * h) / s->dx - 1e-9) * s->dx;
+    if (api->constant(host, "gravity", vec, 3) == 0) {
+        api->error(host, "needs gravity (the hydrostatic state of its open particles): load "
+                         "`gravity`");
+        return SLUICE_ERROR;
+    }
+    s->g = fabs((double)vec[s->vertical]);
+    s->p_ref = 0;
+    if (api->constant(host, "reference_pressure", &value, 1) == 1)
+        s->p_ref = value;
+    if (api->density_from_pressure(host, 0, NULL, NULL) != SLUICE_OK)
+        return SLUICE_ERROR;
+    sluice_real lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    api->constant(host, "domain_min", lo, 3);
+    api->constant(host, "domain_max", hi, 3);
+    for (int d = 0; d < 3; d++) {
+        s->domain_min[d] = lo[d];
+        s->domain_max[d] = hi[d];
+    }
+    if (s->inlet) {
+        if (s->position - s->width < s->domain_min[0] && s->form == INLET_BUFFER) {
+            api->error(host,
+                       "the inlet buffer [%g, %g) m reaches below domain.min x = %g m: move the "
+                       "inlet downstream or enlarge the domain",
+                       s->position - s->width, s->position, s->domain_min[0]);
+            return SLUICE_ERROR;
+        }
+        s->has_k = sluice_util_optional_field(api, host, "turbulent_kinetic_energy", &s->k_field) &&
+                   sluice_util_optional_field(api, host, "turbulent_dissipation_rate",
+                                              &s->epsilon_field);
+        if (s->has_k) {
+            /* the standard model's c_mu (seed 004) */
+            const double c_mu = 0.09;
+            s->turbulence_epsilon = pow(c_mu, 0.75) * pow(s->turbulence_k, 1.5) / s->mixing_length;
+        }
+    } else {
+        sluice_real x_in;
+        if (api->constant(host, "inlet_position", &x_in, 1) == 1 && !(x_in < s->position)) {
+            api->error(host, "the outlet (x = %g m) must lie downstream of the inlet (x = %g m)",
+                       s->position, (double)x_in);
+            return SLUICE_ERROR;
+        }
+        const double reach = s->position + (s->form == OUTLET_FREE ? 0 : s->width) + s->dx;
+        if (reach > s->domain_max[0]) {
+            api->error(host,
+                       "the outlet (x = %g m, layer %g m) needs the domain to reach x = %g m "
+                       "(domain.max x = %g m): fluid past it would leave the domain first",
+                       s->position, s->form == OUTLET_FREE ? 0 : s->width, reach,
+                       s->domain_max[0]);
+            return SLUICE_ERROR;
+        }
+    }
+    return SLUICE_OK;
+}
+
+static int reserve(boundary_state *s, sluice_host *host, sluice_index n)
+{
+    if (n <= s->capacity)
+        return SLUICE_OK;
+    sluice_index cap = n + n / 2 + 64;
+    sluice_index *a = realloc(s->to_convert, (size_t)cap * sizeof *a);
+    if (a)
+        s->to_convert = a;
+    sluice_index *b = a ? realloc(s->to_remove, (size_t)cap * sizeof *b) : NULL;
+    if (b)
+        s->to_remove = b;
+    if (!a || !b) {
+        s->api->error(host, "out of memory");
+        return SLUICE_ERROR;
+    }
+    s->capacity = cap;
+    return SLUICE_OK;
+}
+
+/* ---------------------------------------------------------------- inlet -- */
+
+/* Sets the imposed state (velocity, hydrostatic density by row, k and eps)
+ * of lattice particles [first, first + n). */
+static void impose_lattice_state(boundary_state *s, const sluice_view *v, sluice_index first,
+                          sluice_index n)
+{
+    sluice_real *rho = sluice_real_column(v, s->density_field, 0);
+    const sluice_real *z = v->position[s->vertical];
+    for (sluice_index i = first; i < first + n; i++) {
+        for (uint32_t d = 0; d < s->dims; d++)
+            sluice_real_column(v, s->velocity_field, d)[i] = d == 0 ? (sluice_real)s->velocity : 0;
+        uint32_t row = (uint32_t)floor(((double)z[i] - s->bed) / s->dx);
+        rho[i] = (sluice_real)s->column_density[row < s->rows ? row : s->rows - 1];
+        if (s->has_k) {
+            sluice_real_column(v, s->k_field, 0)[i] = (sluice_real)s->turbulence_k;
+            sluice_real_column(v, s->epsilon_field, 0)[i] = (sluice_real)s->turbulence_epsilon;
+        }
+    }
+}
+
+/* Adds one column of inflow particles at x. */
+static int add_column(boundary_state *s, sluice_host *host, double x)
+{
+    const sluice_index n = s->rows * s->lanes;
+    for (uint32_t l = 0; l < s->lanes; l++)
+        for (uint32_t r = 0; r < s->rows; r++) {
+            sluice_real *p = s->scratch + 3 * ((size_t)l * s->rows + r);
+            p[0] = (sluice_real)x;
+            p[1] = p[2] = 0;
+            p[s->vertical] = (sluice_real)(s->bed + (r + 0.5) * s->dx);
+            if (s->dims == 3)
+                p[1] = (sluice_real)(s->span[0] + (l + 0.5) * s->dx);
+        }
+    sluice_index first;
+    if (s->api->add_particles(host, SLUICE_KIND_OPEN, s->scratch, n, &first) != SLUICE_OK)
+        return SLUICE_ERROR;
+    impose_lattice_state(s, s->api->view(host), first, n);
+    return SLUICE_OK;
+}
+
+/* The lattice of a buffer: rows up to the depth, lanes across the span (3D),
+ * the hydrostatic density of each row. */
+static int setup_lattice(boundary_state *s, sluice_host *host)
+{
+    const sluice_api *api = s->api;
+    s->rows = (uint32_t)floor(s->depth / s->dx + 0.5);
+    if (s->rows < 1) {
+        api->error(host, "the depth %g m is less than half a particle spacing (%g m)", s->depth,
+                   s->dx);
+        return SLUICE_ERROR;
+    }
+    s->lanes = 1;
+    if (s->dims == 3) {
+        s->lanes = (uint32_t)floor((s->span[1] - s->span[0]) / s->dx + 0.5);
+        if (s->lanes < 1) {
+            api->error(host, "the span is narrower than a particle spacing");
+            return SLUICE_ERROR;
+        }
+    }
+    s->column_density = malloc(s->rows * sizeof *s->column_density);
+    double *below = malloc(s->rows * sizeof *below);
+    s->scratch = malloc((size_t)s->rows * s->lanes * 3 * sizeof *s->scratch);
+    if (!s->column_density || !below || !s->scratch) {
+        free(below);
+        api->error(host, "out of memory");
+        return SLUICE_ERROR;
+    }
+    for (uint32_t r = 0; r < s->rows; r++)
+        below[r] = s->depth - (r + 0.5) * s->dx;
+    int status = hydrostatic_density(s, host, s->rows, below, s->column_density);
+    free(below);
+    return status;
+}
+
+static int inlet_initialise(void *state, sluice_host *host)
+{
+    boundary_state *s = state;
+    const sluice_api *api = s->api;
+    if (setup_lattice(s, host) != SLUICE_OK)
+        return SLUICE_ERROR;
+    const double effective = s->rows * s->dx;
+    if (fabs(effective - s->depth) > 1e-6 * s->depth)
+        api->warning(host,
+                     "the inflow depth %g m is not a whole number of spacings: %u rows carry "
+                     "%g m (discharge %g m^2/s instead of %g)",
+                     s->depth, s->rows, effective, s->velocity * effective,
+                     s->velocity * s->depth);
+    double length = s->width;
+    if (s->form == INLET_BLOCK) {
+        sluice_real end;
+        if (sluice_util_constant(api, host, "end_time", &end) != SLUICE_OK)
+            return SLUICE_ERROR;
+        length = ceil(((double)end * s->velocity + s->width) / s->dx) * s->dx;
+        if (s->position - length < s->domain_min[0]) {
+            api->error(host,
+                       "the inflow block for %g s is %g m long and reaches x = %g m, below "
+                       "domain.min x = %g m: enlarge the domain (seed 000 placed the whole "
+                       "inflow upstream of the inlet)",
+                       (double)end, length, s->position - length, s->domain_min[0]);
+            return SLUICE_ERROR;
+        }
+    }
+    const uint32_t columns = (uint32_t)floor(length / s->dx + 0.5);
+    for (uint32_t m = 0; m < columns; m++)
+        if (add_column(s, host, s->position - length + (m + 0.5) * s->dx) != SLUICE_OK)
+            return SLUICE_ERROR;
+    s->newest_column = s->position - length + 0.5 * s->dx;
+    s->open_count = columns * s->rows * s->lanes;
+    api->info(host,
+              "%s inflow: V1 = %g m/s, d1 = %g m (%u rows), q = %g m^2/s, Fr1 = %g; %u columns "
+              "upstream of x = %g m",
+              s->form == INLET_BUFFER ? "buffer" : "block", s->velocity, effective, s->rows,
+              s->velocity * effective, s->velocity / sqrt(s->g * effective), columns,
+              s->position);
+    s->table = api->table_open(host, s->file,
+                               "time,mass_flux,discharge,momentum_flux,mass_total,open_particles");
+    return s->table ? SLUICE_OK : SLUICE_ERROR;
+}
+
+static int write_flux_row(boundary_state *s, double time)
+{
+    const double span = time - s->row_time;
+    double row[6] = {time,
+                     span > 0 ? s->mass_interval / span : 0,
+                     span > 0 ? s->mass_interval / span / s->rho0 : 0,
+                     span > 0 ? s->momentum_interval / span : 0,
+                     s->mass_total,
+                     (double)s->open_count};
+    if (s->api->table_row(s->table, row, 6) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->mass_interval = s->momentum_interval = 0;
+    s->row_time = time;
+    return SLUICE_OK;
+}
+
+/* Rows at multiples of the interval (the first at t = 0: zero flux). */
+static int flux_rows(boundary_state *s, sluice_host *host, double time)
+{
+    const double tolerance = 1e-9 * s->interval;
+    double next = (double)s->written * s->interval;
+    if (time + tolerance < next)
+        return SLUICE_OK;
+    if (write_flux_row(s, time) != SLUICE_OK)
+        return SLUICE_ERROR;
+    while ((double)s->written * s->interval <= time + tolerance)
+        s->written++;
+    s->api->request_time(host, (double)s->written * s->interval);
+    return SLUICE_OK;
+}
+
+static int inlet_after_step(void *state, sluice_host *host)
+{
+    boundary_state *s = state;
+    const sluice_api *api = s->api;
+    const sluice_view *v = api->view(host);
+    const double dt = v->time - s->last_time;
+    s->last_time = v->time;
+    if (reserve(s, host, v->count) != SLUICE_OK)
+        return SLUICE_ERROR;
+    /* move the inflow particles; those past the plane become fluid */
+    sluice_real *x = (sluice_real *)v->position[0];
+    const sluice_real *mass = sluice_real_column(v, s->mass_field, 0);
+    const sluice_real shift = (sluice_real)(s->velocity * dt);
+    const sluice_real plane = (sluice_real)s->position;
+    sluice_index converted = 0, open = 0;
+    for (sluice_index i = 0; i < v->count; i++) {
+        if (v->kind[i] != SLUICE_KIND_OPEN || !(x[i] < plane))
+            continue;
+        x[i] += shift;
+        if (x[i] >= plane) {
+            s->to_convert[converted++] = i;
+            s->mass_interval += mass[i];
+            s->momentum_interval += mass[i] * s->velocity;
+            s->mass_total += mass[i];
+        } else {
+            open++;
+        }
+    }
+    if (api->set_kind(host, s->to_convert, converted, SLUICE_KIND_FLUID) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->open_count = open;
+    s->newest_column += s->velocity * dt;
+    if (s->form == INLET_BUFFER) {
+        const double back = s->position - s->width;
+        while (s->newest_column - s->dx >= back - 1e-9 * s->dx) {
+            s->newest_column -= s->dx;
+            if (add_column(s, host, s->newest_column) != SLUICE_OK)
+                return SLUICE_ERROR;
+            s->open_count += s->rows * s->lanes;
+        }
+    }
+    return flux_rows(s, host, v->time);
+}
+
+/* --------------------------------------------------------------- outlet -- */
+
+static int outlet_initialise(void *state, sluice_host *host)
+{
+    boundary_state *s = state;
+    if (s->form == OUTLET_BUFFER) {
+        /* the tailwater layer exists from the start, so that the fluid
+         * reaching the outlet meets its imposed state, not a free end */
+        if (setup_lattice(s, host) != SLUICE_OK)
+            return SLUICE_ERROR;
+        const uint32_t columns = (uint32_t)floor(s->width / s->dx + 0.5);
+        for (uint32_t m = 0; m < columns; m++)
+            if (add_column(s, host, s->position + (m + 0.5) * s->dx) != SLUICE_OK)
+                return SLUICE_ERROR;
+        s->open_count = columns * s->rows * s->lanes;
+    }
+    s->table = s->api->table_open(
+        host, s->file, "time,mass_flux,discharge,momentum_flux,mass_total,open_particles");
+    return s->table ? SLUICE_OK : SLUICE_ERROR;
+}
+
+static int outlet_after_step(void *state, sluice_host *host)
+{
+    boundary_state *s = state;
+    const sluice_api *api = s->api;
+    const sluice_view *v = api->view(host);
+    const double dt = v->time - s->last_time;
+    s->last_time = v->time;
+    if (reserve(s, host, v->count) != SLUICE_OK)
+        return SLUICE_ERROR;
+    const sluice_real plane = (sluice_real)s->position;
+    const double end = s->position + s->width;
+    const sluice_real *mass = sluice_real_column(v, s->mass_field, 0);
+    sluice_real *rho = sluice_real_column(v, s->density_field, 0);
+    sluice_real *u[3] = {NULL, NULL, NULL};
+    sluice_real *pos[3] = {NULL, NULL, NULL};
+    for (uint32_t d = 0; d < s->dims; d++) {
+        u[d] = sluice_real_column(v, s->velocity_field, d);
+        pos[d] = (sluice_real *)v->position[d];
+    }
+    sluice_index converted = 0, removed = 0, open = 0;
+    for (sluice_index i = 0; i < v->count; i++) {
+        if (!(pos[0][i] >= plane))
+            continue;
+        if (v->kind[i] == SLUICE_KIND_OPEN) {
+            /* already in the outlet layer: move on with its (frozen or
+             * imposed) velocity; removed at the end of the layer or the
+             * domain */
+            int gone = 0;
+            for (uint32_t d = 0; d < s->dims; d++) {
+                pos[d][i] += u[d][i] * (sluice_real)dt;
+                const double lo = s->domain_min[d] + 0.5 * s->dx,
+                             hi = s->domain_max[d] - 0.5 * s->dx;
+                gone |= !((double)pos[d][i] >= lo && (double)pos[d][i] < hi);
+            }
+            gone |= (double)pos[0][i] >= end || !(pos[0][i] >= plane);
+            if (gone)
+                s->to_remove[removed++] = i;
+            else
+                open++;
+            continue;
+        }
+        if (v->kind[i] != SLUICE_KIND_FLUID)
+            continue;
+        s->mass_interval += mass[i];
+        s->momentum_interval += mass[i] * u[0][i];
+        s->mass_total += mass[i];
+        if (s->form == OUTLET_FREE) {
+            s->to_remove[removed++] = i;
+            continue;
+        }
+        s->to_convert[converted++] = i;
+        open++;
+        if (s->form == OUTLET_BUFFER) {
+            for (uint32_t d = 0; d < s->dims; d++)
+                u[d][i] = d == 0 ? (sluice_real)s->velocity : 0;
+            const double below = s->bed + s->depth - (double)pos[s->vertical][i];
+            double density;
+            if (hydrostatic_density(s, host, 1, &below, &density) != SLUICE_OK)
+                return SLUICE_ERROR;
+            rho[i] = (sluice_real)density;
+        }
+    }
+    /* kinds first (indices still valid), then removal */
+    if (api->set_kind(host, s->to_convert, converted, SLUICE_KIND_OPEN) != SLUICE_OK ||
+        api->remove_particles(host, s->to_remove, removed) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->open_count = open;
+    return flux_rows(s, host, v->time);
+}
+
+static int boundary_finish(void *state, sluice_host *host, int status)
+{
+    boundary_state *s = state;
+    (void)host;
+    (void)status;
+    if (s->table && s->last_time > s->row_time)
+        return write_flux_row(s, s->last_time);
+    return SLUICE_OK;
+}
+
+static const sluice_component components[] = {
+    {
+        .name = "inlet",
+        .summary = "inflow of depth d1 and velocity V1 (or discharge q) through a buffer of "
+                   "open particles (seed 004) or a pre-placed block (seed 000)",
+        .reference = "De Padova et al. (2017) section 2.3; Jonsson et al. (2016) section 2.3",
+        .dimensions = SLUICE_DIMS_ALL,
+        .params = inlet_params,
+        .param_count = SLUICE_COUNT(inlet_params),
+        .config_size = sizeof(boundary_config),
+        .fields = boundary_fields,
+        .field_count = SLUICE_COUNT(boundary_fields),
+        .create = inlet_create,
+        .destroy = boundary_destroy,
+        .bind = boundary_bind,
+        .initialise = inlet_initialise,
+        .after_step = inlet_after_step,
+        .finish = boundary_finish,
+    },
+    {
+        .name = "outlet",
+        .summary = "outflow: removed (seed 002), frozen (seed 000) or a tailwater buffer "
+                   "(seed 004), with the flux through the plane",
+        .reference = "Lin et al. (2025); Jonsson et al. (2016); De Padova et al. (2017)",
+        .dimensions = SLUICE_DIMS_ALL,
+        .params = outlet_params,
+        .param_count = SLUICE_COUNT(outlet_params),
+        .config_size = sizeof(boundary_config),
+        .fields = boundary_fields,
+        .field_count = SLUICE_COUNT(boundary_fields),
+        .create = outlet_create,
+        .destroy = boundary_destroy,
+        .bind = boundary_bind,
+        .initialise = outlet_initialise,
+        .after_step = outlet_after_step,
+        .finish = boundary_finish,
+    },
+};
+
+SLUICE_DEFINE_LIBRARY("open_boundaries", "1.0.0", "inlets and outlets for channel flows",
+                      SLUICE_DIMS_ALL, components)
