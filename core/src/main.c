@@ -156,11 +156,15 @@ static int command_check(int argc, char **argv)
     if (!sim)
         return 2;
     const sluice_view *v = sluice_sim_view(sim);
-    sluice_index fluid = 0;
+    sluice_index kinds[SLUICE_KIND_COUNT] = {0};
     for (sluice_index i = 0; i < v->count; i++)
-        fluid += v->kind[i] == SLUICE_KIND_FLUID;
-    printf("%s: valid %uD scene, %u particles (%u fluid, %u wall), end time %g s\n", a.scene,
-           v->dimensions, v->count, fluid, v->count - fluid, sluice_sim_end_time(sim));
+        kinds[v->kind[i] < SLUICE_KIND_COUNT ? v->kind[i] : 0]++;
+    char open[64] = "";
+    if (kinds[SLUICE_KIND_OPEN])
+        snprintf(open, sizeof open, ", %u open-boundary", kinds[SLUICE_KIND_OPEN]);
+    printf("%s: valid %uD scene, %u particles (%u fluid, %u wall%s), end time %g s\n", a.scene,
+           v->dimensions, v->count, kinds[SLUICE_KIND_FLUID], kinds[SLUICE_KIND_WALL], open,
+           sluice_sim_end_time(sim));
     sluice_sim_free(sim);
     return 0;
 }

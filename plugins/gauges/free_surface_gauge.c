@@ -1,0 +1,334 @@
+/* Free-surface gauges: the elevation eta (m) of the free surface above each of
+ * a list of horizontal positions, as a CSV time series.
+ *
+ * Method (kernel-sum threshold, the one of DualSPHysics' MeasureTool, used by
+ * seed 002, Lin et al. 2025, for its free-surface profiles): above each
+ * position a vertical column of sample points y_0 = bottom, ..., y_n = top
+ * (spacing at most `sample_spacing` dx) carries the kernel sum of the fluid
+ *
+ *   S(y) = sum_j V_j W(x - x_j),   V_j = m_j / rho_j   (no Shepard division),
+ *
+ * the fraction of the kernel support filled with fluid: 1 inside, 0 in the air
+ * and 1/2 on a flat free surface (W is symmetric: the half-space holds half
+ * of its unit integral). eta is the highest elevation where S crosses
+ * `threshold` (default 1/2) from above: the highest sample y_i with
+ * S_i >= threshold, refined by linear interpolation of S to the next sample,
+ *
+ *   eta = y_i + (S_i - threshold) / (S_i - S_i+1) (y_i+1 - y_i),
+ *
+ * (eta = top when the top sample is wet, nan when no sample is: no fluid
+ * above that position). Spray above the surface counts when its kernel sum
+ * reaches the threshold (a dense jet, not single droplets). The vertical is
+ * the last axis (y in 2D, z in 3D: the gravity plugin's convention); in 3D
+ * each position also needs its y (`lateral`). The state is the integrated one
+ * (position, mass, density): no evaluation is needed.
+ *
+ * Cost: one api->point_pass over every sample of every column per output row;
+ * the samples are bounded (MAX_SAMPLES; the scene is refused beyond it).
+ * Columns: time, eta_x<k> (m) for k = 0, 1, ... in the order of `positions`. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "plugin_util.h"
+
+#define MAX_SAMPLES 1000000u
+
+typedef struct fs_config {
+    sluice_real_list positions, lateral, bottom, top;
+    sluice_real sample_spacing, threshold, interval;
+    const char *file;
+} fs_config;
+
+typedef struct fs_state {
+    const sluice_api *api;
+    uint32_t dims;
+    sluice_index columns;
+    sluice_index *first;   /* columns + 1: the samples of column k are first[k] .. first[k+1]-1 */
+    sluice_real *points;   /* 3 reals per sample, bottom to top within a column */
+    double *sum;           /* kernel sum per sample */
+    double *row;
+    sluice_real threshold, interval;
+    const char *file;
+    sluice_field density, mass;
+    sluice_table *table;
+    int64_t written;
+} fs_state;
+
+static const sluice_param_spec params[] = {
+    {"positions", SLUICE_PARAM_REAL_LIST, offsetof(fs_config, positions), NULL, 0, 0, 0, "m",
+     "x of each gauge", NULL, 0},
+    {"lateral", SLUICE_PARAM_REAL_LIST, offsetof(fs_config, lateral), NULL, 0, 0,
+     SLUICE_PARAM_OPTIONAL, "m",
+     "3D only (required there): y of each gauge, one value for all or one per position", NULL,
+     0},
+    {"bottom", SLUICE_PARAM_REAL_LIST, offsetof(fs_config, bottom), NULL, 0, 0,
+     SLUICE_PARAM_OPTIONAL, "m",
+     "lowest sample elevation, one value for all or one per position (default: domain.min of "
+     "the vertical axis)",
+     NULL, 0},
+    {"top", SLUICE_PARAM_REAL_LIST, offsetof(fs_config, top), NULL, 0, 0, SLUICE_PARAM_OPTIONAL,
+     "m",
+     "highest sample elevation, one value for all or one per position (default: domain.max of "
+     "the vertical axis)",
+     NULL, 0},
+    {"sample_spacing", SLUICE_PARAM_REAL, offsetof(fs_config, sample_spacing), "0.25", 0, 1,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_HAS_MAX, "1",
+     "largest vertical distance between samples, in particle spacings dx", NULL, 0},
+    {"threshold", SLUICE_PARAM_REAL, offsetof(fs_config, threshold), "0.5", 0, 1,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_HAS_MAX |
+         SLUICE_PARAM_MAX_EXCLUSIVE,
+     "1", "kernel sum sum_j V_j W at the free surface (1/2 on a flat surface)", NULL, 0},
+    {"interval", SLUICE_PARAM_REAL, offsetof(fs_config, interval), "0.01", 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between samples", NULL, 0},
+    {"file", SLUICE_PARAM_STRING, offsetof(fs_config, file), "free_surface.csv", 0, 0, 0, NULL,
+     "output file in the run directory", NULL, 0},
+};
+
+static const sluice_field_spec fields[] = {
+    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", 0, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
+     NULL, 0, "mass density"},
+    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
+};
+
+static void fs_destroy(void *state)
+{
+    fs_state *s = state;
+    if (!s)
+        return;
+    free(s->first);
+    free(s->points);
+    free(s->sum);
+    free(s->row);
+    free(s);
+}
+
+/* Value k of a list given as one value for all or one per position. */
+static sluice_real per_position(const sluice_real_list *list, sluice_index k, sluice_real absent)
+{
+    if (list->count == 0)
+        return absent;
+    return list->values[list->count == 1 ? 0 : k];
+}
+
+static int check_list(const sluice_api *api, sluice_host *host, const char *name,
+                      const sluice_real_list *list, sluice_index columns)
+{
+    if (list->count > 1 && list->count != columns) {
+        api->error(host, "'%s' lists %u values for %u positions: give one value for all or one "
+                         "per position",
+                   name, list->count, columns);
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
+static int fs_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
+{
+    const fs_config *c = config;
+    if (c->positions.count == 0) {
+        api->error(host, "'positions' is empty: list the x of at least one gauge (m)");
+        return SLUICE_ERROR;
+    }
+    fs_state *s = sluice_util_state(api, host, sizeof *s);
+    if (!s)
+        return SLUICE_ERROR;
+    s->api = api;
+    sluice_real dims, dx, lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK ||
+        sluice_util_constant(api, host, "spacing", &dx) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    s->dims = (uint32_t)dims;
+    const uint32_t up = s->dims - 1; /* the vertical axis */
+    const int have_domain = api->constant(host, "domain_min", lo, 3) == s->dims &&
+                            api->constant(host, "domain_max", hi, 3) == s->dims;
+    s->columns = c->positions.count;
+    s->threshold = c->threshold;
+    s->interval = c->interval;
+    s->file = c->file;
+    if (check_list(api, host, "lateral", &c->lateral, s->columns) != SLUICE_OK ||
+        check_list(api, host, "bottom", &c->bottom, s->columns) != SLUICE_OK ||
+        check_list(api, host, "top", &c->top, s->columns) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    if (s->dims == 3 && c->lateral.count == 0) {
+        api->error(host, "needs 'lateral' in 3D: the y of each gauge (one value for all or one "
+                         "per position; z is vertical)");
+        free(s);
+        return SLUICE_ERROR;
+    }
+    if (s->dims == 2 && c->lateral.count > 0) {
+        api->error(host, "'lateral' (the y of each gauge) is for 3D scenes; in 2D give only "
+                         "'positions'");
+        free(s);
+        return SLUICE_ERROR;
+    }
+    if ((c->bottom.count == 0 || c->top.count == 0) && !have_domain) {
+        api->error(host, "needs 'bottom' and 'top' (the core does not publish the domain)");
+        free(s);
+        return SLUICE_ERROR;
+    }
+    s->first = calloc((size_t)s->columns + 1, sizeof *s->first);
+    if (!s->first) {
+        api->error(host, "out of memory");
+        fs_destroy(s);
+        return SLUICE_ERROR;
+    }
+    const double step = (double)c->sample_spacing * (double)dx;
+    size_t total = 0;
+    for (sluice_index k = 0; k < s->columns; k++) {
+        const double b = (double)per_position(&c->bottom, k, lo[up]);
+        const double t = (double)per_position(&c->top, k, hi[up]);
+        if (!(t > b)) {
+            api->error(host, "gauge %u at x = %g m: top %g m is not above bottom %g m", k,
+                       (double)c->positions.values[k], t, b);
+            fs_destroy(s);
+            return SLUICE_ERROR;
+        }
+        /* n intervals of at most `step` (a hair of slack so that a span that
+         * is a whole number of steps is not split into one more) */
+        const double intervals = ceil((t - b) / step * (1 - 1e-12));
+        total += (size_t)(intervals < 1 ? 1 : intervals) + 1;
+        if (!(intervals < MAX_SAMPLES) || total > MAX_SAMPLES) {
+            api->error(host, "the sample columns hold more than %u points (sample_spacing %g dx "
+                             "= %g m); narrow bottom/top or raise sample_spacing",
+                       MAX_SAMPLES, (double)c->sample_spacing, step);
+            fs_destroy(s);
+            return SLUICE_ERROR;
+        }
+        s->first[k + 1] = (sluice_index)total;
+    }
+    s->points = malloc(3 * total * sizeof *s->points);
+    s->sum = calloc(total, sizeof *s->sum);
+    s->row = calloc((size_t)s->columns + 1, sizeof *s->row);
+    if (!s->points || !s->sum || !s->row) {
+        api->error(host, "out of memory (%zu samples)", total);
+        fs_destroy(s);
+        return SLUICE_ERROR;
+    }
+    for (sluice_index k = 0; k < s->columns; k++) {
+        const double b = (double)per_position(&c->bottom, k, lo[up]);
+        const double t = (double)per_position(&c->top, k, hi[up]);
+        const sluice_index n = s->first[k + 1] - s->first[k] - 1;
+        for (sluice_index i = 0; i <= n; i++) {
+            sluice_real *p = s->points + 3 * ((size_t)s->first[k] + i);
+            p[0] = c->positions.values[k];
+            p[1] = s->dims == 3 ? per_position(&c->lateral, k, 0) : 0;
+            p[2] = 0;
+            p[up] = (sluice_real)(i == n ? t : b + (t - b) * (double)i / (double)n);
+        }
+    }
+    *state = s;
+    return SLUICE_OK;
+}
+
+static int fs_bind(void *state, sluice_host *host)
+{
+    fs_state *s = state;
+    if (s->api->field(host, "density", &s->density) != SLUICE_OK ||
+        s->api->field(host, "mass", &s->mass) != SLUICE_OK)
+        return SLUICE_ERROR;
+    return SLUICE_OK;
+}
+
+static int fs_initialise(void *state, sluice_host *host)
+{
+    fs_state *s = state;
+    size_t size = 16 + 24 * (size_t)s->columns;
+    char *header = malloc(size);
+    if (!header) {
+        s->api->error(host, "out of memory");
+        return SLUICE_ERROR;
+    }
+    size_t used = (size_t)snprintf(header, size, "time");
+    for (sluice_index k = 0; k < s->columns; k++)
+        used += (size_t)snprintf(header + used, size - used, ",eta_x%u", k);
+    s->table = s->api->table_open(host, s->file, header);
+    free(header);
+    return s->table ? SLUICE_OK : SLUICE_ERROR;
+}
+
+/* S = sum_j V_j W at each sample of the batch (fluid neighbours only). */
+static void kernel_sums(void *context, const sluice_view *v, const sluice_pair_batch *b)
+{
+    fs_state *s = context;
+    const sluice_real *restrict rho = sluice_real_column(v, s->density, 0);
+    const sluice_real *restrict m = sluice_real_column(v, s->mass, 0);
+    const sluice_real *restrict W = b->kernel;
+    const sluice_index *restrict nb = b->neighbour;
+    for (sluice_index t = 0; t < b->target_count; t++) {
+        double sum = 0;
+        for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
+            const sluice_index j = nb[k];
+            sum += (double)(m[j] / rho[j] * W[k]);
+        }
+        s->sum[b->target[t]] = sum;
+    }
+}
+
+/* The highest crossing of the threshold in one column, or nan. */
+static double surface(const fs_state *s, sluice_index k)
+{
+    const uint32_t up = s->dims - 1;
+    const sluice_index a = s->first[k], n = s->first[k + 1] - a;
+    const double *S = s->sum + a;
+    const sluice_real *p = s->points + 3 * (size_t)a;
+    const double c = (double)s->threshold;
+    if (S[n - 1] >= c)
+        return (double)p[3 * (size_t)(n - 1) + up];
+    for (sluice_index i = n - 1; i-- > 0;)
+        if (S[i] >= c) {
+            const double y0 = (double)p[3 * (size_t)i + up], y1 = (double)p[3 * (size_t)(i + 1) + up];
+            return y0 + (S[i] - c) / (S[i] - S[i + 1]) * (y1 - y0);
+        }
+    return NAN;
+}
+
+static int fs_after_step(void *state, sluice_host *host)
+{
+    fs_state *s = state;
+    const sluice_api *api = s->api;
+    const sluice_view *v = api->view(host);
+    const double tolerance = 1e-9 * (double)s->interval;
+    if (v->time + tolerance < (double)s->written * (double)s->interval)
+        return SLUICE_OK;
+    const sluice_index total = s->first[s->columns];
+    if (api->point_pass(host, s->points, total, SLUICE_KIND_MASK(SLUICE_KIND_FLUID), kernel_sums,
+                        s) != SLUICE_OK)
+        return SLUICE_ERROR;
+    v = api->view(host);
+    s->row[0] = v->time;
+    for (sluice_index k = 0; k < s->columns; k++)
+        s->row[1 + k] = surface(s, k);
+    if (api->table_row(s->table, s->row, s->columns + 1) != SLUICE_OK)
+        return SLUICE_ERROR;
+    while ((double)s->written * (double)s->interval <= v->time + tolerance)
+        s->written++;
+    api->request_time(host, (double)s->written * (double)s->interval);
+    return SLUICE_OK;
+}
+
+static const sluice_component components[] = {{
+    .name = "free_surface_gauge",
+    .summary = "free-surface elevation above listed positions (kernel-sum threshold on a "
+               "vertical column of samples), as a CSV time series",
+    .reference = "seed 002 (Lin et al. 2025) free-surface profiles; DualSPHysics MeasureTool "
+                 "(kernel sum 0.5)",
+    .dimensions = SLUICE_DIMS_ALL,
+    .params = params,
+    .param_count = SLUICE_COUNT(params),
+    .config_size = sizeof(fs_config),
+    .fields = fields,
+    .field_count = SLUICE_COUNT(fields),
+    .create = fs_create,
+    .destroy = fs_destroy,
+    .bind = fs_bind,
+    .initialise = fs_initialise,
+    .after_step = fs_after_step,
+}};
+
+SLUICE_DEFINE_LIBRARY("free_surface_gauge", "1.0.0", "free-surface elevation gauges",
+                      SLUICE_DIMS_ALL, components)

@@ -1,0 +1,389 @@
+/* Section gauges (2D): flow depth, discharge per unit width, depth-averaged
+ * velocity and Froude number at a list of cross-sections x = x_k, as a CSV
+ * time series. Hydraulic jumps are judged by these (seed 000, Jonsson et al.
+ * 2016, samples the sequent depth d2 at a section; seed 004, De Padova et al.
+ * 2017, classifies its jumps by Fr1 = V1 / sqrt(g y1)).
+ *
+ * Above each section a vertical column of samples y_0 = bed, ..., y_n = top
+ * (spacing at most `sample_spacing` dx) carries, from the fluid particles,
+ *
+ *   S(y) = sum_j V_j W(x - x_j)               (kernel sum, V_j = m_j / rho_j),
+ *   u(y) = sum_j V_j u_j W(x - x_j) / S(y)     (Shepard-normalised u_x).
+ *
+ *  - free-surface elevation eta: the highest crossing of S = `threshold` from
+ *    above, by linear interpolation of S between samples (as
+ *    free_surface_gauge: S = 1/2 on a flat surface);
+ *  - depth d = eta - b, with b the bed elevation of the section
+ *    (`bed_elevation`, where the column starts);
+ *  - discharge per unit width q = integral of u over the wet part of
+ *    [b, eta], wet meaning S >= threshold: the trapezoid rule on the samples,
+ *    each wet interval ending where S crosses the threshold (located by linear
+ *    interpolation of S, with u linearly interpolated there). Air pockets in
+ *    the column (S below the threshold, e.g. in an aerated roller) carry no
+ *    discharge; near the bed the fluid-only kernel sum is 1/2 at the edge of
+ *    the fluid, so the integral starts there;
+ *  - depth-averaged velocity U = q / d, Froude number Fr = |U| / sqrt(g d),
+ *    g the component of gravity along -y (|g| for vertical gravity; for
+ *    gravity tilted by a slope S_0, the bed-normal g cos(theta) that enters
+ *    the Froude number of a sloping channel).
+ * For a uniform u = U0 the Shepard velocity is U0 exactly and q = U0 times the
+ * wet length (U0 d when the fluid fills [b, eta]); for a linear u(y) the
+ * Shepard bias near the bed and near the surface (one-sided supports) is
+ * antisymmetric about mid-depth on a column symmetric about it, so q is then
+ * the exact integral of u over the wet part.
+ * A dry section (no wet sample) gives d = 0, q = 0, U = Fr = nan.
+ *
+ * 2D only: in 3D a section would be a width-averaged surface integral (not
+ * implemented; the scene is refused). The state is the integrated one
+ * (position, velocity, mass, density): no evaluation is needed. Cost: one
+ * api->point_pass over all samples per output row (bounded by MAX_SAMPLES).
+ * Columns: time, then for each section k: d_x<k> (m), q_x<k> (m^2 s^-1),
+ * U_x<k> (m s^-1), Fr_x<k> (1). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "plugin_util.h"
+
+#define MAX_SAMPLES 1000000u
+
+typedef struct sg_config {
+    sluice_real_list positions, bed_elevation, top;
+    sluice_real sample_spacing, threshold, interval;
+    const char *file;
+} sg_config;
+
+typedef struct sg_state {
+    const sluice_api *api;
+    sluice_index sections;
+    sluice_index *first;  /* sections + 1: samples of section k are first[k] .. first[k+1]-1 */
+    sluice_real *points;  /* 3 reals per sample, bed to top within a section */
+    double *sums;         /* 2 per sample: S, sum_j V_j u_j W */
+    double *row;
+    sluice_real *bed;
+    sluice_real threshold, interval;
+    double g;             /* gravity along -y, m s^-2 */
+    const char *file;
+    sluice_field density, mass, velocity;
+    sluice_table *table;
+    int64_t written;
+} sg_state;
+
+static const sluice_param_spec params[] = {
+    {"positions", SLUICE_PARAM_REAL_LIST, offsetof(sg_config, positions), NULL, 0, 0, 0, "m",
+     "x of each section", NULL, 0},
+    {"bed_elevation", SLUICE_PARAM_REAL_LIST, offsetof(sg_config, bed_elevation), "[0]", 0, 0, 0,
+     "m", "bed elevation b (the column starts there), one value for all or one per section",
+     NULL, 0},
+    {"top", SLUICE_PARAM_REAL_LIST, offsetof(sg_config, top), NULL, 0, 0, SLUICE_PARAM_OPTIONAL,
+     "m",
+     "highest sample elevation, one value for all or one per section (default: domain.max y)",
+     NULL, 0},
+    {"sample_spacing", SLUICE_PARAM_REAL, offsetof(sg_config, sample_spacing), "0.25", 0, 1,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_HAS_MAX, "1",
+     "largest vertical distance between samples, in particle spacings dx", NULL, 0},
+    {"threshold", SLUICE_PARAM_REAL, offsetof(sg_config, threshold), "0.5", 0, 1,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_HAS_MAX |
+         SLUICE_PARAM_MAX_EXCLUSIVE,
+     "1", "kernel sum sum_j V_j W at the free surface (1/2 on a flat surface); wet above it",
+     NULL, 0},
+    {"interval", SLUICE_PARAM_REAL, offsetof(sg_config, interval), "0.01", 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between samples", NULL, 0},
+    {"file", SLUICE_PARAM_STRING, offsetof(sg_config, file), "sections.csv", 0, 0, 0, NULL,
+     "output file in the run directory", NULL, 0},
+};
+
+static const sluice_field_spec fields[] = {
+    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", 0,
+     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
+    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", 0, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
+     NULL, 0, "mass density"},
+    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
+};
+
+static void sg_destroy(void *state)
+{
+    sg_state *s = state;
+    if (!s)
+        return;
+    free(s->first);
+    free(s->points);
+    free(s->sums);
+    free(s->row);
+    free(s->bed);
+    free(s);
+}
+
+static sluice_real per_section(const sluice_real_list *list, sluice_index k, sluice_real absent)
+{
+    if (list->count == 0)
+        return absent;
+    return list->values[list->count == 1 ? 0 : k];
+}
+
+static int check_list(const sluice_api *api, sluice_host *host, const char *name,
+                      const sluice_real_list *list, sluice_index sections)
+{
+    if (list->count > 1 && list->count != sections) {
+        api->error(host, "'%s' lists %u values for %u sections: give one value for all or one "
+                         "per section",
+                   name, list->count, sections);
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
+static int sg_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
+{
+    const sg_config *c = config;
+    if (c->positions.count == 0) {
+        api->error(host, "'positions' is empty: list the x of at least one section (m)");
+        return SLUICE_ERROR;
+    }
+    sluice_real dims, dx, lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK ||
+        sluice_util_constant(api, host, "spacing", &dx) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (dims != 2) {
+        api->error(host, "measures 2D sections only (a 3D section would need a width average)");
+        return SLUICE_ERROR;
+    }
+    const int have_domain =
+        api->constant(host, "domain_min", lo, 3) == 2 && api->constant(host, "domain_max", hi, 3) == 2;
+    if (check_list(api, host, "bed_elevation", &c->bed_elevation, c->positions.count) != SLUICE_OK ||
+        check_list(api, host, "top", &c->top, c->positions.count) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (c->bed_elevation.count == 0) {
+        api->error(host, "'bed_elevation' is empty: give one value for all sections or one per "
+                         "section (m)");
+        return SLUICE_ERROR;
+    }
+    if (c->top.count == 0 && !have_domain) {
+        api->error(host, "needs 'top' (the core does not publish the domain)");
+        return SLUICE_ERROR;
+    }
+    sg_state *s = sluice_util_state(api, host, sizeof *s);
+    if (!s)
+        return SLUICE_ERROR;
+    s->api = api;
+    s->sections = c->positions.count;
+    s->threshold = c->threshold;
+    s->interval = c->interval;
+    s->file = c->file;
+    s->first = calloc((size_t)s->sections + 1, sizeof *s->first);
+    s->bed = malloc((size_t)s->sections * sizeof *s->bed);
+    if (!s->first || !s->bed) {
+        api->error(host, "out of memory");
+        sg_destroy(s);
+        return SLUICE_ERROR;
+    }
+    const double step = (double)c->sample_spacing * (double)dx;
+    size_t total = 0;
+    for (sluice_index k = 0; k < s->sections; k++) {
+        const double b = (double)per_section(&c->bed_elevation, k, 0);
+        const double t = (double)per_section(&c->top, k, hi[1]);
+        s->bed[k] = (sluice_real)b;
+        if (!(t > b)) {
+            api->error(host, "section %u at x = %g m: top %g m is not above the bed %g m", k,
+                       (double)c->positions.values[k], t, b);
+            sg_destroy(s);
+            return SLUICE_ERROR;
+        }
+        const double intervals = ceil((t - b) / step * (1 - 1e-12));
+        total += (size_t)(intervals < 1 ? 1 : intervals) + 1;
+        if (!(intervals < MAX_SAMPLES) || total > MAX_SAMPLES) {
+            api->error(host, "the sample columns hold more than %u points (sample_spacing %g dx "
+                             "= %g m); lower top or raise sample_spacing",
+                       MAX_SAMPLES, (double)c->sample_spacing, step);
+            sg_destroy(s);
+            return SLUICE_ERROR;
+        }
+        s->first[k + 1] = (sluice_index)total;
+    }
+    s->points = malloc(3 * total * sizeof *s->points);
+    s->sums = calloc(2 * total, sizeof *s->sums);
+    s->row = calloc(4 * (size_t)s->sections + 1, sizeof *s->row);
+    if (!s->points || !s->sums || !s->row) {
+        api->error(host, "out of memory (%zu samples)", total);
+        sg_destroy(s);
+        return SLUICE_ERROR;
+    }
+    for (sluice_index k = 0; k < s->sections; k++) {
+        const double b = (double)s->bed[k];
+        const double t = (double)per_section(&c->top, k, hi[1]);
+        const sluice_index n = s->first[k + 1] - s->first[k] - 1;
+        for (sluice_index i = 0; i <= n; i++) {
+            sluice_real *p = s->points + 3 * ((size_t)s->first[k] + i);
+            p[0] = c->positions.values[k];
+            p[1] = (sluice_real)(i == n ? t : b + (t - b) * (double)i / (double)n);
+            p[2] = 0;
+        }
+    }
+    *state = s;
+    return SLUICE_OK;
+}
+
+static int sg_bind(void *state, sluice_host *host)
+{
+    sg_state *s = state;
+    const sluice_api *api = s->api;
+    static const char *const names[] = {"density", "mass", "velocity"};
+    sluice_field f[3];
+    if (sluice_util_fields(api, host, names, f, 3) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->density = f[0];
+    s->mass = f[1];
+    s->velocity = f[2];
+    sluice_real g[3] = {0, 0, 0};
+    if (api->constant(host, "gravity", g, 3) < 2) {
+        api->error(host, "needs the constant 'gravity' for the Froude number: load the gravity "
+                         "plugin");
+        return SLUICE_ERROR;
+    }
+    s->g = -(double)g[1];
+    if (!(s->g > 0)) {
+        api->error(host, "gravity (%g, %g) m s^-2 has no downward (-y) component: no Froude "
+                         "number",
+                   (double)g[0], (double)g[1]);
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
+static int sg_initialise(void *state, sluice_host *host)
+{
+    sg_state *s = state;
+    size_t size = 16 + 64 * (size_t)s->sections;
+    char *header = malloc(size);
+    if (!header) {
+        s->api->error(host, "out of memory");
+        return SLUICE_ERROR;
+    }
+    size_t used = (size_t)snprintf(header, size, "time");
+    for (sluice_index k = 0; k < s->sections; k++)
+        used += (size_t)snprintf(header + used, size - used, ",d_x%u,q_x%u,U_x%u,Fr_x%u", k, k, k,
+                                 k);
+    s->table = s->api->table_open(host, s->file, header);
+    free(header);
+    return s->table ? SLUICE_OK : SLUICE_ERROR;
+}
+
+/* S and sum_j V_j u_j W at each sample of the batch (fluid neighbours). */
+static void section_sums(void *context, const sluice_view *v, const sluice_pair_batch *b)
+{
+    sg_state *s = context;
+    const sluice_real *restrict rho = sluice_real_column(v, s->density, 0);
+    const sluice_real *restrict m = sluice_real_column(v, s->mass, 0);
+    const sluice_real *restrict u = sluice_real_column(v, s->velocity, 0);
+    const sluice_real *restrict W = b->kernel;
+    const sluice_index *restrict nb = b->neighbour;
+    for (sluice_index t = 0; t < b->target_count; t++) {
+        double sum = 0, flux = 0;
+        for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
+            const sluice_index j = nb[k];
+            const double w = (double)(m[j] / rho[j] * W[k]);
+            sum += w;
+            flux += w * (double)u[j];
+        }
+        s->sums[2 * (size_t)b->target[t]] = sum;
+        s->sums[2 * (size_t)b->target[t] + 1] = flux;
+    }
+}
+
+/* d, q, U, Fr of section k from its samples. */
+static void measure(const sg_state *s, sluice_index k, double *out)
+{
+    const sluice_index a = s->first[k], n = s->first[k + 1] - a;
+    const double *sums = s->sums + 2 * (size_t)a;
+    const sluice_real *p = s->points + 3 * (size_t)a;
+    const double c = (double)s->threshold;
+#define S_(i) sums[2 * (size_t)(i)]
+#define U_(i) (S_(i) > 0 ? sums[2 * (size_t)(i) + 1] / S_(i) : NAN)
+#define Y_(i) ((double)p[3 * (size_t)(i) + 1])
+    double eta = NAN;
+    if (S_(n - 1) >= c)
+        eta = Y_(n - 1);
+    else
+        for (sluice_index i = n - 1; i-- > 0;)
+            if (S_(i) >= c) {
+                eta = Y_(i) + (S_(i) - c) / (S_(i) - S_(i + 1)) * (Y_(i + 1) - Y_(i));
+                break;
+            }
+    if (isnan(eta)) {
+        out[0] = 0;
+        out[1] = 0;
+        out[2] = NAN;
+        out[3] = NAN;
+        return;
+    }
+    /* trapezoid over the wet part; above eta nothing is wet by its definition */
+    double q = 0;
+    for (sluice_index i = 0; i + 1 < n; i++) {
+        const int wet0 = S_(i) >= c, wet1 = S_(i + 1) >= c;
+        const double dy = Y_(i + 1) - Y_(i);
+        if (wet0 && wet1) {
+            q += 0.5 * (U_(i) + U_(i + 1)) * dy;
+        } else if (wet0 || wet1) {
+            const sluice_index w = wet0 ? i : i + 1, d = wet0 ? i + 1 : i;
+            const double theta = (S_(w) - c) / (S_(w) - S_(d));
+            const double uw = U_(w), ud = S_(d) > 0 ? U_(d) : uw;
+            const double uc = uw + theta * (ud - uw);
+            q += 0.5 * (uw + uc) * theta * dy;
+        }
+    }
+#undef S_
+#undef U_
+#undef Y_
+    const double depth = eta - (double)s->bed[k];
+    const double U = depth > 0 ? q / depth : NAN;
+    out[0] = depth;
+    out[1] = q;
+    out[2] = U;
+    out[3] = depth > 0 ? fabs(U) / sqrt(s->g * depth) : NAN;
+}
+
+static int sg_after_step(void *state, sluice_host *host)
+{
+    sg_state *s = state;
+    const sluice_api *api = s->api;
+    const sluice_view *v = api->view(host);
+    const double tolerance = 1e-9 * (double)s->interval;
+    if (v->time + tolerance < (double)s->written * (double)s->interval)
+        return SLUICE_OK;
+    const sluice_index total = s->first[s->sections];
+    if (api->point_pass(host, s->points, total, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+                        section_sums, s) != SLUICE_OK)
+        return SLUICE_ERROR;
+    v = api->view(host);
+    s->row[0] = v->time;
+    for (sluice_index k = 0; k < s->sections; k++)
+        measure(s, k, s->row + 1 + 4 * (size_t)k);
+    if (api->table_row(s->table, s->row, 4 * s->sections + 1) != SLUICE_OK)
+        return SLUICE_ERROR;
+    while ((double)s->written * (double)s->interval <= v->time + tolerance)
+        s->written++;
+    api->request_time(host, (double)s->written * (double)s->interval);
+    return SLUICE_OK;
+}
+
+static const sluice_component components[] = {{
+    .name = "section_gauge",
+    .summary = "2D cross-sections: depth, discharge per unit width, mean velocity and Froude "
+               "number (kernel-sum free surface, Shepard velocity), as a CSV time series",
+    .reference = "seed 000 (Jonsson et al. 2016) sequent depth at a section; seed 004 (De Padova "
+                 "et al. 2017) Fr = V / sqrt(g y); DualSPHysics MeasureTool kernel sum",
+    .dimensions = SLUICE_DIMS_2,
+    .params = params,
+    .param_count = SLUICE_COUNT(params),
+    .config_size = sizeof(sg_config),
+    .fields = fields,
+    .field_count = SLUICE_COUNT(fields),
+    .create = sg_create,
+    .destroy = sg_destroy,
+    .bind = sg_bind,
+    .initialise = sg_initialise,
+    .after_step = sg_after_step,
+}};
+
+SLUICE_DEFINE_LIBRARY("section_gauge", "1.0.0", "2D section gauges: depth, discharge, Froude",
+                      SLUICE_DIMS_2, components)
