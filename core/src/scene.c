@@ -112,6 +112,7 @@ typedef struct {
     sluice_real_list points;
     sluice_real velocity[3];
     sluice_real surface;
+    sluice_real lattice_origin[3];
 } fluid_config;
 
 #define FLUID_SHAPES "box|polygon"
@@ -124,6 +125,13 @@ typedef struct {
             "free-surface level (vertical coordinate) for the hydrostatic initial density; "    \
             "default: the top of the region",                                                  \
             NULL, 0                                                                             \
+    },                                                                                          \
+    {                                                                                           \
+        "lattice_origin", SLUICE_PARAM_VECTOR, OFF(fluid_config, lattice_origin), NULL, 0, 0,   \
+            SLUICE_PARAM_OPTIONAL, "m",                                                         \
+            "this region's lattice: points at lattice_origin + (k + 1/2) dx (default: "         \
+            "particles.lattice_origin); align a region with its own bed",                      \
+            NULL, SLUICE_LENGTH_DIM                                                             \
     }
 
 static const sluice_param_spec fluid_box_specs[] = {
@@ -149,6 +157,7 @@ typedef struct {
     sluice_real min[3], max[3];
     sluice_real_list points;
     const char *scheme, *name;
+    sluice_real lattice_origin[3];
 } wall_config;
 
 #define WALL_SHAPES "tank|box|polyline|polygon"
@@ -158,6 +167,12 @@ typedef struct {
     {                                                                                           \
         "name", SLUICE_PARAM_STRING, OFF(wall_config, name), NULL, 0, 0, SLUICE_PARAM_OPTIONAL, \
             NULL, "name of the wall in reports", NULL, 0                                        \
+    },                                                                                          \
+    {                                                                                           \
+        "lattice_origin", SLUICE_PARAM_VECTOR, OFF(wall_config, lattice_origin), NULL, 0, 0,    \
+            SLUICE_PARAM_OPTIONAL, "m",                                                         \
+            "lattice of this wall's particle layers (default: particles.lattice_origin)",       \
+            NULL, SLUICE_LENGTH_DIM                                                             \
     }
 
 static const sluice_param_spec wall_box_specs[] = {
@@ -400,6 +415,10 @@ static int load_fluids(sluice_scene *scene, sluice_node *geometry, sluice_diag *
         memcpy(f->velocity, c.velocity, sizeof f->velocity);
         f->has_surface = sluice_node_get(item, "surface") != NULL;
         f->surface = c.surface;
+        f->has_lattice_origin = sluice_node_get(item, "lattice_origin") != NULL;
+        memcpy(f->lattice_origin,
+               f->has_lattice_origin ? c.lattice_origin : scene->particles.lattice_origin,
+               sizeof f->lattice_origin);
         if (shape == 0) {
             if (check_box(scene, item, c.min, c.max, path, diag)) {
                 errors++;
@@ -468,6 +487,10 @@ static int load_walls(sluice_scene *scene, sluice_node *geometry, sluice_diag *d
         sluice_scene_wall *w = &scene->walls[scene->wall_count];
         memset(w, 0, sizeof *w);
         w->node = item;
+        memcpy(w->lattice_origin,
+               sluice_node_get(item, "lattice_origin") ? c.lattice_origin
+                                                       : scene->particles.lattice_origin,
+               sizeof w->lattice_origin);
         w->scheme = c.scheme;
         w->name = c.name ? c.name : "";
         const char *reason = NULL;

@@ -20,6 +20,8 @@ typedef struct sluice_scene_fluid {
     sluice_real velocity[3];
     int has_surface;
     sluice_real surface; /* free-surface level along the vertical (last) axis */
+    int has_lattice_origin;
+    sluice_real lattice_origin[3]; /* the region's lattice (particles.lattice_origin unless set) */
     const sluice_node *node;
 } sluice_scene_fluid;
 
@@ -27,6 +29,7 @@ typedef struct sluice_scene_wall {
     sluice_wall_geometry geometry;
     const char *scheme; /* NULL: the only loaded wall scheme */
     const char *name;
+    sluice_real lattice_origin[3]; /* lattice of its particle layers */
     const sluice_node *node;
 } sluice_scene_wall;
 

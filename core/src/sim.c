@@ -539,7 +539,7 @@ static int api_wall_layer_points(sluice_host *host, uint32_t wall_index, sluice_
         return SLUICE_ERROR;
     sluice_points out = {0};
     if (sluice_wall_layer_points(&sim->scene.walls[wall_index].geometry, sim->spacing,
-                                 sim->scene.particles.lattice_origin, thickness, &out) != 0) {
+                                 sim->scene.walls[wall_index].lattice_origin, thickness, &out) != 0) {
         sluice_points_free(&out);
         api_error(host, "out of memory generating wall layer points");
         return SLUICE_ERROR;
@@ -1476,8 +1476,8 @@ static int fill_fluid(sluice_sim *sim)
     for (size_t r = 0; r < scene->fluid_count && !errors; r++) {
         const sluice_scene_fluid *fluid = &scene->fluids[r];
         sluice_points pts = {0};
-        if (sluice_region_fill(&fluid->region, dims, sim->spacing, scene->particles.lattice_origin,
-                               &pts) != 0) {
+        if (sluice_region_fill(&fluid->region, dims, sim->spacing, fluid->lattice_origin, &pts) !=
+            0) {
             sluice_points_free(&pts);
             free(keys);
             report(sim, SLUICE_CORE_INSTANCE, "out of memory filling fluid regions");
