@@ -1,0 +1,196 @@
+/* Hydraulic-jump measurements: pure numerical functions of sluice-analyze.
+ *
+ * No function here reads or writes a file or prints: they take arrays and
+ * return numbers (main.c does the I/O). Every function that can fail returns
+ * 0 on success and a negative value on bad arguments; functions returning a
+ * double return NaN when the quantity does not exist (e.g. no crossing).
+ * NaN samples (a gauge outside the fluid) are skipped where documented.
+ * Units: SI throughout (m, s, m s^-1). See docs/analysis.md for the
+ * definitions, references and the tests that verify each function
+ * (tests/test_analysis.c). */
+#ifndef SLUICE_HYDRAULICS_H
+#define SLUICE_HYDRAULICS_H
+
+#include <stddef.h>
+
+/* ----------------------------------------------------- reference relations */
+
+/* Inflow Froude number Fr = v / sqrt(g d). */
+double sluice_hyd_froude(double v, double d, double g);
+
+/* Belanger's conjugate depth (seed 000 eq. 1, horizontal rectangular channel):
+ * d2 = d1/2 (sqrt(1 + 8 Fr1^2) - 1). */
+double sluice_hyd_belanger_depth(double d1, double fr1);
+
+/* Roller length, Hager, Bremen & Kawagoshi (1990) as quoted by seed 000 eq. 2:
+ * L_r = d1 (160 tanh(Fr1/20) - 12), stated for 2 < Fr1 < 16. */
+double sluice_hyd_hager_roller_length(double d1, double fr1);
+
+/* Decay of the maximum velocity, Chanson (seed 000 eq. 3):
+ * Vmax/V1 = exp(-0.028 (x - x1)/d1), with xi = (x - x1)/d1. */
+double sluice_hyd_chanson_vmax_ratio(double xi);
+
+/* Maximum free-surface fluctuation, Murzyn & Chanson (seed 000 eq. 4):
+ * (eta'/d1)_max = 0.116 (Fr1 - 1)^1.235. */
+double sluice_hyd_murzyn_chanson_eta_std(double fr1);
+
+/* Free-surface Strouhal number, Chachereau & Chanson (seed 000 eq. 5):
+ * St = f d1 / V1 = 0.143 exp(-0.27 Fr1), stated for 2.4 < Fr1 < 6.5. */
+double sluice_hyd_chachereau_chanson_strouhal(double fr1);
+
+/* ------------------------------------------------------------- statistics */
+
+/* Mean and population standard deviation (1/N) of the finite values of
+ * x[0..n); *used = their count. Returns -1 when fewer than one is finite. */
+int sluice_hyd_mean_std(const double *x, size_t n, double *mean, double *std, size_t *used);
+
+/* Seed 000 eqs. 19-20 with a constant theoretical depth d2_theory:
+ *   A = sqrt(sum d2_i^2 / sum d2_th^2),  P = sqrt(sum (d2_i - d2_th)^2 / sum d2_th^2),
+ * over the finite d2_i (*used of them). Returns -1 when none or d2_theory <= 0. */
+int sluice_hyd_conjugate_statistics(const double *d2, size_t n, double d2_theory, double *A,
+                                    double *P, size_t *used);
+
+/* Pearson correlation coefficient (seed 004's r):
+ *   r = sum (a-abar)(b-bbar) / sqrt(sum (a-abar)^2 sum (b-bbar)^2)
+ * over the pairs where both are finite (*used). NaN when fewer than two pairs
+ * or a variance is zero. */
+double sluice_hyd_pearson(const double *a, const double *b, size_t n, size_t *used);
+
+/* Seed 002's free-surface errors between numerical h_num and measured h_ref
+ * levels at N points (pairs where both are finite; h_ref must not be 0):
+ *   L2   = sqrt( (1/N) sum ((h_num - h_ref)/h_ref)^2 ),
+ *   RMSE = sqrt( (1/N) sum (h_num - h_ref)^2 ).
+ * Returns -1 when no pair is usable or some h_ref is 0. */
+int sluice_hyd_profile_errors(const double *h_num, const double *h_ref, size_t n, double *l2,
+                              double *rmse, size_t *used);
+
+/* Least-squares decay rate k of ratio = exp(-k xi) through (0, 1):
+ *   k = -sum xi ln(ratio) / sum xi^2 over the points with xi > 0, ratio > 0.
+ * NaN when there is none. */
+double sluice_hyd_decay_rate(const double *xi, const double *ratio, size_t n);
+
+/* Least-squares slope of y against t over the finite pairs (NaN if < 2). */
+double sluice_hyd_slope(const double *t, const double *y, size_t n);
+
+/* ---------------------------------------------------------- interpolation */
+
+/* Linear interpolation of y(x) at xq, x strictly increasing. NaN outside
+ * [x[0], x[n-1]] or when a bracketing value is NaN. */
+double sluice_hyd_interpolate(const double *x, const double *y, size_t n, double xq);
+
+/* Resamples the finite samples of y(t) (t increasing) onto m = n_out uniform
+ * times t0 + k dt, k = 0..m-1, dt = (t1 - t0)/(m - 1), by linear
+ * interpolation between finite neighbours. Returns -1 when fewer than two
+ * samples are finite or m < 2 or t1 <= t0. */
+int sluice_hyd_resample(const double *t, const double *y, size_t n, double t0, double t1,
+                        size_t m, double *out);
+
+/* --------------------------------------------------------------- spectrum */
+
+/* Smallest power of two >= n (n >= 1). */
+size_t sluice_hyd_next_pow2(size_t n);
+
+/* In-place radix-2 complex FFT (decimation in time), n a power of two:
+ *   X_k = sum_j x_j exp(-/+ 2 pi i j k / n)   (sign -: forward, +: inverse),
+ * unnormalised both ways (inverse(forward(x)) = n x). Returns -1 when n is not
+ * a power of two. */
+int sluice_hyd_fft(double *re, double *im, size_t n, int inverse);
+
+/* Removes the least-squares straight line a + b k (k = 0..n-1) from x. */
+void sluice_hyd_detrend(double *x, size_t n);
+
+/* Periodic Hann window w_k = (1 - cos(2 pi k / n)) / 2, k = 0..n-1. */
+void sluice_hyd_hann(double *w, size_t n);
+
+/* One-sided amplitude spectrum of x[0..n) sampled every dt: detrended (linear
+ * least squares), multiplied by the periodic Hann window, zero-padded to
+ * m = sluice_hyd_next_pow2(n), transformed, and scaled by the window's
+ * coherent gain so that a sine a sin(2 pi f t) whose f is a bin centre
+ * j/(m dt) has amplitude exactly a at bin j:
+ *   A_0 = |X_0| / sum w,  A_j = 2 |X_j| / sum w (0 < j < m/2),  A_{m/2} = |X_{m/2}| / sum w.
+ * Between bin centres the peak is lower by at most the Hann scalloping loss
+ * (sin(pi d)/(pi d))/(1 - d^2), d = n/(2m) <= 1/2 bins of n (0.8488 at d = 1/2).
+ * work_re and work_im hold m values each; amplitude receives m/2 + 1 values
+ * and *df = 1/(m dt). Returns -1 when n < 2 or dt <= 0. */
+int sluice_hyd_amplitude_spectrum(const double *x, size_t n, double dt, double *work_re,
+                                  double *work_im, double *amplitude, double *df);
+
+/* Index of the largest amplitude among bins 1 .. bins-1 (DC excluded) whose
+ * frequency j df lies in [fmin, fmax] (fmax <= 0: no upper bound). Returns
+ * 0 when no bin qualifies. */
+size_t sluice_hyd_spectrum_peak(const double *amplitude, size_t bins, double df, double fmin,
+                                double fmax);
+
+/* ----------------------------------------------------- jump measurements */
+
+/* Jump toe from one free-surface profile: depth[k] = eta - bed at gauge
+ * positions x[k] (strictly increasing, upstream to downstream). Going
+ * downstream from the first gauge, the toe is where the depth first rises
+ * through `threshold` (= d1 + fraction (d2_B - d1)): between the last gauge
+ * below it and the next one at or above it, by linear interpolation of the
+ * depth. NaN gauges (dry) are skipped. Returns NaN when no finite gauge
+ * reaches the threshold, or when the first finite gauge already does (the
+ * toe is upstream of the gauges). */
+double sluice_hyd_toe_position(const double *x, const double *depth, size_t n,
+                               double threshold);
+
+/* Groups points by their x (|x - x_section| <= tolerance, in order of first
+ * appearance sorted by x): section_of[i] receives the section of point i,
+ * section_x the sections' x (ascending, at most n). Returns the number of
+ * sections. */
+size_t sluice_hyd_group_sections(const double *px, size_t n, double tolerance,
+                                 size_t *section_of, double *section_x);
+
+/* Time mean of a gauge series over a window: the mean of its finite samples
+ * when they are at least min_wet of the n samples (a point outside the fluid
+ * too often has no mean), else NaN. */
+double sluice_hyd_wet_mean(const double *x, size_t n, double min_wet);
+
+/* Per section s (section_of[i] of point i, as sluice_hyd_group_sections):
+ * the value of its highest point (largest py) whose value is finite, and that
+ * point's py; NaN for both when the section has none. */
+void sluice_hyd_section_top(const size_t *section_of, const double *py, const double *value,
+                            size_t n, size_t sections, double *top_value, double *top_y);
+
+/* Per section: the largest finite value of its points (NaN when none). */
+void sluice_hyd_section_max(const size_t *section_of, const double *value, size_t n,
+                            size_t sections, double *max_value);
+
+/* Roller end from the time-mean near-surface horizontal velocity u[k] of
+ * sections x[k] (ascending; NaN sections skipped) and the toe x1 (seed 000,
+ * section 3: the first position downstream of the toe with non-negative mean
+ * velocity). The search starts at the first section downstream of x1 with
+ * u < 0 (inside the roller's reverse flow) and returns the first section after
+ * it with u >= 0: *x_section = its x, *x_crossing = the zero of u linearly
+ * interpolated from the section before it. Returns 0 when found, 1 when the
+ * data show no reverse flow downstream of x1 or never recover u >= 0. */
+int sluice_hyd_roller_end(const double *x, const double *u, size_t n, double x1,
+                          double *x_section, double *x_crossing);
+
+/* --------------------------------------------- jump type at an abrupt drop */
+
+/* Momentum limits of the jump at an abrupt drop of height s (S = s/y1) with
+ * tailwater depth yt above the lower bed (Y = yt/y1) and inflow Froude number
+ * F1 on the upper bed, the classical pair of curves (Hsu 1950; Moore & Morgan
+ * 1959, seed 004 ref. [3]; Hager & Bretz 1986, ref. [8]) re-derived in
+ * hydraulics.c from the momentum balance between the inflow section and the
+ * tailwater with hydrostatic pressure on the step face:
+ *   A-jump limit (face under the tailwater level):  F_A^2 = Y ((Y - S)^2 - 1) / (2 (Y - 1)),
+ *   B-jump limit (face under the inflow level):     F_B^2 = Y (Y^2 - (1 + S)^2) / (2 (Y - 1)).
+ * Both reduce to Belanger's Y (Y + 1) = 2 F^2 at S = 0. Returns -1 when
+ * Y <= 1 + S (no tailwater above the step) or S < 0. */
+int sluice_hyd_drop_limits(double Y, double S, double *fa, double *fb);
+
+typedef enum sluice_hyd_drop_regime {
+    SLUICE_HYD_DROP_A_JUMP = 0,   /* F1 <= F_A: the jump stays upstream of the drop */
+    SLUICE_HYD_DROP_TRANSITION,   /* F_A < F1 < F_B: wave-jump region */
+    SLUICE_HYD_DROP_B_JUMP        /* F1 >= F_B: the jet plunges over the drop */
+} sluice_hyd_drop_regime;
+
+/* Regime of (F1, Y, S) by the momentum limits, and the position of F1 in the
+ * band, t = (F1 - F_A) / (F_B - F_A) (t <= 0: A-jump region, t >= 1: B-jump
+ * region). Returns -1 as sluice_hyd_drop_limits. */
+int sluice_hyd_drop_regime_of(double F1, double Y, double S, sluice_hyd_drop_regime *regime,
+                              double *t);
+
+#endif

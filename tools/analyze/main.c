@@ -1,0 +1,1583 @@
+/* sluice-analyze: hydraulic-jump measurements from Sluice's gauge output, the
+ * way hydraulic engineers take them (docs/analysis.md).
+ *
+ *   sluice-analyze belanger --d1 D (--v1 V | --fr F)
+ *   sluice-analyze conjugate RUN --d1 D --v1 V --x X [--from T0 --to T1]
+ *   sluice-analyze toe       RUN --d1 D --v1 V [--fraction F]
+ *   sluice-analyze roller    RUN --d1 D --v1 V [--x1 X1]
+ *   sluice-analyze vmax      RUN --d1 D --v1 V [--x1 X1]
+ *   sluice-analyze surface   RUN --d1 D --v1 V [--x1 X1]
+ *   sluice-analyze spectrum  RUN --column NAME [--d1 D --v1 V]
+ *   sluice-analyze correlate A.csv:COL B.csv:COL
+ *   sluice-analyze l2        RUN --reference REF.csv [--time T ...]
+ *   sluice-analyze classify  --y1 Y1 --yt YT --v1 V --drop S
+ *
+ * Each prints its headline figures as `name = value [unit]` lines, writes a
+ * CSV and (gnuplot permitting) a PNG into --out (default RUN/analysis).
+ * Exit status: 0 measured, 1 the feature is absent from the data, 2 bad
+ * input (one message on stderr). The numbers come from hydraulics.c. */
+#define _GNU_SOURCE
+#include <math.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "hydraulics.h"
+#include "io.h"
+
+#define MAX_TIMES 64
+#define MAX_POSITIONAL 4
+
+typedef struct options {
+    const char *command;
+    const char *positional[MAX_POSITIONAL];
+    size_t positional_count;
+    double d1, v1, fr, g, x, from, to, fraction, x1, bed, drop, y1, yt, min_wet, fmin, fmax,
+        tolerance;
+    const char *column, *reference, *out, *positions, *points, *field;
+    double times[MAX_TIMES];
+    size_t time_count;
+    int no_plot;
+} options;
+
+enum { OPT_NUMBER, OPT_STRING, OPT_TIMES, OPT_FLAG };
+
+static const struct option_spec {
+    const char *name;
+    int kind;
+    size_t offset;
+} option_specs[] = {
+    {"d1", OPT_NUMBER, offsetof(options, d1)},
+    {"v1", OPT_NUMBER, offsetof(options, v1)},
+    {"fr", OPT_NUMBER, offsetof(options, fr)},
+    {"g", OPT_NUMBER, offsetof(options, g)},
+    {"x", OPT_NUMBER, offsetof(options, x)},
+    {"from", OPT_NUMBER, offsetof(options, from)},
+    {"to", OPT_NUMBER, offsetof(options, to)},
+    {"fraction", OPT_NUMBER, offsetof(options, fraction)},
+    {"x1", OPT_NUMBER, offsetof(options, x1)},
+    {"bed", OPT_NUMBER, offsetof(options, bed)},
+    {"drop", OPT_NUMBER, offsetof(options, drop)},
+    {"y1", OPT_NUMBER, offsetof(options, y1)},
+    {"yt", OPT_NUMBER, offsetof(options, yt)},
+    {"min-wet", OPT_NUMBER, offsetof(options, min_wet)},
+    {"fmin", OPT_NUMBER, offsetof(options, fmin)},
+    {"fmax", OPT_NUMBER, offsetof(options, fmax)},
+    {"tolerance", OPT_NUMBER, offsetof(options, tolerance)},
+    {"column", OPT_STRING, offsetof(options, column)},
+    {"reference", OPT_STRING, offsetof(options, reference)},
+    {"out", OPT_STRING, offsetof(options, out)},
+    {"positions", OPT_STRING, offsetof(options, positions)},
+    {"points", OPT_STRING, offsetof(options, points)},
+    {"field", OPT_STRING, offsetof(options, field)},
+    {"time", OPT_TIMES, 0},
+    {"no-plot", OPT_FLAG, offsetof(options, no_plot)},
+};
+
+static const char usage[] =
+    "usage: sluice-analyze COMMAND [ARGS] [OPTIONS]\n"
+    "  belanger  --d1 D (--v1 V | --fr F)          Belanger's conjugate depth\n"
+    "  conjugate RUN --d1 --v1 --x X               d2(t) at x, seed 000's A and P\n"
+    "  toe       RUN --d1 --v1 [--fraction 0.5]   jump toe x1(t) from the free surface\n"
+    "  roller    RUN --d1 --v1 [--x1]             roller length vs Hager et al. (1990)\n"
+    "  vmax      RUN --d1 --v1 [--x1]             Vmax/V1 decay vs Chanson (2010)\n"
+    "  surface   RUN --d1 --v1 [--x1]             free-surface mean/std vs Murzyn & Chanson\n"
+    "  spectrum  RUN --column [FILE:]NAME          amplitude spectrum, Strouhal number\n"
+    "  correlate A.csv:COL B.csv:COL               Pearson r (seed 004)\n"
+    "  l2        RUN --reference REF.csv [--time]  free-surface L2 error, RMSE (seed 002)\n"
+    "  classify  --y1 --yt --v1 --drop S           jump at an abrupt drop (momentum limits)\n"
+    "options: --from T0 --to T1 (window, s), --out DIR (default RUN/analysis), --g 9.81,\n"
+    "  --bed B (bed elevation, m), --positions a,b,.. --points x,y;x,y.. (instead of\n"
+    "  RUN/scene.resolved.yaml), --field velocity, --min-wet 0.5, --fmin, --fmax,\n"
+    "  --tolerance 1e-6 (m, position matching), --no-plot. Details: docs/analysis.md\n";
+
+/* ----------------------------------------------------------- utilities -- */
+
+static void headline(const char *name, double value, const char *unit)
+{
+    printf("%s = %.6g%s%s\n", name, value, unit ? " " : "", unit ? unit : "");
+}
+
+static int parse_options(analyze_ctx *cx, int argc, char **argv, options *o)
+{
+    for (int i = 2; i < argc; i++) {
+        const char *arg = argv[i];
+        if (strncmp(arg, "--", 2) != 0) {
+            if (o->positional_count == MAX_POSITIONAL)
+                return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "too many arguments ('%s')",
+                                    arg);
+            o->positional[o->positional_count++] = arg;
+            continue;
+        }
+        const char *name = arg + 2, *eq = strchr(name, '=');
+        size_t len = eq ? (size_t)(eq - name) : strlen(name);
+        const struct option_spec *spec = NULL;
+        for (size_t k = 0; k < sizeof option_specs / sizeof *option_specs; k++)
+            if (strlen(option_specs[k].name) == len &&
+                strncmp(option_specs[k].name, name, len) == 0)
+                spec = &option_specs[k];
+        if (!spec)
+            return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                                "unknown option %.*s (sluice-analyze --help lists them)",
+                                (int)len + 2, arg);
+        if (spec->kind == OPT_FLAG) {
+            if (eq)
+                return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--%s takes no value",
+                                    spec->name);
+            *(int *)((char *)o + spec->offset) = 1;
+            continue;
+        }
+        const char *value = eq ? eq + 1 : (i + 1 < argc ? argv[++i] : NULL);
+        if (!value)
+            return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--%s needs a value", spec->name);
+        if (spec->kind == OPT_STRING) {
+            *(const char **)((char *)o + spec->offset) = value;
+            continue;
+        }
+        char *end;
+        double v = strtod(value, &end);
+        if (end == value || *end != '\0' || !isfinite(v))
+            return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--%s expects a number, got '%s'",
+                                spec->name, value);
+        if (spec->kind == OPT_TIMES) {
+            if (o->time_count == MAX_TIMES)
+                return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "at most %d --time options",
+                                    MAX_TIMES);
+            o->times[o->time_count++] = v;
+        } else {
+            *(double *)((char *)o + spec->offset) = v;
+        }
+    }
+    return 0;
+}
+
+static int need(analyze_ctx *cx, const options *o, double value, const char *name,
+                int positive)
+{
+    if (isnan(value))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "%s needs --%s", o->command, name);
+    if (positive && !(value > 0.0))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--%s must be positive", name);
+    return 0;
+}
+
+/* Fr1 and V1 from --d1 and --v1 or --fr. */
+static int inflow(analyze_ctx *cx, const options *o, double *fr1, double *v1)
+{
+    if (need(cx, o, o->d1, "d1", 1) != 0)
+        return -1;
+    if (!(o->g > 0.0))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--g must be positive");
+    if (!isnan(o->v1)) {
+        if (!(o->v1 > 0.0))
+            return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--v1 must be positive");
+        *v1 = o->v1;
+        *fr1 = sluice_hyd_froude(o->v1, o->d1, o->g);
+        if (!isnan(o->fr) && fabs(o->fr - *fr1) > 1e-3 * *fr1)
+            return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                                "--fr %g contradicts --v1/--d1 (Fr1 = %g): give one", o->fr,
+                                *fr1);
+        return 0;
+    }
+    if (isnan(o->fr))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "%s needs --v1 (or --fr)", o->command);
+    if (!(o->fr > 1.0))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "--fr must exceed 1 (supercritical inflow)");
+    *fr1 = o->fr;
+    *v1 = o->fr * sqrt(o->g * o->d1);
+    return 0;
+}
+
+static const char *run_dir(analyze_ctx *cx, const options *o)
+{
+    if (o->positional_count != 1) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "%s needs one run directory, RUN",
+                     o->command);
+        return NULL;
+    }
+    return o->positional[0];
+}
+
+/* The output directory: --out, else RUN/analysis (created). */
+static char *out_dir(analyze_ctx *cx, const options *o, const char *run)
+{
+    char *dir = o->out ? analyze_format(cx, "%s", o->out)
+                       : analyze_format(cx, "%s/analysis", run);
+    if (dir && analyze_mkdir(cx, dir) != 0) {
+        free(dir);
+        return NULL;
+    }
+    return dir;
+}
+
+static FILE *open_csv(analyze_ctx *cx, const char *dir, const char *name, char **path)
+{
+    *path = analyze_format(cx, "%s/%s", dir, name);
+    if (!*path)
+        return NULL;
+    FILE *f = fopen(*path, "w");
+    if (!f)
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "cannot write %s", *path);
+    return f;
+}
+
+static int close_csv(analyze_ctx *cx, FILE *f, char *path)
+{
+    int bad = ferror(f);
+    bad |= fclose(f) != 0;
+    if (bad)
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "cannot write %s", path);
+    else
+        printf("wrote %s\n", path);
+    free(path);
+    return bad ? -1 : 0;
+}
+
+static void plot(analyze_ctx *cx, const options *o, const char *dir, const char *name,
+                 const char *body)
+{
+    if (!o->no_plot && body)
+        analyze_plot(cx, dir, name, body);
+}
+
+/* ------------------------------------------------------- run contents -- */
+
+typedef struct run_data {
+    const char *run;
+    analyze_scene *scene; /* NULL when RUN has no scene.resolved.yaml */
+} run_data;
+
+static int run_open(analyze_ctx *cx, const char *run, run_data *r)
+{
+    r->run = run;
+    r->scene = NULL;
+    struct stat st;
+    if (stat(run, &st) != 0 || !S_ISDIR(st.st_mode))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "run directory %s does not exist", run);
+    char *path = analyze_format(cx, "%s/scene.resolved.yaml", run);
+    if (!path)
+        return -1;
+    int status = 0;
+    if (analyze_file_exists(path))
+        status = analyze_scene_load(cx, path, &r->scene);
+    free(path);
+    return status;
+}
+
+/* RUN/<the gauge's file> (plugins.<gauge>.file, else the default name). */
+static char *gauge_path(analyze_ctx *cx, const run_data *r, const char *gauge,
+                        const char *default_file)
+{
+    const char *file = analyze_scene_string(r->scene, gauge, "file");
+    return analyze_format(cx, "%s/%s", r->run, file ? file : default_file);
+}
+
+/* Gauge positions: --positions, else plugins.<gauge>.positions. */
+static long gauge_positions(analyze_ctx *cx, const options *o, const run_data *r,
+                            const char *gauge, double **xs)
+{
+    if (o->positions)
+        return analyze_parse_list(cx, "--positions", o->positions, xs);
+    if (!r->scene)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "%s/scene.resolved.yaml not found: give the %s positions with "
+                            "--positions",
+                            r->run, gauge);
+    long n = analyze_scene_numbers(cx, r->scene, gauge, "positions", xs);
+    if (n == 0)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "%s/scene.resolved.yaml has no plugins.%s.positions", r->run, gauge);
+    return n;
+}
+
+static long gauge_points(analyze_ctx *cx, const options *o, const run_data *r, double **xs,
+                         double **ys)
+{
+    if (o->points)
+        return analyze_parse_points(cx, "--points", o->points, xs, ys);
+    if (!r->scene)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "%s/scene.resolved.yaml not found: give the point_gauge points "
+                            "with --points",
+                            r->run);
+    long n = analyze_scene_points(cx, r->scene, "point_gauge", "points", xs, ys);
+    if (n == 0)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "%s/scene.resolved.yaml has no plugins.point_gauge.points", r->run);
+    return n;
+}
+
+/* A gauge table with its time column and the rows in [from, to]. */
+typedef struct gauge_table {
+    analyze_table table;
+    double *time;
+    size_t first, last; /* window rows first .. last-1 */
+} gauge_table;
+
+static int gauge_table_load(analyze_ctx *cx, const options *o, const char *path, gauge_table *g)
+{
+    memset(g, 0, sizeof *g);
+    if (analyze_table_load(cx, path, &g->table) != 0)
+        return -1;
+    long tc = analyze_table_column(cx, &g->table, "time");
+    if (tc < 0)
+        return -1;
+    if (g->table.rows == 0)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "%s has no data rows", path);
+    g->time = analyze_alloc(cx, g->table.rows, sizeof *g->time);
+    if (!g->time)
+        return -1;
+    analyze_table_copy(&g->table, (size_t)tc, g->time);
+    for (size_t r = 1; r < g->table.rows; r++)
+        if (!(g->time[r] > g->time[r - 1]))
+            return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                                "%s: time is not increasing at data row %zu", path, r + 1);
+    g->first = g->table.rows;
+    g->last = 0;
+    for (size_t r = 0; r < g->table.rows; r++)
+        if (g->time[r] >= o->from && g->time[r] <= o->to) {
+            if (g->first == g->table.rows)
+                g->first = r;
+            g->last = r + 1;
+        }
+    if (g->first >= g->last)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "%s has no rows in the window [%g, %g] s (data: %g to %g s)", path,
+                            o->from, o->to, g->time[0], g->time[g->table.rows - 1]);
+    return 0;
+}
+
+static void gauge_table_free(gauge_table *g)
+{
+    analyze_table_free(&g->table);
+    free(g->time);
+}
+
+static double cell(const gauge_table *g, size_t row, size_t col)
+{
+    return g->table.data[row * g->table.cols + col];
+}
+
+static void print_window(const gauge_table *g)
+{
+    printf("window = [%.6g, %.6g] s\n", g->time[g->first], g->time[g->last - 1]);
+    printf("samples = %zu\n", g->last - g->first);
+}
+
+/* Columns PREFIX<k> for k = 0..n-1 (e.g. eta_x0, eta_x1, ...). */
+static int gauge_columns(analyze_ctx *cx, const gauge_table *g, const char *prefix, size_t n,
+                         size_t *cols)
+{
+    for (size_t k = 0; k < n; k++) {
+        char name[64];
+        snprintf(name, sizeof name, "%s%zu", prefix, k);
+        long c = analyze_table_column(cx, &g->table, name);
+        if (c < 0)
+            return -1;
+        cols[k] = (size_t)c;
+    }
+    return 0;
+}
+
+/* Index k of the position equal to x within the tolerance, or -1. */
+static long position_index(const double *xs, size_t n, double x, double tolerance)
+{
+    for (size_t k = 0; k < n; k++)
+        if (fabs(xs[k] - x) <= tolerance)
+            return (long)k;
+    return -1;
+}
+
+/* ---------------------------------------------------- the free surface -- */
+
+/* The free-surface gauges sorted upstream to downstream: positions x[j] and
+ * their columns. */
+typedef struct surface_gauges {
+    gauge_table g;
+    size_t n;
+    double *x;
+    size_t *col;
+} surface_gauges;
+
+static void surface_free(surface_gauges *s)
+{
+    gauge_table_free(&s->g);
+    free(s->x);
+    free(s->col);
+}
+
+static int surface_load(analyze_ctx *cx, const options *o, const run_data *r, surface_gauges *s)
+{
+    memset(s, 0, sizeof *s);
+    double *xs = NULL;
+    long n = gauge_positions(cx, o, r, "free_surface_gauge", &xs);
+    if (n < 0)
+        return -1;
+    char *path = gauge_path(cx, r, "free_surface_gauge", "free_surface.csv");
+    int status = path ? gauge_table_load(cx, o, path, &s->g) : -1;
+    free(path);
+    size_t *cols = status == 0 ? analyze_alloc(cx, (size_t)n, sizeof *cols) : NULL;
+    if (!cols || gauge_columns(cx, &s->g, "eta_x", (size_t)n, cols) != 0) {
+        free(xs);
+        free(cols);
+        return -1;
+    }
+    s->n = (size_t)n;
+    s->x = analyze_alloc(cx, s->n, sizeof *s->x);
+    s->col = analyze_alloc(cx, s->n, sizeof *s->col);
+    if (!s->x || !s->col) {
+        free(xs);
+        free(cols);
+        return -1;
+    }
+    /* insertion sort by x (tens of gauges) */
+    for (size_t k = 0; k < s->n; k++) {
+        size_t j = k;
+        while (j > 0 && s->x[j - 1] > xs[k]) {
+            s->x[j] = s->x[j - 1];
+            s->col[j] = s->col[j - 1];
+            j--;
+        }
+        s->x[j] = xs[k];
+        s->col[j] = cols[k];
+    }
+    free(xs);
+    free(cols);
+    for (size_t k = 1; k < s->n; k++)
+        if (!(s->x[k] > s->x[k - 1]))
+            return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                                "two free-surface gauges at x = %g", s->x[k]);
+    return 0;
+}
+
+/* x1(t) for every row of the free-surface table (NaN: no toe in the row). */
+static int toe_series(analyze_ctx *cx, const options *o, const surface_gauges *s, double fr1,
+                      double *threshold, double *x1)
+{
+    if (!(o->fraction > 0.0 && o->fraction < 1.0))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--fraction must be in (0, 1)");
+    double d2 = sluice_hyd_belanger_depth(o->d1, fr1);
+    *threshold = o->d1 + o->fraction * (d2 - o->d1);
+    double *depth = analyze_alloc(cx, s->n, sizeof *depth);
+    if (!depth)
+        return -1;
+    for (size_t r = 0; r < s->g.table.rows; r++) {
+        for (size_t k = 0; k < s->n; k++)
+            depth[k] = cell(&s->g, r, s->col[k]) - o->bed;
+        x1[r] = sluice_hyd_toe_position(s->x, depth, s->n, *threshold);
+    }
+    free(depth);
+    return 0;
+}
+
+/* x1 for roller, vmax and surface: --x1, else the mean toe over the window. */
+static int resolve_x1(analyze_ctx *cx, const options *o, const run_data *r, double fr1,
+                      double *x1)
+{
+    if (!isnan(o->x1)) {
+        *x1 = o->x1;
+        printf("x1 = %.6g m (given)\n", *x1);
+        return 0;
+    }
+    surface_gauges s;
+    if (surface_load(cx, o, r, &s) != 0) {
+        surface_free(&s);
+        return -1;
+    }
+    double *series = analyze_alloc(cx, s.g.table.rows, sizeof *series), threshold;
+    int status = series ? toe_series(cx, o, &s, fr1, &threshold, series) : -1;
+    double mean = NAN, std;
+    size_t used = 0;
+    if (status == 0 &&
+        sluice_hyd_mean_std(series + s.g.first, s.g.last - s.g.first, &mean, &std, &used) != 0)
+        status = analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND,
+                              "no jump toe in the free surface over the window (threshold "
+                              "depth %g m): give --x1",
+                              threshold);
+    if (status == 0) {
+        *x1 = mean;
+        printf("x1 = %.6g m (mean toe over %zu of %zu rows)\n", mean, used,
+               s.g.last - s.g.first);
+    }
+    free(series);
+    surface_free(&s);
+    return status;
+}
+
+/* -------------------------------------------------------- the commands -- */
+
+static int cmd_belanger(analyze_ctx *cx, const options *o)
+{
+    double fr1, v1;
+    if (inflow(cx, o, &fr1, &v1) != 0)
+        return -1;
+    double d2 = sluice_hyd_belanger_depth(o->d1, fr1);
+    headline("Fr1", fr1, NULL);
+    headline("V1", v1, "m/s");
+    headline("d1", o->d1, "m");
+    headline("d2", d2, "m");
+    headline("d2/d1", d2 / o->d1, NULL);
+    if (!o->out)
+        return 0;
+    if (analyze_mkdir(cx, o->out) != 0)
+        return -1;
+    char *path;
+    FILE *f = open_csv(cx, o->out, "belanger.csv", &path);
+    if (!f) {
+        free(path);
+        return -1;
+    }
+    fprintf(f, "d1,V1,Fr1,d2,d2_over_d1\n%.10g,%.10g,%.10g,%.10g,%.10g\n", o->d1, v1, fr1, d2,
+            d2 / o->d1);
+    if (close_csv(cx, f, path) != 0)
+        return -1;
+    char body[1024];
+    snprintf(body, sizeof body,
+             "set xlabel 'Fr1'\nset ylabel 'd2/d1'\nset key top left\n"
+             "plot [1:%g] (sqrt(1+8*x**2)-1)/2 title 'Belanger (seed 000 eq. 1)', "
+             "'belanger.csv' using 3:5 skip 1 with points pt 7 ps 1.5 title 'this jump'\n",
+             fmax(10.0, 1.5 * fr1));
+    plot(cx, o, o->out, "belanger", body);
+    return 0;
+}
+
+static int cmd_conjugate(analyze_ctx *cx, const options *o)
+{
+    const char *run = run_dir(cx, o);
+    double fr1, v1;
+    if (!run || inflow(cx, o, &fr1, &v1) != 0 || need(cx, o, o->x, "x", 0) != 0)
+        return -1;
+    run_data r;
+    if (run_open(cx, run, &r) != 0)
+        return -1;
+    int status = -1;
+    gauge_table g = {0};
+    double *xs = NULL, *d2 = NULL;
+    char *dir = NULL, *path = NULL, *source = NULL;
+    long k = -1, n = 0;
+    int from_sections = 0;
+
+    path = gauge_path(cx, &r, "section_gauge", "sections.csv");
+    if (!path)
+        goto done;
+    if (analyze_file_exists(path) &&
+        (o->positions || analyze_scene_has(r.scene, "section_gauge"))) {
+        n = gauge_positions(cx, o, &r, "section_gauge", &xs);
+        if (n < 0)
+            goto done;
+        k = position_index(xs, (size_t)n, o->x, o->tolerance);
+        from_sections = k >= 0;
+    }
+    if (!from_sections) {
+        free(xs);
+        xs = NULL;
+        free(path);
+        path = gauge_path(cx, &r, "free_surface_gauge", "free_surface.csv");
+        if (!path)
+            goto done;
+        if (!o->positions && !analyze_scene_has(r.scene, "free_surface_gauge") &&
+            !analyze_file_exists(path)) {
+            analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                         "%s has neither a section gauge nor a free-surface gauge at x = %g "
+                         "(no sections.csv or free_surface.csv)",
+                         run, o->x);
+            goto done;
+        }
+        n = gauge_positions(cx, o, &r, "free_surface_gauge", &xs);
+        if (n < 0)
+            goto done;
+        k = position_index(xs, (size_t)n, o->x, o->tolerance);
+        if (k < 0) {
+            analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                         "no section or free-surface gauge at x = %g m in %s (within %g m)",
+                         o->x, run, o->tolerance);
+            goto done;
+        }
+    }
+    if (gauge_table_load(cx, o, path, &g) != 0)
+        goto done;
+    char name[64];
+    snprintf(name, sizeof name, from_sections ? "d_x%ld" : "eta_x%ld", k);
+    long c = analyze_table_column(cx, &g.table, name);
+    d2 = c >= 0 ? analyze_alloc(cx, g.table.rows, sizeof *d2) : NULL;
+    if (!d2)
+        goto done;
+    analyze_table_copy(&g.table, (size_t)c, d2);
+    if (!from_sections)
+        for (size_t i = 0; i < g.table.rows; i++)
+            d2[i] -= o->bed;
+    double d2b = sluice_hyd_belanger_depth(o->d1, fr1), A, P, mean, std;
+    size_t used;
+    if (sluice_hyd_conjugate_statistics(d2 + g.first, g.last - g.first, d2b, &A, &P, &used) !=
+            0 ||
+        sluice_hyd_mean_std(d2 + g.first, g.last - g.first, &mean, &std, &used) != 0) {
+        analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND, "%s: %s is nan over the whole window", path,
+                     name);
+        goto done;
+    }
+    source = analyze_format(cx, "%s %s (x = %g m)", path, name, xs[k]);
+    if (!source)
+        goto done;
+    printf("source = %s\n", source);
+    headline("Fr1", fr1, NULL);
+    headline("d2_Belanger", d2b, "m");
+    print_window(&g);
+    printf("used = %zu\n", used);
+    headline("d2_mean", mean, "m");
+    headline("d2_std", std, "m");
+    headline("d2_mean/d2_Belanger", mean / d2b, NULL);
+    headline("A", A, NULL);
+    headline("P", P, NULL);
+
+    dir = out_dir(cx, o, run);
+    if (!dir)
+        goto done;
+    char *csv;
+    FILE *f = open_csv(cx, dir, "conjugate.csv", &csv);
+    if (!f) {
+        free(csv);
+        goto done;
+    }
+    fprintf(f, "time,d2,d2_over_d2B\n");
+    for (size_t i = 0; i < g.table.rows; i++)
+        fprintf(f, "%.10g,%.10g,%.10g\n", g.time[i], d2[i], d2[i] / d2b);
+    if (close_csv(cx, f, csv) != 0)
+        goto done;
+    char body[1024];
+    snprintf(body, sizeof body,
+             "set xlabel 'time (s)'\nset ylabel 'd2 / d2_Belanger'\n"
+             "set arrow from %g, graph 0 to %g, graph 1 nohead dt 2\n"
+             "set arrow from %g, graph 0 to %g, graph 1 nohead dt 2\n"
+             "set title 'x = %g m: A = %.3f, P = %.3f over [%g, %g] s'\n"
+             "plot 'conjugate.csv' using 1:3 skip 1 with lines title 'Sluice', "
+             "1 with lines dt 3 title 'Belanger'\n",
+             g.time[g.first], g.time[g.first], g.time[g.last - 1], g.time[g.last - 1], xs[k], A,
+             P, g.time[g.first], g.time[g.last - 1]);
+    plot(cx, o, dir, "conjugate", body);
+    status = 0;
+done:
+    gauge_table_free(&g);
+    analyze_scene_free(r.scene);
+    free(xs);
+    free(d2);
+    free(dir);
+    free(path);
+    free(source);
+    return status;
+}
+
+static int cmd_toe(analyze_ctx *cx, const options *o)
+{
+    const char *run = run_dir(cx, o);
+    double fr1, v1;
+    if (!run || inflow(cx, o, &fr1, &v1) != 0)
+        return -1;
+    run_data r;
+    if (run_open(cx, run, &r) != 0)
+        return -1;
+    int status = -1;
+    surface_gauges s;
+    double *x1 = NULL;
+    char *dir = NULL;
+    if (surface_load(cx, o, &r, &s) != 0)
+        goto done;
+    double threshold;
+    x1 = analyze_alloc(cx, s.g.table.rows, sizeof *x1);
+    if (!x1 || toe_series(cx, o, &s, fr1, &threshold, x1) != 0)
+        goto done;
+    size_t rows = s.g.last - s.g.first, used = 0;
+    double mean = NAN, std = NAN;
+    sluice_hyd_mean_std(x1 + s.g.first, rows, &mean, &std, &used);
+    double speed = sluice_hyd_slope(s.g.time + s.g.first, x1 + s.g.first, rows);
+    headline("Fr1", fr1, NULL);
+    headline("d2_Belanger", sluice_hyd_belanger_depth(o->d1, fr1), "m");
+    headline("threshold_depth", threshold, "m");
+    print_window(&s.g);
+    printf("detected = %zu\n", used);
+    headline("x1_mean", mean, "m");
+    headline("x1_std", std, "m");
+    headline("x1_speed", speed, "m/s");
+
+    dir = out_dir(cx, o, run);
+    if (!dir)
+        goto done;
+    char *csv;
+    FILE *f = open_csv(cx, dir, "toe.csv", &csv);
+    if (!f) {
+        free(csv);
+        goto done;
+    }
+    fprintf(f, "time,x1\n");
+    for (size_t i = 0; i < s.g.table.rows; i++)
+        fprintf(f, "%.10g,%.10g\n", s.g.time[i], x1[i]);
+    if (close_csv(cx, f, csv) != 0)
+        goto done;
+    if (used == 0) {
+        analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND,
+                     "no jump toe detected in the window: the depth never rises through %g m "
+                     "downstream of a gauge below it",
+                     threshold);
+        goto done;
+    }
+    char body[1024];
+    snprintf(body, sizeof body,
+             "set xlabel 'time (s)'\nset ylabel 'toe x1 (m)'\n"
+             "set title 'toe: depth crosses %.4g m; mean %.4g m, std %.3g m over [%g, %g] s'\n"
+             "plot 'toe.csv' using 1:2 skip 1 with lines title 'x1(t)', "
+             "%g with lines dt 3 title 'mean'\n",
+             threshold, mean, std, s.g.time[s.g.first], s.g.time[s.g.last - 1], mean);
+    plot(cx, o, dir, "toe", body);
+    status = 0;
+done:
+    surface_free(&s);
+    analyze_scene_free(r.scene);
+    free(x1);
+    free(dir);
+    return status;
+}
+
+/* Time-mean horizontal velocity at each point over the window; NaN where the
+ * point is wet (finite) in fewer than --min-wet of the rows. */
+typedef struct point_means {
+    size_t n;
+    double *x, *y, *u;
+    size_t sections;
+    size_t *section_of;
+    double *section_x;
+} point_means;
+
+static void point_means_free(point_means *p)
+{
+    free(p->x);
+    free(p->y);
+    free(p->u);
+    free(p->section_of);
+    free(p->section_x);
+}
+
+static int point_means_load(analyze_ctx *cx, const options *o, const run_data *r, point_means *p)
+{
+    memset(p, 0, sizeof *p);
+    long n = gauge_points(cx, o, r, &p->x, &p->y);
+    if (n < 0)
+        return -1;
+    p->n = (size_t)n;
+    char *path = gauge_path(cx, r, "point_gauge", "points.csv");
+    gauge_table g;
+    memset(&g, 0, sizeof g);
+    int status = path ? gauge_table_load(cx, o, path, &g) : -1;
+    free(path);
+    if (status != 0) {
+        gauge_table_free(&g);
+        return -1;
+    }
+    p->u = analyze_alloc(cx, p->n, sizeof *p->u);
+    double *series = analyze_alloc(cx, g.table.rows, sizeof *series);
+    p->section_of = analyze_alloc(cx, p->n, sizeof *p->section_of);
+    p->section_x = analyze_alloc(cx, p->n, sizeof *p->section_x);
+    if (!p->u || !series || !p->section_of || !p->section_x)
+        status = -1;
+    for (size_t k = 0; status == 0 && k < p->n; k++) {
+        char name[96];
+        snprintf(name, sizeof name, "p%zu_%s_x", k, o->field);
+        long c = analyze_table_column(cx, &g.table, name);
+        if (c < 0) {
+            status = -1;
+            break;
+        }
+        analyze_table_copy(&g.table, (size_t)c, series);
+        p->u[k] = sluice_hyd_wet_mean(series + g.first, g.last - g.first, o->min_wet);
+    }
+    if (status == 0) {
+        print_window(&g);
+        p->sections = sluice_hyd_group_sections(p->x, p->n, o->tolerance, p->section_of,
+                                                p->section_x);
+    }
+    free(series);
+    gauge_table_free(&g);
+    return status;
+}
+
+static int cmd_roller(analyze_ctx *cx, const options *o)
+{
+    const char *run = run_dir(cx, o);
+    double fr1, v1;
+    if (!run || inflow(cx, o, &fr1, &v1) != 0)
+        return -1;
+    run_data r;
+    if (run_open(cx, run, &r) != 0)
+        return -1;
+    int status = -1;
+    point_means p = {0};
+    double *us = NULL, *ys = NULL, x1;
+    char *dir = NULL;
+    if (resolve_x1(cx, o, &r, fr1, &x1) != 0 || point_means_load(cx, o, &r, &p) != 0)
+        goto done;
+    /* near-surface velocity of a section: its highest point wet in the mean */
+    us = analyze_alloc(cx, p.sections, sizeof *us);
+    ys = analyze_alloc(cx, p.sections, sizeof *ys);
+    if (!us || !ys)
+        goto done;
+    sluice_hyd_section_top(p.section_of, p.y, p.u, p.n, p.sections, us, ys);
+    double x_section = NAN, x_crossing = NAN;
+    int found = sluice_hyd_roller_end(p.section_x, us, p.sections, x1, &x_section,
+                                      &x_crossing) == 0;
+    double hager = sluice_hyd_hager_roller_length(o->d1, fr1);
+    headline("Fr1", fr1, NULL);
+    printf("sections = %zu\n", p.sections);
+    headline("x_roller_end", x_section, "m");
+    headline("L_r", x_section - x1, "m");
+    headline("L_r_crossing", x_crossing - x1, "m");
+    headline("L_r_Hager", hager, "m");
+    headline("L_r/L_r_Hager", (x_section - x1) / hager, NULL);
+
+    dir = out_dir(cx, o, run);
+    if (!dir)
+        goto done;
+    char *csv;
+    FILE *f = open_csv(cx, dir, "roller.csv", &csv);
+    if (!f) {
+        free(csv);
+        goto done;
+    }
+    fprintf(f, "x,xi,y_near_surface,u_mean\n");
+    for (size_t s = 0; s < p.sections; s++)
+        fprintf(f, "%.10g,%.10g,%.10g,%.10g\n", p.section_x[s], (p.section_x[s] - x1) / o->d1,
+                ys[s], us[s]);
+    if (close_csv(cx, f, csv) != 0)
+        goto done;
+    if (!found) {
+        analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND,
+                     "no roller end: no section downstream of x1 = %g m has a negative mean "
+                     "near-surface velocity followed by a non-negative one",
+                     x1);
+        goto done;
+    }
+    char body[1024];
+    snprintf(body, sizeof body,
+             "set xlabel 'x (m)'\nset ylabel 'mean near-surface u (m/s)'\n"
+             "set arrow from %g, graph 0 to %g, graph 1 nohead dt 2\n"
+             "set arrow from %g, graph 0 to %g, graph 1 nohead lc rgb 'red'\n"
+             "set arrow from %g, graph 0 to %g, graph 1 nohead dt 3 lc rgb 'blue'\n"
+             "set title 'L_r = %.4g m (toe %.4g m, dashed; end red), Hager et al. %.4g m "
+             "(blue)'\n"
+             "plot 'roller.csv' using 1:4 skip 1 with linespoints title 'Sluice', 0 notitle\n",
+             x1, x1, x_section, x_section, x1 + hager, x1 + hager, x_section - x1, x1, hager);
+    plot(cx, o, dir, "roller", body);
+    status = 0;
+done:
+    point_means_free(&p);
+    analyze_scene_free(r.scene);
+    free(us);
+    free(ys);
+    free(dir);
+    return status;
+}
+
+static int cmd_vmax(analyze_ctx *cx, const options *o)
+{
+    const char *run = run_dir(cx, o);
+    double fr1, v1;
+    if (!run || inflow(cx, o, &fr1, &v1) != 0)
+        return -1;
+    run_data r;
+    if (run_open(cx, run, &r) != 0)
+        return -1;
+    int status = -1;
+    point_means p = {0};
+    double *vmax = NULL, *xi = NULL, *ratio = NULL, x1;
+    char *dir = NULL;
+    if (resolve_x1(cx, o, &r, fr1, &x1) != 0 || point_means_load(cx, o, &r, &p) != 0)
+        goto done;
+    vmax = analyze_alloc(cx, p.sections, sizeof *vmax);
+    xi = analyze_alloc(cx, p.sections, sizeof *xi);
+    ratio = analyze_alloc(cx, p.sections, sizeof *ratio);
+    if (!vmax || !xi || !ratio)
+        goto done;
+    size_t downstream = 0;
+    double dev2 = 0.0;
+    sluice_hyd_section_max(p.section_of, p.u, p.n, p.sections, vmax);
+    for (size_t s = 0; s < p.sections; s++) {
+        xi[s] = (p.section_x[s] - x1) / o->d1;
+        ratio[s] = xi[s] >= 0.0 ? vmax[s] / v1 : NAN;
+        if (isfinite(ratio[s])) {
+            double e = ratio[s] - sluice_hyd_chanson_vmax_ratio(xi[s]);
+            dev2 += e * e;
+            downstream++;
+        }
+    }
+    double k_fit = sluice_hyd_decay_rate(xi, ratio, p.sections);
+    headline("V1", v1, "m/s");
+    printf("sections_downstream = %zu\n", downstream);
+    headline("decay_rate", k_fit, NULL);
+    headline("decay_rate_Chanson", 0.028, NULL);
+    headline("rms_deviation_from_Chanson", downstream ? sqrt(dev2 / (double)downstream) : NAN,
+             NULL);
+
+    dir = out_dir(cx, o, run);
+    if (!dir)
+        goto done;
+    char *csv;
+    FILE *f = open_csv(cx, dir, "vmax.csv", &csv);
+    if (!f) {
+        free(csv);
+        goto done;
+    }
+    fprintf(f, "x,xi,Vmax,Vmax_over_V1,Chanson\n");
+    for (size_t s = 0; s < p.sections; s++)
+        fprintf(f, "%.10g,%.10g,%.10g,%.10g,%.10g\n", p.section_x[s], xi[s], vmax[s], ratio[s],
+                sluice_hyd_chanson_vmax_ratio(xi[s]));
+    if (close_csv(cx, f, csv) != 0)
+        goto done;
+    if (downstream == 0) {
+        analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND,
+                     "no wet point gauge downstream of the toe x1 = %g m", x1);
+        goto done;
+    }
+    char body[1024];
+    snprintf(body, sizeof body,
+             "set xlabel '(x - x1)/d1'\nset ylabel 'Vmax / V1'\n"
+             "set title 'fitted decay exp(-%.4g xi); Chanson exp(-0.028 xi)'\n"
+             "plot 'vmax.csv' using 2:4 skip 1 with points pt 7 title 'Sluice', "
+             "'vmax.csv' using 2:5 skip 1 with lines title 'Chanson (2010)'\n",
+             k_fit);
+    plot(cx, o, dir, "vmax", body);
+    status = 0;
+done:
+    point_means_free(&p);
+    analyze_scene_free(r.scene);
+    free(vmax);
+    free(xi);
+    free(ratio);
+    free(dir);
+    return status;
+}
+
+static int cmd_surface(analyze_ctx *cx, const options *o)
+{
+    const char *run = run_dir(cx, o);
+    double fr1, v1;
+    if (!run || inflow(cx, o, &fr1, &v1) != 0)
+        return -1;
+    run_data r;
+    if (run_open(cx, run, &r) != 0)
+        return -1;
+    int status = -1;
+    surface_gauges s;
+    memset(&s, 0, sizeof s);
+    double *series = NULL, *mean = NULL, *std = NULL, *wet = NULL, x1;
+    char *dir = NULL;
+    if (resolve_x1(cx, o, &r, fr1, &x1) != 0 || surface_load(cx, o, &r, &s) != 0)
+        goto done;
+    size_t rows = s.g.last - s.g.first;
+    series = analyze_alloc(cx, s.g.table.rows, sizeof *series);
+    mean = analyze_alloc(cx, s.n, sizeof *mean);
+    std = analyze_alloc(cx, s.n, sizeof *std);
+    wet = analyze_alloc(cx, s.n, sizeof *wet);
+    if (!series || !mean || !std || !wet)
+        goto done;
+    size_t peak = s.n;
+    for (size_t k = 0; k < s.n; k++) {
+        analyze_table_copy(&s.g.table, s.col[k], series);
+        size_t used = 0;
+        mean[k] = std[k] = NAN;
+        if (sluice_hyd_mean_std(series + s.g.first, rows, &mean[k], &std[k], &used) == 0)
+            mean[k] -= o->bed;
+        wet[k] = (double)used / (double)rows;
+        if (wet[k] < o->min_wet)
+            mean[k] = std[k] = NAN;
+        if (s.x[k] >= x1 && isfinite(std[k]) && (peak == s.n || std[k] > std[peak]))
+            peak = k;
+    }
+    double murzyn = sluice_hyd_murzyn_chanson_eta_std(fr1);
+    headline("Fr1", fr1, NULL);
+    print_window(&s.g);
+    if (peak < s.n) {
+        headline("eta_std_max/d1", std[peak] / o->d1, NULL);
+        headline("x_of_max", s.x[peak], "m");
+        headline("xi_of_max", (s.x[peak] - x1) / o->d1, NULL);
+    }
+    headline("eta_std_max/d1_Murzyn_Chanson", murzyn, NULL);
+    if (peak < s.n)
+        headline("ratio_to_Murzyn_Chanson", std[peak] / o->d1 / murzyn, NULL);
+
+    dir = out_dir(cx, o, run);
+    if (!dir)
+        goto done;
+    char *csv;
+    FILE *f = open_csv(cx, dir, "surface.csv", &csv);
+    if (!f) {
+        free(csv);
+        goto done;
+    }
+    fprintf(f, "x,xi,depth_mean,eta_std,depth_mean_over_d1,eta_std_over_d1,wet_fraction\n");
+    for (size_t k = 0; k < s.n; k++)
+        fprintf(f, "%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n", s.x[k], (s.x[k] - x1) / o->d1,
+                mean[k], std[k], mean[k] / o->d1, std[k] / o->d1, wet[k]);
+    if (close_csv(cx, f, csv) != 0)
+        goto done;
+    if (peak == s.n) {
+        analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND,
+                     "no wet free-surface gauge downstream of the toe x1 = %g m", x1);
+        goto done;
+    }
+    char body[1200];
+    snprintf(body, sizeof body,
+             "set xlabel '(x - x1)/d1'\nset ylabel 'depth/d1, eta std/d1'\nset y2tics\n"
+             "set key center right\n"
+             "set title 'max eta std/d1 = %.3g; Murzyn & Chanson 0.116 (Fr1-1)^1.235 = %.3g'\n"
+             "plot 'surface.csv' using 2:5 skip 1 with linespoints title 'mean depth / d1', "
+             "'surface.csv' using 2:6 skip 1 with linespoints axes x1y2 title 'std / d1 "
+             "(right)', %g axes x1y2 with lines dt 3 title 'Murzyn & Chanson (right)'\n",
+             std[peak] / o->d1, murzyn, murzyn);
+    plot(cx, o, dir, "surface", body);
+    status = 0;
+done:
+    surface_free(&s);
+    analyze_scene_free(r.scene);
+    free(series);
+    free(mean);
+    free(std);
+    free(wet);
+    free(dir);
+    return status;
+}
+
+/* FILE:NAME or NAME searched in the run's gauge files. */
+static int find_column(analyze_ctx *cx, const options *o, const run_data *r, char **path,
+                       char **name)
+{
+    const char *colon = strrchr(o->column, ':');
+    *path = *name = NULL;
+    if (colon) {
+        *name = analyze_format(cx, "%s", colon + 1);
+        *path = o->column[0] == '/'
+                    ? analyze_format(cx, "%.*s", (int)(colon - o->column), o->column)
+                    : analyze_format(cx, "%s/%.*s", r->run, (int)(colon - o->column), o->column);
+        return *name && *path ? 0 : -1;
+    }
+    static const char *const gauges[][2] = {{"free_surface_gauge", "free_surface.csv"},
+                                            {"section_gauge", "sections.csv"},
+                                            {"point_gauge", "points.csv"},
+                                            {"inlet", "inlet.csv"},
+                                            {"outlet", "outlet.csv"}};
+    char searched[512] = "";
+    size_t used = 0;
+    for (size_t k = 0; k < sizeof gauges / sizeof *gauges; k++) {
+        char *candidate = gauge_path(cx, r, gauges[k][0], gauges[k][1]);
+        if (!candidate)
+            return -1;
+        if (analyze_file_exists(candidate)) {
+            analyze_table t;
+            if (analyze_table_load(cx, candidate, &t) != 0) {
+                analyze_table_free(&t);
+                free(candidate);
+                return -1;
+            }
+            int has = analyze_table_find(&t, o->column) >= 0;
+            analyze_table_free(&t);
+            if (has) {
+                *path = candidate;
+                *name = analyze_format(cx, "%s", o->column);
+                return *name ? 0 : -1;
+            }
+            int w = snprintf(searched + used, sizeof searched - used, "%s%s", used ? ", " : "",
+                             candidate);
+            if (w > 0 && (size_t)w < sizeof searched - used)
+                used += (size_t)w;
+        }
+        free(candidate);
+    }
+    return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                        "no gauge file of %s has a column '%s' (searched: %s)", r->run,
+                        o->column, used ? searched : "no gauge file found");
+}
+
+static int cmd_spectrum(analyze_ctx *cx, const options *o)
+{
+    const char *run = run_dir(cx, o);
+    if (!run)
+        return -1;
+    if (!o->column)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "spectrum needs --column [FILE:]NAME");
+    double fr1 = NAN, v1 = NAN;
+    int strouhal = !isnan(o->d1);
+    if (strouhal && inflow(cx, o, &fr1, &v1) != 0)
+        return -1;
+    run_data r;
+    if (run_open(cx, run, &r) != 0)
+        return -1;
+    int status = -1;
+    char *path = NULL, *name = NULL, *dir = NULL, *file = NULL;
+    gauge_table g = {0};
+    double *y = NULL, *u = NULL, *re = NULL, *im = NULL, *amp = NULL;
+    if (find_column(cx, o, &r, &path, &name) != 0 || gauge_table_load(cx, o, path, &g) != 0)
+        goto done;
+    long c = analyze_table_column(cx, &g.table, name);
+    if (c < 0)
+        goto done;
+    size_t n = g.last - g.first;
+    if (n < 4) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "%s: only %zu samples in the window", path,
+                     n);
+        goto done;
+    }
+    size_t m = sluice_hyd_next_pow2(n);
+    y = analyze_alloc(cx, g.table.rows, sizeof *y);
+    u = analyze_alloc(cx, n, sizeof *u);
+    re = analyze_alloc(cx, m, sizeof *re);
+    im = analyze_alloc(cx, m, sizeof *im);
+    amp = analyze_alloc(cx, m / 2 + 1, sizeof *amp);
+    if (!y || !u || !re || !im || !amp)
+        goto done;
+    analyze_table_copy(&g.table, (size_t)c, y);
+    size_t finite = 0;
+    for (size_t i = g.first; i < g.last; i++)
+        finite += isfinite(y[i]) != 0;
+    double t0 = g.time[g.first], t1 = g.time[g.last - 1], dt = (t1 - t0) / (double)(n - 1), df;
+    if (sluice_hyd_resample(g.time + g.first, y + g.first, n, t0, t1, n, u) != 0) {
+        analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND,
+                     "%s: %s has fewer than two finite samples in the window", path, name);
+        goto done;
+    }
+    sluice_hyd_amplitude_spectrum(u, n, dt, re, im, amp, &df);
+    size_t peak = sluice_hyd_spectrum_peak(amp, m / 2 + 1, df, isnan(o->fmin) ? 0.0 : o->fmin,
+                                           isnan(o->fmax) ? 0.0 : o->fmax);
+    printf("source = %s %s\n", path, name);
+    print_window(&g);
+    printf("finite = %zu\n", finite);
+    headline("dt", dt, "s");
+    printf("fft_length = %zu\n", m);
+    headline("df", df, "Hz");
+    headline("f_peak", (double)peak * df, "Hz");
+    headline("amplitude_peak", peak ? amp[peak] : NAN, NULL);
+    if (strouhal) {
+        double st = (double)peak * df * o->d1 / v1;
+        double cc = sluice_hyd_chachereau_chanson_strouhal(fr1);
+        headline("Fr1", fr1, NULL);
+        headline("St", st, NULL);
+        headline("St_Chachereau_Chanson", cc, NULL);
+        headline("St/St_Chachereau_Chanson", st / cc, NULL);
+    }
+    dir = out_dir(cx, o, run);
+    if (!dir)
+        goto done;
+    file = analyze_format(cx, "spectrum_%s", name);
+    if (!file)
+        goto done;
+    for (char *q = file; *q; q++)
+        if (!(*q == '_' || *q == '-' || *q == '.' || (*q >= '0' && *q <= '9') ||
+              (*q >= 'a' && *q <= 'z') || (*q >= 'A' && *q <= 'Z')))
+            *q = '_';
+    char csvname[300];
+    snprintf(csvname, sizeof csvname, "%s.csv", file);
+    char *csv;
+    FILE *f = open_csv(cx, dir, csvname, &csv);
+    if (!f) {
+        free(csv);
+        goto done;
+    }
+    fprintf(f, "frequency,amplitude\n");
+    for (size_t j = 0; j <= m / 2; j++)
+        fprintf(f, "%.10g,%.10g\n", (double)j * df, amp[j]);
+    if (close_csv(cx, f, csv) != 0)
+        goto done;
+    if (peak == 0) {
+        analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND, "no spectral bin in [--fmin, --fmax]");
+        goto done;
+    }
+    if (!(amp[peak] > 0.0)) {
+        analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND,
+                     "%s is a straight line in the window: its spectrum is zero", name);
+        goto done;
+    }
+    char body[1024];
+    snprintf(body, sizeof body,
+             "set xlabel 'frequency (Hz)'\nset ylabel 'amplitude'\n"
+             "set title '%s: peak %.4g Hz (df = %.3g Hz, Hann window, detrended)'\n"
+             "plot '%s' using 1:2 skip 1 with lines title '%s'\n",
+             name, (double)peak * df, df, csvname, name);
+    plot(cx, o, dir, file, body);
+    status = 0;
+done:
+    gauge_table_free(&g);
+    analyze_scene_free(r.scene);
+    free(path);
+    free(name);
+    free(dir);
+    free(file);
+    free(y);
+    free(u);
+    free(re);
+    free(im);
+    free(amp);
+    return status;
+}
+
+/* A.csv:COL -> table, column values, times. */
+static int load_series(analyze_ctx *cx, const options *o, const char *spec, gauge_table *g,
+                       double **values, char **name)
+{
+    const char *colon = strrchr(spec, ':');
+    *values = NULL;
+    *name = NULL;
+    if (!colon || colon == spec || !colon[1])
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "correlate expects FILE.csv:COLUMN, got '%s'", spec);
+    char *path = analyze_format(cx, "%.*s", (int)(colon - spec), spec);
+    if (!path)
+        return -1;
+    options all = *o; /* the whole file: the window is applied to the common times */
+    all.from = -INFINITY;
+    all.to = INFINITY;
+    int status = gauge_table_load(cx, &all, path, g);
+    free(path);
+    if (status != 0)
+        return -1;
+    long c = analyze_table_column(cx, &g->table, colon + 1);
+    if (c < 0)
+        return -1;
+    *values = analyze_alloc(cx, g->table.rows, sizeof **values);
+    *name = analyze_format(cx, "%s", colon + 1);
+    if (!*values || !*name)
+        return -1;
+    analyze_table_copy(&g->table, (size_t)c, *values);
+    return 0;
+}
+
+static int cmd_correlate(analyze_ctx *cx, const options *o)
+{
+    if (o->positional_count != 2)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "correlate needs two series, A.csv:COLUMN B.csv:COLUMN");
+    int status = -1;
+    gauge_table a = {0}, b = {0};
+    double *va = NULL, *vb = NULL, *bi = NULL;
+    char *na = NULL, *nb = NULL, *dir = NULL;
+    if (load_series(cx, o, o->positional[0], &a, &va, &na) != 0 ||
+        load_series(cx, o, o->positional[1], &b, &vb, &nb) != 0)
+        goto done;
+    double lo = fmax(fmax(a.time[0], b.time[0]), o->from);
+    double hi = fmin(fmin(a.time[a.table.rows - 1], b.time[b.table.rows - 1]), o->to);
+    bi = analyze_alloc(cx, a.table.rows, sizeof *bi);
+    if (!bi)
+        goto done;
+    size_t first = a.table.rows, last = 0;
+    for (size_t i = 0; i < a.table.rows; i++)
+        if (a.time[i] >= lo && a.time[i] <= hi) {
+            if (first == a.table.rows)
+                first = i;
+            last = i + 1;
+            bi[i] = sluice_hyd_interpolate(b.time, vb, b.table.rows, a.time[i]);
+        }
+    if (first >= last) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                     "%s and %s have no common times in the window", o->positional[0],
+                     o->positional[1]);
+        goto done;
+    }
+    size_t used;
+    double r = sluice_hyd_pearson(va + first, bi + first, last - first, &used);
+    printf("common_window = [%.6g, %.6g] s\n", a.time[first], a.time[last - 1]);
+    printf("pairs = %zu\n", used);
+    headline("r", r, NULL);
+    if (o->out)
+        dir = analyze_format(cx, "%s", o->out);
+    else {
+        const char *slash = strrchr(o->positional[0], '/');
+        dir = slash ? analyze_format(cx, "%.*s/analysis", (int)(slash - o->positional[0]),
+                                     o->positional[0])
+                    : analyze_format(cx, "analysis");
+    }
+    if (!dir || analyze_mkdir(cx, dir) != 0)
+        goto done;
+    char *csv;
+    FILE *f = open_csv(cx, dir, "correlate.csv", &csv);
+    if (!f) {
+        free(csv);
+        goto done;
+    }
+    fprintf(f, "time,a,b\n");
+    for (size_t i = first; i < last; i++)
+        fprintf(f, "%.10g,%.10g,%.10g\n", a.time[i], va[i], bi[i]);
+    if (close_csv(cx, f, csv) != 0)
+        goto done;
+    if (!isfinite(r)) {
+        analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND,
+                     "r undefined: fewer than two common finite pairs or a constant series");
+        goto done;
+    }
+    char body[1024];
+    snprintf(body, sizeof body,
+             "set xlabel '%s (A)'\nset ylabel '%s (B)'\nset title 'r = %.4f (%zu pairs)'\n"
+             "plot 'correlate.csv' using 2:3 skip 1 with points pt 7 ps 0.5 notitle\n",
+             na, nb, r, used);
+    plot(cx, o, dir, "correlate", body);
+    status = 0;
+done:
+    gauge_table_free(&a);
+    gauge_table_free(&b);
+    free(va);
+    free(vb);
+    free(bi);
+    free(na);
+    free(nb);
+    free(dir);
+    return status;
+}
+
+static int cmd_l2(analyze_ctx *cx, const options *o)
+{
+    const char *run = run_dir(cx, o);
+    if (!run)
+        return -1;
+    if (!o->reference)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "l2 needs --reference REF.csv");
+    run_data r;
+    if (run_open(cx, run, &r) != 0)
+        return -1;
+    int status = -1;
+    surface_gauges s;
+    memset(&s, 0, sizeof s);
+    analyze_table ref = {0};
+    double *xr = NULL, *hr = NULL, *tr = NULL, *profile = NULL, *hn = NULL, *href = NULL;
+    double times[MAX_TIMES];
+    size_t ntimes = 0;
+    char *dir = NULL;
+    FILE *f = NULL, *fp = NULL;
+    char *csv = NULL, *csvp = NULL;
+    options all = *o;
+    all.from = -INFINITY;
+    all.to = INFINITY;
+    if (analyze_table_load(cx, o->reference, &ref) != 0 || surface_load(cx, &all, &r, &s) != 0)
+        goto done;
+    long cx_ = analyze_table_column(cx, &ref, "x");
+    long ch = analyze_table_find(&ref, "eta");
+    if (ch < 0)
+        ch = analyze_table_find(&ref, "h");
+    if (cx_ < 0)
+        goto done;
+    if (ch < 0) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                     "%s has no column 'eta' (or 'h'): the measured level", o->reference);
+        goto done;
+    }
+    long ct = analyze_table_find(&ref, "time");
+    xr = analyze_alloc(cx, ref.rows, sizeof *xr);
+    hr = analyze_alloc(cx, ref.rows, sizeof *hr);
+    tr = analyze_alloc(cx, ref.rows, sizeof *tr);
+    profile = analyze_alloc(cx, s.n, sizeof *profile);
+    hn = analyze_alloc(cx, ref.rows, sizeof *hn);
+    href = analyze_alloc(cx, ref.rows, sizeof *href);
+    if (!xr || !hr || !tr || !profile || !hn || !href)
+        goto done;
+    analyze_table_copy(&ref, (size_t)cx_, xr);
+    analyze_table_copy(&ref, (size_t)ch, hr);
+    if (ct >= 0) {
+        analyze_table_copy(&ref, (size_t)ct, tr);
+        for (size_t i = 0; i < ref.rows; i++) {
+            size_t k = 0;
+            while (k < ntimes && times[k] != tr[i])
+                k++;
+            if (k == ntimes) {
+                if (ntimes == MAX_TIMES) {
+                    analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "%s: more than %d profile times",
+                                 o->reference, MAX_TIMES);
+                    goto done;
+                }
+                times[ntimes++] = tr[i];
+            }
+        }
+        if (o->time_count) {
+            analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                         "%s has a time column: --time is not needed", o->reference);
+            goto done;
+        }
+    } else {
+        if (o->time_count != 1) {
+            analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                         "%s has no time column: give the profile's time with one --time",
+                         o->reference);
+            goto done;
+        }
+        times[ntimes++] = o->times[0];
+        for (size_t i = 0; i < ref.rows; i++)
+            tr[i] = o->times[0];
+    }
+    dir = out_dir(cx, o, run);
+    if (!dir)
+        goto done;
+    f = open_csv(cx, dir, "l2.csv", &csv);
+    fp = f ? open_csv(cx, dir, "l2_profiles.csv", &csvp) : NULL;
+    if (!f || !fp)
+        goto done;
+    fprintf(f, "time,time_simulated,L2,RMSE,points\n");
+    fprintf(fp, "time,x,h_num,h_ref\n");
+    for (size_t k = 0; k < ntimes; k++) {
+        size_t best = 0;
+        for (size_t i = 1; i < s.g.table.rows; i++)
+            if (fabs(s.g.time[i] - times[k]) < fabs(s.g.time[best] - times[k]))
+                best = i;
+        for (size_t j = 0; j < s.n; j++)
+            profile[j] = cell(&s.g, best, s.col[j]);
+        size_t count = 0;
+        for (size_t i = 0; i < ref.rows; i++)
+            if (tr[i] == times[k]) {
+                hn[count] = sluice_hyd_interpolate(s.x, profile, s.n, xr[i]);
+                href[count] = hr[i];
+                fprintf(fp, "%.10g,%.10g,%.10g,%.10g\n", times[k], xr[i], hn[count], hr[i]);
+                count++;
+            }
+        double l2 = NAN, rmse = NAN;
+        size_t used = 0;
+        if (sluice_hyd_profile_errors(hn, href, count, &l2, &rmse, &used) != 0) {
+            analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                         "%s at t = %g: no reference point inside the gauges' range, or a "
+                         "reference level of 0 (L2 divides by it)",
+                         o->reference, times[k]);
+            goto done;
+        }
+        fprintf(f, "%.10g,%.10g,%.10g,%.10g,%zu\n", times[k], s.g.time[best], l2, rmse, used);
+        printf("time = %g s (simulated %g s): L2 = %.6g, RMSE = %.6g m, points = %zu\n",
+               times[k], s.g.time[best], l2, rmse, used);
+    }
+    status = 0;
+done:
+    if (f && close_csv(cx, f, csv) != 0)
+        status = -1;
+    if (fp && close_csv(cx, fp, csvp) != 0)
+        status = -1;
+    if (status == 0) {
+        char body[1024];
+        snprintf(body, sizeof body,
+                 "set xlabel 'x (m)'\nset ylabel 'level (m)'\n"
+                 "plot 'l2_profiles.csv' using 2:3 skip 1 with points pt 7 ps 0.6 title "
+                 "'Sluice', 'l2_profiles.csv' using 2:4 skip 1 with points pt 6 title "
+                 "'reference'\n");
+        plot(cx, o, dir, "l2", body);
+    }
+    surface_free(&s);
+    analyze_table_free(&ref);
+    analyze_scene_free(r.scene);
+    free(xr);
+    free(hr);
+    free(tr);
+    free(profile);
+    free(hn);
+    free(href);
+    free(dir);
+    return status;
+}
+
+static int cmd_classify(analyze_ctx *cx, const options *o)
+{
+    if (need(cx, o, o->y1, "y1", 1) != 0 || need(cx, o, o->yt, "yt", 1) != 0 ||
+        need(cx, o, o->drop, "drop", 0) != 0)
+        return -1;
+    if (!(o->drop >= 0.0))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--drop must be >= 0");
+    options with_d1 = *o;
+    with_d1.d1 = o->y1;
+    double fr1, v1;
+    if (inflow(cx, &with_d1, &fr1, &v1) != 0)
+        return -1;
+    double Y = o->yt / o->y1, S = o->drop / o->y1, fa, fb, t;
+    sluice_hyd_drop_regime regime;
+    if (sluice_hyd_drop_regime_of(fr1, Y, S, &regime, &t) != 0 ||
+        sluice_hyd_drop_limits(Y, S, &fa, &fb) != 0)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "the tailwater must stand above the step: yt/y1 = %g <= 1 + s/y1 = %g",
+                            Y, 1 + S);
+    static const char *const names[] = {"A-jump", "wave-jump region", "B-jump"};
+    headline("F1", fr1, NULL);
+    headline("yt/y1", Y, NULL);
+    headline("s/y1", S, NULL);
+    headline("F_A", fa, NULL);
+    headline("F_B", fb, NULL);
+    headline("t", t, NULL);
+    printf("regime = %s\n", names[regime]);
+    if (!o->out)
+        return 0;
+    if (analyze_mkdir(cx, o->out) != 0)
+        return -1;
+    char *path;
+    FILE *f = open_csv(cx, o->out, "classify.csv", &path);
+    if (!f) {
+        free(path);
+        return -1;
+    }
+    fprintf(f, "F1,Y,S,F_A,F_B,t,regime\n%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%d\n", fr1, Y, S, fa,
+            fb, t, (int)regime);
+    if (close_csv(cx, f, path) != 0)
+        return -1;
+    char body[1400];
+    snprintf(body, sizeof body,
+             "S = %.10g\nfa(y) = sqrt(y*((y-S)**2-1)/(2*(y-1)))\n"
+             "fb(y) = sqrt(y*(y**2-(1+S)**2)/(2*(y-1)))\n"
+             "set xlabel 'yt/y1'\nset ylabel 'F1'\nset key top left\n"
+             "set title 'abrupt drop s/y1 = %.3g: A-jump below F_A, B-jump above F_B'\n"
+             "plot [%g:%g] fa(x) title 'F_A (A-jump limit)', fb(x) title 'F_B (B-jump limit)', "
+             "'classify.csv' using 2:1 skip 1 with points pt 7 ps 1.5 title 'this flow'\n",
+             S, S, 1.0 + S + 1e-3, fmax(2.0 * Y, Y + 3.0));
+    plot(cx, o, o->out, "classify", body);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        fputs(usage, stderr);
+        return SLUICE_ANALYZE_BAD_INPUT;
+    }
+    if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 ||
+        strcmp(argv[1], "help") == 0) {
+        fputs(usage, stdout);
+        return SLUICE_ANALYZE_OK;
+    }
+    analyze_ctx cx = {{0}, SLUICE_ANALYZE_OK};
+    options o = {0};
+    o.command = argv[1];
+    o.d1 = o.v1 = o.fr = o.x = o.x1 = o.drop = o.y1 = o.yt = o.fmin = o.fmax = NAN;
+    o.g = 9.81;
+    o.from = -INFINITY;
+    o.to = INFINITY;
+    o.fraction = 0.5;
+    o.bed = 0.0;
+    o.min_wet = 0.5;
+    o.tolerance = 1e-6;
+    o.field = "velocity";
+    static const struct {
+        const char *name;
+        int (*run)(analyze_ctx *, const options *);
+    } commands[] = {
+        {"belanger", cmd_belanger}, {"conjugate", cmd_conjugate}, {"toe", cmd_toe},
+        {"roller", cmd_roller},     {"vmax", cmd_vmax},           {"surface", cmd_surface},
+        {"spectrum", cmd_spectrum}, {"correlate", cmd_correlate}, {"l2", cmd_l2},
+        {"classify", cmd_classify},
+    };
+    int (*command)(analyze_ctx *, const options *) = NULL;
+    for (size_t k = 0; k < sizeof commands / sizeof *commands; k++)
+        if (strcmp(commands[k].name, argv[1]) == 0)
+            command = commands[k].run;
+    if (!command)
+        analyze_fail(&cx, SLUICE_ANALYZE_BAD_INPUT,
+                     "unknown command '%s' (sluice-analyze --help lists them)", argv[1]);
+    else if (parse_options(&cx, argc, argv, &o) == 0) {
+        if (!(o.from <= o.to))
+            analyze_fail(&cx, SLUICE_ANALYZE_BAD_INPUT, "--from must not exceed --to");
+        else if (!(o.min_wet >= 0.0 && o.min_wet <= 1.0))
+            analyze_fail(&cx, SLUICE_ANALYZE_BAD_INPUT, "--min-wet must be in [0, 1]");
+        else if (!(o.tolerance >= 0.0))
+            analyze_fail(&cx, SLUICE_ANALYZE_BAD_INPUT, "--tolerance must be >= 0");
+        else
+            command(&cx, &o);
+    }
+    fflush(stdout);
+    if (cx.status != SLUICE_ANALYZE_OK)
+        fprintf(stderr, "sluice-analyze: %s: %s\n",
+                cx.status == SLUICE_ANALYZE_NOT_FOUND ? "not found" : "error", cx.message);
+    return cx.status;
+}
