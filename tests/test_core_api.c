@@ -238,6 +238,67 @@ START_TEST(plugin_built_for_abi_1_2_loads)
 }
 END_TEST
 
+/* Per-region and per-wall lattice origins: an upper reach whose bed lies
+ * 0.032 m up (3.2 dx at dx = 0.01 m) is filled on its own lattice, rows at
+ * 0.032 + (k + 1/2) dx, and its bed's dbc layers at 0.032 - (k + 1/2) dx,
+ * while the lower region keeps the global lattice. */
+START_TEST(region_and_wall_lattice_origin)
+{
+    const char *yaml = "dimensions: 2\n"
+                       "particles: {spacing: 0.01, smoothing_length_ratio: 1.5}\n"
+                       "time: {end: 0.01}\n"
+                       "domain: {min: [-0.2, -0.2], max: [1.2, 0.5]}\n"
+                       "geometry:\n"
+                       "  fluid:\n"
+                       "    - {shape: box, min: [0, 0.032], max: [0.5, 0.072], lattice_origin: [0, 0.032]}\n"
+                       "    - {shape: box, min: [0.5, 0], max: [1.0, 0.05]}\n"
+                       "  walls:\n"
+                       "    - {shape: polyline, points: [[-0.1, 0.032], [0.5, 0.032]], name: upper,\n"
+                       "       lattice_origin: [0, 0.032]}\n"
+                       "    - {shape: polyline, points: [[0.5, 0], [1.1, 0]], name: lower}\n"
+                       "plugins:\n"
+                       "  wendland_c2: {}\n"
+                       "  tait: {speed_of_sound: 10}\n"
+                       "  continuity: {}\n"
+                       "  pressure_gradient: {}\n"
+                       "  gravity: {}\n"
+                       "  dbc: {}\n"
+                       "  time_step: {}\n"
+                       "  symplectic: {}\n";
+    sluice_sim *sim = test_load("lattice-origin", yaml, NULL, 0);
+    const sluice_view *v = sluice_sim_view(sim);
+    const double dx = 0.01;
+    int upper_fluid = 0, lower_fluid = 0, upper_wall = 0;
+    double worst = 0;
+    for (sluice_index i = 0; i < v->count; i++) {
+        const double x = v->position[0][i], y = v->position[1][i];
+        double k;
+        if (v->kind[i] == SLUICE_KIND_FLUID && x < 0.5) {
+            k = (y - 0.032) / dx - 0.5; /* rows above the upper bed */
+            upper_fluid++;
+        } else if (v->kind[i] == SLUICE_KIND_FLUID) {
+            k = y / dx - 0.5; /* the global lattice */
+            lower_fluid++;
+        } else if (y > 0.0) {
+            k = (0.032 - y) / dx - 0.5; /* layers under the upper bed */
+            upper_wall++;
+        } else {
+            k = -y / dx - 0.5;
+        }
+        worst = fmax(worst, fabs(k - nearbyint(k)));
+        worst = fmax(worst, fabs(x / dx - 0.5 - nearbyint(x / dx - 0.5)));
+    }
+    fprintf(stderr, "lattice origins: %d upper fluid, %d lower fluid, %d upper-bed wall "
+                    "particles; largest distance from their lattices %.2e dx\n",
+            upper_fluid, lower_fluid, upper_wall, worst);
+    ck_assert_int_eq(upper_fluid, 50 * 4);
+    ck_assert_int_eq(lower_fluid, 50 * 5);
+    ck_assert_int_gt(upper_wall, 0);
+    ck_assert_msg(worst < 1e-9, "a particle is %g dx off its lattice", worst);
+    sluice_sim_free(sim);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("core_api");
@@ -247,6 +308,7 @@ int main(void)
     tcase_add_test(c, point_pass_periodic);
     tcase_add_test(c, wall_nearest_in_a_tank);
     tcase_add_test(c, plugin_built_for_abi_1_2_loads);
+    tcase_add_test(c, region_and_wall_lattice_origin);
     suite_add_tcase(s, c);
     return test_run_suite(s);
 }
