@@ -254,6 +254,49 @@ START_TEST(bad_input_refused)
 }
 END_TEST
 
+/* The hydraulic-jump scenes of configs/ load and take their first steps
+ * (the reduced CI version: 100 steps; their physics is measured
+ * by tools/jump-study.sh and docs/validation.md): every open boundary,
+ * gauge and writer starts, particles enter, and nothing is lost. */
+static const char *const jump_scenes[] = {
+    "hydraulic_jump_jonsson2016.yaml", "abrupt_drop_T1.yaml", "abrupt_drop_T2.yaml",
+    "abrupt_drop_T3.yaml",             "abrupt_drop_T4.yaml", "abrupt_drop_T5.yaml",
+    "abrupt_drop_T6.yaml",             "abrupt_drop_T7.yaml",
+};
+
+START_TEST(jump_scenes_start)
+{
+    char *path = test_config(jump_scenes[_i]);
+    char *text = test_read_file(path);
+    ck_assert_ptr_nonnull(text);
+    sluice_sim *sim = test_load("jump-scene", text, NULL, 0);
+    free(text);
+    char *dir = test_scratch("jump-scene-run");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    const sluice_index start = sluice_sim_view(sim)->count;
+    for (int step = 0; step < 100; step++) {
+        const int status = sluice_sim_step(sim);
+        ck_assert_msg(status == SLUICE_RUN_COMPLETE, "%s stopped at step %d: %s", jump_scenes[_i],
+                      step, sluice_sim_failure(sim));
+    }
+    const sluice_index end = sluice_sim_view(sim)->count;
+    fprintf(stderr, "%s: 100 steps to t = %.4f s, particles %u -> %u\n", jump_scenes[_i],
+            sluice_sim_time(sim), start, end);
+    /* every particle accounted for: the count changed only through the
+     * boundaries */
+    const uint64_t added = sim->next_id - sim->particles_initial;
+    ck_assert_uint_eq(start, sim->particles_initial);
+    ck_assert_uint_eq((uint64_t)end, (uint64_t)start + added - sim->removed);
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    char file[4096];
+    snprintf(file, sizeof file, "%s/run.json", dir);
+    ck_assert(test_exists(file));
+    sluice_sim_free(sim);
+    free(path);
+    free(dir);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("open_boundaries");
@@ -267,6 +310,11 @@ int main(void)
     tcase_add_test(uniform, uniform_supercritical_block_frozen);
     tcase_add_test(uniform, uniform_supercritical_free);
     suite_add_tcase(s, uniform);
+    TCase *scenes = tcase_create("jump_scenes");
+    tcase_set_timeout(scenes, 300);
+    tcase_add_loop_test(scenes, jump_scenes_start, 0,
+                        (int)(sizeof jump_scenes / sizeof *jump_scenes));
+    suite_add_tcase(s, scenes);
     TCase *input = tcase_create("bad_input");
     tcase_add_test(input, bad_input_refused);
     suite_add_tcase(s, input);
