@@ -16,7 +16,7 @@
 #             impact on the far wall;
 #   poiseuille configs/poiseuille_2d.yaml (no-slip schemes): L2 error of the
 #             steady profile against the analytic one, 40 particles across;
-#   obstacles configs/dam_break_obstacles_2d.yaml, 1.5 s: the dam break with
+#   obstacles configs/dam_break_obstacles_2d.yaml, 1 s: the dam break with
 #             a weir and a plate 2 dx thick in the surge's path: crossings
 #             and the smallest fluid-wall distance through the impacts;
 #   channel   configs/inclined_channel_2d.yaml, 20 s: the wall-parallel
@@ -72,8 +72,8 @@ json() { sed -n "s/.*\"$2\": \\([0-9.eE+-]*\\).*/\\1/p" "$1/run.json" | head -n 
 # last value of column $2 of a CSV (header skipped)
 last() { awk -F, -v c="$2" 'NR > 1 { v = $c } END { print v }' "$1"; }
 
-end_still=10; end_dam=1.5; end_pois=1.5; end_channel=20
-if [ "$quick" = 1 ]; then end_still=1; end_dam=0.6; end_pois=0.2; end_channel=2; fi
+end_still=10; end_dam=1.5; end_obstacles=1.0; end_pois=1.5; end_channel=20
+if [ "$quick" = 1 ]; then end_still=1; end_dam=0.6; end_obstacles=0.6; end_pois=0.2; end_channel=2; fi
 
 # row SCHEME CASE STATUS RUN_DIR METRIC VALUE WITH_WALLS: one line of summary.csv
 row() {
@@ -100,8 +100,8 @@ for s in $schemes; do
             { echo "boundary-study: configs/dam_break_obstacles_2d.yaml is not in the expected form" >&2; exit 2; }
     fi
     status=complete
-    "$build/sluice" run "$sc" --out "$run" --quiet --no-progress --set time.end=$end_dam \
-        --set plugins.hdf5.interval=$end_dam >/dev/null 2>&1 || status=failed
+    "$build/sluice" run "$sc" --out "$run" --quiet --no-progress --set time.end=$end_obstacles \
+        --set plugins.hdf5.interval=$end_obstacles >/dev/null 2>&1 || status=failed
     if [ -f "$run/run.json" ]; then
         gap=$(awk -F, 'NR > 1 && $4 == $4 + 0 && (g == "" || $4 < g) { g = $4 } END { printf "%.4f", g / 0.02 }' "$run/walls.csv")
         row "$s" obstacles "$status" "$run" smallest_gap_dx "$gap" 1
