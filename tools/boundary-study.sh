@@ -198,7 +198,7 @@ if command -v gnuplot >/dev/null 2>&1; then
         [ -f "$out/$s/dam/front.csv" ] && plot="$plot${plot:+, }'$out/$s/dam/front.csv' every ::1 using (\$1*sqrt(2*9.81)):(\$2) with lines title '$s'"
     done
     [ -n "$plot" ] && gnuplot <<EOF
-set terminal pngcairo size 900,600
+set terminal pngcairo size 900,600 noenhanced
 set output '$out/dam_front.png'
 set datafile separator ','
 set xlabel 'T = t sqrt(2g/L)'; set ylabel 'Z = x_front / L'; set key left top
@@ -210,7 +210,7 @@ EOF
         [ -f "$out/$s/still/bottom.csv" ] && plot="$plot${plot:+, }'$out/$s/still/bottom.csv' every ::1 using 1:((\$2+\$3+\$4)/3/(1000*9.81*0.44)-1) with lines title '$s'"
     done
     [ -n "$plot" ] && gnuplot <<EOF
-set terminal pngcairo size 900,600
+set terminal pngcairo size 900,600 noenhanced
 set output '$out/still_pressure.png'
 set datafile separator ','
 set xlabel 't (s)'; set ylabel 'p / (rho g (H - y)) - 1 at y = 2h'
@@ -223,7 +223,7 @@ EOF
             plot="$plot${plot:+, }'$out/$s/poiseuille/profile.dat' using 2:1 with linespoints title '$s'"
     done
     [ -n "$plot" ] && gnuplot <<EOF
-set terminal pngcairo size 900,600
+set terminal pngcairo size 900,600 noenhanced
 set output '$out/poiseuille_profile.png'
 set xlabel 'u (m/s)'; set ylabel 'y (m)'; set key left top
 plot $plot, [0:1e-3] (1e-4/(2e-6))*x*(1e-3-x) with lines lw 2 title 'analytic', '+' using (0):(0) notitle with dots
@@ -235,7 +235,7 @@ EOF
             plot="$plot${plot:+, }'$out/$s/channel/profile.dat' using 2:1 with linespoints title '$s'"
     done
     [ -n "$plot" ] && gnuplot <<EOF
-set terminal pngcairo size 900,600
+set terminal pngcairo size 900,600 noenhanced
 set output '$out/channel_profile.png'
 set xlabel 'u (m/s)'; set ylabel 'y (m)'; set key left top
 plot $plot
