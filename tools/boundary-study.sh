@@ -203,7 +203,7 @@ set output '$out/dam_front.png'
 set datafile separator ','
 set xlabel 'T = t sqrt(2g/L)'; set ylabel 'Z = x_front / L'; set key left top
 set xrange [0:3]
-plot $plot, '$data' every ::9::17 using 2:3 with points pt 7 title 'Martin & Moyce a = 2.25 in'
+plot $plot, '$data' using (\$1 == 2.25 ? \$2 : 1/0):3 with points pt 7 title 'Martin & Moyce a = 2.25 in'
 EOF
     plot=""
     for s in $schemes; do
