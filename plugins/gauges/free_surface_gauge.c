@@ -30,7 +30,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include "gauge_column.h"
 
 #define MAX_SAMPLES 1000000u
 
@@ -103,26 +103,6 @@ static void fs_destroy(void *state)
     free(s);
 }
 
-/* Value k of a list given as one value for all or one per position. */
-static sluice_real per_position(const sluice_real_list *list, sluice_index k, sluice_real absent)
-{
-    if (list->count == 0)
-        return absent;
-    return list->values[list->count == 1 ? 0 : k];
-}
-
-static int check_list(const sluice_api *api, sluice_host *host, const char *name,
-                      const sluice_real_list *list, sluice_index columns)
-{
-    if (list->count > 1 && list->count != columns) {
-        api->error(host, "'%s' lists %u values for %u positions: give one value for all or one "
-                         "per position",
-                   name, list->count, columns);
-        return SLUICE_ERROR;
-    }
-    return SLUICE_OK;
-}
-
 static int fs_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
 {
     const fs_config *c = config;
@@ -148,9 +128,10 @@ static int fs_create(const sluice_api *api, sluice_host *host, const void *confi
     s->threshold = c->threshold;
     s->interval = c->interval;
     s->file = c->file;
-    if (check_list(api, host, "lateral", &c->lateral, s->columns) != SLUICE_OK ||
-        check_list(api, host, "bottom", &c->bottom, s->columns) != SLUICE_OK ||
-        check_list(api, host, "top", &c->top, s->columns) != SLUICE_OK) {
+    const char *per = "positions";
+    if (sluice_gauge_check_list(api, host, "lateral", &c->lateral, s->columns, per) != SLUICE_OK ||
+        sluice_gauge_check_list(api, host, "bottom", &c->bottom, s->columns, per) != SLUICE_OK ||
+        sluice_gauge_check_list(api, host, "top", &c->top, s->columns, per) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
@@ -180,8 +161,8 @@ static int fs_create(const sluice_api *api, sluice_host *host, const void *confi
     const double step = (double)c->sample_spacing * (double)dx;
     size_t total = 0;
     for (sluice_index k = 0; k < s->columns; k++) {
-        const double b = (double)per_position(&c->bottom, k, lo[up]);
-        const double t = (double)per_position(&c->top, k, hi[up]);
+        const double b = (double)sluice_gauge_list_value(&c->bottom, k, lo[up]);
+        const double t = (double)sluice_gauge_list_value(&c->top, k, hi[up]);
         if (!(t > b)) {
             api->error(host, "gauge %u at x = %g m: top %g m is not above bottom %g m", k,
                        (double)c->positions.values[k], t, b);
@@ -210,13 +191,13 @@ static int fs_create(const sluice_api *api, sluice_host *host, const void *confi
         return SLUICE_ERROR;
     }
     for (sluice_index k = 0; k < s->columns; k++) {
-        const double b = (double)per_position(&c->bottom, k, lo[up]);
-        const double t = (double)per_position(&c->top, k, hi[up]);
+        const double b = (double)sluice_gauge_list_value(&c->bottom, k, lo[up]);
+        const double t = (double)sluice_gauge_list_value(&c->top, k, hi[up]);
         const sluice_index n = s->first[k + 1] - s->first[k] - 1;
         for (sluice_index i = 0; i <= n; i++) {
             sluice_real *p = s->points + 3 * ((size_t)s->first[k] + i);
             p[0] = c->positions.values[k];
-            p[1] = s->dims == 3 ? per_position(&c->lateral, k, 0) : 0;
+            p[1] = s->dims == 3 ? sluice_gauge_list_value(&c->lateral, k, 0) : 0;
             p[2] = 0;
             p[up] = (sluice_real)(i == n ? t : b + (t - b) * (double)i / (double)n);
         }
@@ -269,22 +250,12 @@ static void kernel_sums(void *context, const sluice_view *v, const sluice_pair_b
     }
 }
 
-/* The highest crossing of the threshold in one column, or nan. */
+/* The highest crossing of the threshold in column k, or nan. */
 static double surface(const fs_state *s, sluice_index k)
 {
-    const uint32_t up = s->dims - 1;
-    const sluice_index a = s->first[k], n = s->first[k + 1] - a;
-    const double *S = s->sum + a;
-    const sluice_real *p = s->points + 3 * (size_t)a;
-    const double c = (double)s->threshold;
-    if (S[n - 1] >= c)
-        return (double)p[3 * (size_t)(n - 1) + up];
-    for (sluice_index i = n - 1; i-- > 0;)
-        if (S[i] >= c) {
-            const double y0 = (double)p[3 * (size_t)i + up], y1 = (double)p[3 * (size_t)(i + 1) + up];
-            return y0 + (S[i] - c) / (S[i] - S[i + 1]) * (y1 - y0);
-        }
-    return NAN;
+    const sluice_index a = s->first[k];
+    return sluice_gauge_surface(s->first[k + 1] - a, s->sum + a, 1, s->points + 3 * (size_t)a,
+                                s->dims - 1, (double)s->threshold);
 }
 
 static int fs_after_step(void *state, sluice_host *host)

@@ -43,7 +43,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include "gauge_column.h"
 
 #define MAX_SAMPLES 1000000u
 
@@ -114,25 +114,6 @@ static void sg_destroy(void *state)
     free(s);
 }
 
-static sluice_real per_section(const sluice_real_list *list, sluice_index k, sluice_real absent)
-{
-    if (list->count == 0)
-        return absent;
-    return list->values[list->count == 1 ? 0 : k];
-}
-
-static int check_list(const sluice_api *api, sluice_host *host, const char *name,
-                      const sluice_real_list *list, sluice_index sections)
-{
-    if (list->count > 1 && list->count != sections) {
-        api->error(host, "'%s' lists %u values for %u sections: give one value for all or one "
-                         "per section",
-                   name, list->count, sections);
-        return SLUICE_ERROR;
-    }
-    return SLUICE_OK;
-}
-
 static int sg_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
 {
     const sg_config *c = config;
@@ -150,8 +131,10 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
     }
     const int have_domain =
         api->constant(host, "domain_min", lo, 3) == 2 && api->constant(host, "domain_max", hi, 3) == 2;
-    if (check_list(api, host, "bed_elevation", &c->bed_elevation, c->positions.count) != SLUICE_OK ||
-        check_list(api, host, "top", &c->top, c->positions.count) != SLUICE_OK)
+    const sluice_index n = c->positions.count;
+    if (sluice_gauge_check_list(api, host, "bed_elevation", &c->bed_elevation, n, "sections") !=
+            SLUICE_OK ||
+        sluice_gauge_check_list(api, host, "top", &c->top, n, "sections") != SLUICE_OK)
         return SLUICE_ERROR;
     if (c->bed_elevation.count == 0) {
         api->error(host, "'bed_elevation' is empty: give one value for all sections or one per "
@@ -180,8 +163,8 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
     const double step = (double)c->sample_spacing * (double)dx;
     size_t total = 0;
     for (sluice_index k = 0; k < s->sections; k++) {
-        const double b = (double)per_section(&c->bed_elevation, k, 0);
-        const double t = (double)per_section(&c->top, k, hi[1]);
+        const double b = (double)sluice_gauge_list_value(&c->bed_elevation, k, 0);
+        const double t = (double)sluice_gauge_list_value(&c->top, k, hi[1]);
         s->bed[k] = (sluice_real)b;
         if (!(t > b)) {
             api->error(host, "section %u at x = %g m: top %g m is not above the bed %g m", k,
@@ -210,7 +193,7 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
     }
     for (sluice_index k = 0; k < s->sections; k++) {
         const double b = (double)s->bed[k];
-        const double t = (double)per_section(&c->top, k, hi[1]);
+        const double t = (double)sluice_gauge_list_value(&c->top, k, hi[1]);
         const sluice_index n = s->first[k + 1] - s->first[k] - 1;
         for (sluice_index i = 0; i <= n; i++) {
             sluice_real *p = s->points + 3 * ((size_t)s->first[k] + i);
@@ -300,15 +283,7 @@ static void measure(const sg_state *s, sluice_index k, double *out)
 #define S_(i) sums[2 * (size_t)(i)]
 #define U_(i) (S_(i) > 0 ? sums[2 * (size_t)(i) + 1] / S_(i) : NAN)
 #define Y_(i) ((double)p[3 * (size_t)(i) + 1])
-    double eta = NAN;
-    if (S_(n - 1) >= c)
-        eta = Y_(n - 1);
-    else
-        for (sluice_index i = n - 1; i-- > 0;)
-            if (S_(i) >= c) {
-                eta = Y_(i) + (S_(i) - c) / (S_(i) - S_(i + 1)) * (Y_(i + 1) - Y_(i));
-                break;
-            }
+    const double eta = sluice_gauge_surface(n, sums, 2, p, 1, c);
     if (isnan(eta)) {
         out[0] = 0;
         out[1] = 0;
