@@ -601,23 +601,11 @@ static int analyze(const char *scratch, const char *args, char **out, char **err
         asprintf(&command, "%s/tools/sluice-analyze %s 2>%s", test_build_dir(), args, errpath) <
             0)
         return -1;
-    FILE *p = popen(command, "r");
+    int status = test_popen(command, out);
     free(command);
-    if (!p)
-        return -1;
-    char *text = NULL;
-    size_t size = 0;
-    FILE *m = open_memstream(&text, &size);
-    char buffer[4096];
-    size_t n;
-    while ((n = fread(buffer, 1, sizeof buffer, p)) > 0)
-        fwrite(buffer, 1, n, m);
-    fclose(m);
-    int status = pclose(p);
-    *out = text;
     *err = test_read_file(errpath);
     free(errpath);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return status;
 }
 
 /* The number after "name = " at the start of a line of text, or NaN. */

@@ -79,15 +79,11 @@ static inline int test_exists(const char *path)
     return stat(path, &st) == 0;
 }
 
-/* Runs `<build>/sluice args...` through the shell, capturing stderr and
- * stdout; returns the exit status (or -1). */
-static inline int test_sluice(const char *args, char **output)
+/* Runs a shell command; its standard output into *output (when given).
+ * Returns the exit status, or -1. */
+static inline int test_popen(const char *command, char **output)
 {
-    char *command = NULL;
-    if (asprintf(&command, "%s/sluice %s 2>&1", test_build_dir(), args) < 0)
-        return -1;
     FILE *p = popen(command, "r");
-    free(command);
     if (!p)
         return -1;
     char *text = NULL;
@@ -104,6 +100,18 @@ static inline int test_sluice(const char *args, char **output)
     else
         free(text);
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+/* Runs `<build>/sluice args...` through the shell, capturing stderr and
+ * stdout; returns the exit status (or -1). */
+static inline int test_sluice(const char *args, char **output)
+{
+    char *command = NULL;
+    if (asprintf(&command, "%s/sluice %s 2>&1", test_build_dir(), args) < 0)
+        return -1;
+    int status = test_popen(command, output);
+    free(command);
+    return status;
 }
 
 /* Counts the lines of text that contain `needle`. */
