@@ -634,7 +634,8 @@ static char *make_run(double d2b)
     char *path = NULL;
     if (asprintf(&path, "%s/scene.resolved.yaml", dir) < 0 || !(f = fopen(path, "w")))
         return NULL;
-    fputs("dimensions: 2\nplugins:\n  section_gauge:\n    positions: [0.5, 1]\n"
+    fputs("dimensions: 2\nplugins:\n  inlet:\n    depth: 0.02\n    discharge: 0.03\n"
+          "  section_gauge:\n    positions: [0.5, 1]\n"
           "  free_surface_gauge:\n    positions: [",
           f);
     for (int k = 0; k < 50; k++)
@@ -733,6 +734,19 @@ START_TEST(cli)
         ck_assert_msg(test_exists(path), "gnuplot is installed but %s is missing", path);
         free(path);
     }
+    free(args);
+    free(out);
+    free(err);
+
+    /* the same without --d1/--v1: the run's inlet (depth 0.02 m, discharge
+     * 0.03 m^2/s, so V1 = 1.5 m/s) gives the inflow */
+    ck_assert(asprintf(&args, "conjugate %s --x 1.0 --from 1 --to 3 --no-plot", run) > 0);
+    status = analyze(run, args, &out, &err);
+    fprintf(stderr, "cli conjugate from the inlet: exit %d\n%s%s", status, out, err);
+    ck_assert_int_eq(status, 0);
+    ck_assert_double_eq_tol(headline(out, "Fr1"), sluice_hyd_froude(1.5, 0.02, G),
+                            5e-6 * 3.4);
+    ck_assert_double_eq_tol(headline(out, "A"), A, 5e-6 * A);
     free(args);
     free(out);
     free(err);
@@ -863,7 +877,7 @@ START_TEST(cli)
         {"spectrum %s --column nosuch", "nosuch"},
         {"spectrum %s --column missing.csv:d_x1", "missing.csv"},
         {"correlate %s/sections.csv:d_x7 %s/sections.csv:d_x1", "d_x7"},
-        {"conjugate %s --d1 0.02 --x 1", "--v1"},
+        {"conjugate %s --d1 0.02 --v1 -1 --x 1", "--v1 must be positive"},
         {"toe %s --d1 0.02 --v1 1.5 --bogus 1", "--bogus"},
     };
     for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {

@@ -635,6 +635,44 @@ START_TEST(time_step_limits)
 }
 END_TEST
 
+
+/* wall_backstop: penalty_contact's spring, d0 = dx/4 by default, on the walls
+ * of the other schemes only: a repulsive_force bed at y = 0 (a scheme
+ * without wall particles, so that the probe is the only particle; its
+ * cutoff of 1 mm keeps Monaghan's force out of the way) gets it, a
+ * penalty_contact lid at y = 1 keeps only its own spring (no double push). */
+START_TEST(backstop_other_schemes)
+{
+    sluice_sim *sim = probe_scene(
+        2,
+        "{shape: polyline, points: [[-1, 0], [2, 0]], scheme: repulsive_force}, "
+        "{shape: polyline, points: [[2, 1], [-1, 1]], scheme: penalty_contact}",
+        "repulsive_force: {cutoff: 0.001}, penalty_contact: {}, wall_backstop: {}");
+    const double d0 = PROBE_DX / 4;
+    const double gaps[5] = {0.03, d0 + 1e-9, 0.024, 0.015, 0.002};
+    for (int k = 0; k < 5; k++) {
+        double p[3] = {0.5, gaps[k], 0}, a[3];
+        probe(sim, p, NULL, a);
+        const double expected = gaps[k] < d0 ? penalty_rate * (d0 - gaps[k]) : 0;
+        fprintf(stderr, "backstop over a repulsive bed, gap %.4f m: a = (%.15g, %.15g) m s^-2\n",
+                gaps[k], a[0], a[1]);
+        ck_assert_msg(fabs(a[1] - expected) <= 1e-12 * penalty_rate * d0,
+                      "a_y = %.15g, expected %.15g", a[1], expected);
+        ck_assert(fabs(a[0]) <= 1e-12 * penalty_rate * d0);
+    }
+    /* 0.02 m under the penalty lid: penalty_contact's own k (dx/2 - 0.02) only */
+    const double p[3] = {0.5, 1 - 0.02, 0};
+    double a[3];
+    probe(sim, p, NULL, a);
+    ck_assert_msg(fabs(a[1] + penalty_rate * (PROBE_D0 - 0.02)) <= 1e-12 * penalty_rate * PROBE_D0,
+                  "a_y = %.15g under the lid", a[1]);
+    /* its time-step limit: C_p dx / (c0 sqrt(f_s)) */
+    const double limit = component_limit(sim, "wall_backstop");
+    ck_assert(fabs(limit / (0.5 * PROBE_DX / PROBE_C0) - 1) <= 1e-14);
+    sluice_sim_free(sim);
+}
+END_TEST
+
 /* ------------------------------------------------------------------ scenes -- */
 
 /* The text of configs/NAME with `from` replaced by `to` (each must occur). */
@@ -974,6 +1012,7 @@ int main(void)
     tcase_add_test(single, penalty_friction);
     tcase_add_test(single, repulsive_single_particle);
     tcase_add_test(single, time_step_limits);
+    tcase_add_test(single, backstop_other_schemes);
     suite_add_tcase(s, single);
     TCase *still = tcase_create("still_water");
     tcase_set_tags(still, "validation"); /* long: release pass only */

@@ -219,12 +219,18 @@ static int watchdog(sluice_sim *sim)
     }
     if (!what && density) {
         sluice_index found = n;
-#pragma omp parallel for schedule(static) reduction(min : found)
+        double deviation = 0; /* fluid only: wall particles' densities are a wall model's */
+        const uint8_t *kind = v->kind;
+#pragma omp parallel for schedule(static) reduction(min : found) reduction(max : deviation)
         for (sluice_index i = 0; i < n; i++) {
             double r = (double)density[i] / rho0 - 1.0;
             if (!(fabs(r) <= band) && i < found)
                 found = i;
+            if (kind[i] == SLUICE_KIND_FLUID && fabs(r) > deviation)
+                deviation = fabs(r);
         }
+        if (deviation > sim->max_density_deviation)
+            sim->max_density_deviation = deviation;
         if (found < n) {
             first = found;
             what = 2;
@@ -420,6 +426,7 @@ static int write_run_json(sluice_sim *sim, int status)
             (unsigned long long)sluice_pair_engine_pairs(&sim->engine));
     fprintf(f, "  \"neighbour_list_rebuilds\": %llu,\n", (unsigned long long)sim->grid.rebuilds);
     fprintf(f, "  \"threads\": %d,\n", sim->threads);
+    fprintf(f, "  \"max_density_deviation\": %.6g,\n", sim->max_density_deviation);
     fprintf(f, "  \"smoothing_length\": %.9g,\n", (double)sim->smoothing_length);
     fprintf(f, "  \"spacing\": %.9g,\n", (double)sim->spacing);
     fprintf(f, "  \"failure\": ");

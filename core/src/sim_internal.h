@@ -127,6 +127,9 @@ struct sluice_sim {
     int threads;
     double wall_start, wall_seconds;
     uint64_t particle_steps;
+    /* largest |density / rest density - 1| over fluid particles seen by the
+     * watchdog during the run (run.json max_density_deviation) */
+    double max_density_deviation;
     sluice_index particles_initial;
     char *resolved_scene;
     char failure[4096];

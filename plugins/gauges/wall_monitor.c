@@ -5,7 +5,8 @@
  *   crossed        fluid particles behind a wall now;
  *   crossed_total  distinct particles (ids) seen behind a wall at any sample
  *                  so far;
- *   gap_min        the smallest d (m; negative when a particle is behind);
+ *   gap_min        the smallest d (m; negative when a particle is behind;
+ *                  past an open end d is the unsigned distance from the end);
  *   gap_layer      the mean d of the first fluid layer: the particles with
  *                  d < gap_min + dx/2 among those within 2 h of a wall (m).
  *                  On the initial lattice it is dx/2; a wall scheme that
@@ -115,7 +116,9 @@ static void distances(void *context, const sluice_view *v, sluice_index begin, s
         sluice_wall_point w;
         if (s->api->wall_nearest(job->host, p, -1, &w) != SLUICE_OK)
             continue;
-        s->distance[i] = (double)w.distance;
+        /* past an open end a particle is on neither side of the wall: its
+         * gap is its distance from the end */
+        s->distance[i] = w.beyond_end ? fabs((double)w.distance) : (double)w.distance;
         s->behind[i] = w.distance < 0 && !w.beyond_end;
     }
 }

@@ -57,7 +57,20 @@
  * Against the time_step plugin's acoustic condition C h / c0 (C = 0.2,
  * h = 1.5 dx: 0.3 dx / c0) the contact limit is 1.7 times looser at the
  * default f_s = 1 (it costs nothing; 5.3 times at f_s = 0.1) and takes over
- * above f_s = (C_p / 0.3)^2 = 2.8. */
+ * above f_s = (C_p / 0.3)^2 = 2.8.
+ *
+ * wall_backstop (second component of this library): the same spring, with
+ * no friction, on the walls of every other scheme (dbc, mdbc,
+ * ghost_particles, repulsive_force), as a safety net under a particle wall
+ * scheme: d0 = `distance` (default dx/4, below the dx/2 at which the first
+ * fluid layer sits, so that a fluid at rest against the wall never feels
+ * it). The particle schemes hold the fluid only through the field they put
+ * in the wall particles: mdbc and ghost particles mirror the fluid's
+ * pressure, which is near zero in a thin supercritical stream pressed onto
+ * a bed or in a free jet at a convex edge, so nothing pushes back a particle
+ * that drifts onto the wall, and once behind it the mirrored field pushes it
+ * further. The backstop catches it; the scene keeps its wall scheme
+ * everywhere else. docs/validation.md gives the scenes that need it. */
 #include <math.h>
 #include <string.h>
 
@@ -80,6 +93,8 @@ typedef struct penalty_state {
     sluice_real limit;        /* s: dt_c = C_p sqrt(m/k) */
     contact_walls walls;
     sluice_field acceleration, velocity;
+    const char *scheme; /* the walls: those of this scheme, or with exclude all others */
+    int exclude;
 } penalty_state;
 
 #define POSITIVE (SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE)
@@ -105,10 +120,50 @@ static const sluice_param_spec params[] = {
      "C_p in dt <= C_p sqrt(m/k); a spring is stable below 2 sqrt(m/k)", NULL, 0},
 };
 
+typedef struct backstop_config {
+    sluice_real distance, penalty_scale, time_step_factor;
+} backstop_config;
+
+static const sluice_param_spec backstop_params[] = {
+    {"distance", SLUICE_PARAM_REAL, offsetof(backstop_config, distance), NULL, 0, 0,
+     POSITIVE | SLUICE_PARAM_OPTIONAL, "m",
+     "d0: a fluid particle closer than this to a wall of another scheme (or behind it) gets "
+     "the spring force k (d0 - d) (default dx/4: a fluid at rest, dx/2 from the wall, never "
+     "feels it)",
+     NULL, 0},
+    {"penalty_scale", SLUICE_PARAM_REAL, offsetof(backstop_config, penalty_scale), "1", 0, 0,
+     POSITIVE, "1", "f_s in k = f_s rho0 c0^2 dx^(D-2), as penalty_contact", NULL, 0},
+    {"time_step_factor", SLUICE_PARAM_REAL, offsetof(backstop_config, time_step_factor), "0.5",
+     0, 2, POSITIVE | SLUICE_PARAM_HAS_MAX, "1", "C_p in dt <= C_p sqrt(m/k)", NULL, 0},
+};
+
+static int penalty_create_common(const sluice_api *api, sluice_host *host, penalty_state **out,
+                                 sluice_real contact_distance, sluice_real default_fraction,
+                                 sluice_real scale, sluice_real friction, sluice_real factor,
+                                 const char *scheme, int exclude);
+
 static int penalty_create(const sluice_api *api, sluice_host *host, const void *config,
                           void **state)
 {
     const penalty_config *c = config;
+    return penalty_create_common(api, host, (penalty_state **)state, c->contact_distance, 0.5,
+                                 c->penalty_scale, c->friction, c->time_step_factor,
+                                 "penalty_contact", 0);
+}
+
+static int backstop_create(const sluice_api *api, sluice_host *host, const void *config,
+                           void **state)
+{
+    const backstop_config *c = config;
+    return penalty_create_common(api, host, (penalty_state **)state, c->distance, 0.25,
+                                 c->penalty_scale, 0, c->time_step_factor, "penalty_contact", 1);
+}
+
+static int penalty_create_common(const sluice_api *api, sluice_host *host, penalty_state **out,
+                                 sluice_real contact_distance, sluice_real default_fraction,
+                                 sluice_real scale, sluice_real friction, sluice_real factor,
+                                 const char *scheme, int exclude)
+{
     penalty_state *s = sluice_util_state(api, host, sizeof *s);
     if (!s)
         return SLUICE_ERROR;
@@ -123,10 +178,12 @@ static int penalty_create(const sluice_api *api, sluice_host *host, const void *
         return SLUICE_ERROR;
     }
     s->dims = (uint32_t)dims;
-    s->d0 = c->contact_distance > 0 ? c->contact_distance : s->dx / 2;
-    s->scale = c->penalty_scale;
-    s->mu = c->friction;
-    s->factor = c->time_step_factor;
+    s->d0 = contact_distance > 0 ? contact_distance : default_fraction * s->dx;
+    s->scale = scale;
+    s->mu = friction;
+    s->factor = factor;
+    s->scheme = scheme;
+    s->exclude = exclude;
     const sluice_field_spec fields[] = {
         {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0,
          "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
@@ -139,7 +196,7 @@ static int penalty_create(const sluice_api *api, sluice_host *host, const void *
             free(s);
             return SLUICE_ERROR;
         }
-    *state = s;
+    *out = s;
     return SLUICE_OK;
 }
 
@@ -166,10 +223,12 @@ static int penalty_bind(void *state, sluice_host *host)
     s->mass = s->rho0 * V;
     s->k_over_m = s->k / s->mass;
     s->limit = s->factor * sqrt(s->mass / s->k);
-    if (contact_walls_build(&s->walls, api, host, "penalty_contact", s->dims) != SLUICE_OK)
+    if (contact_walls_select(&s->walls, api, host, s->scheme, s->exclude, s->dims) != SLUICE_OK)
         return SLUICE_ERROR;
     if (s->walls.count == 0)
-        api->warning(host, "no wall of the scene uses this scheme: it adds no force");
+        api->warning(host, s->exclude ? "no wall of the scene uses another scheme than "
+                                        "penalty_contact: the backstop adds no force"
+                                      : "no wall of the scene uses this scheme: it adds no force");
     else
         api->info(host,
                   "k = %.6g N m^-1%s, d0 = %.6g m, stable-step limit C_p sqrt(m/k) = %.6g s",
@@ -258,24 +317,45 @@ static sluice_real penalty_limit(void *state, const sluice_view *v, sluice_index
     return s->walls.count > 0 ? s->limit : (sluice_real)INFINITY;
 }
 
-static const sluice_component components[] = {{
-    .name = "penalty_contact",
-    .summary = "penalty contact of fluid particles with rigid wall segments/triangles: spring "
-               "force k (d0 - d) along the contact normal, optional Coulomb friction",
-    .reference = "Jonsson et al. (2016), seed 000, section 2.2; LS-DYNA Theory Manual, penalty "
-                 "method (k = f_s K A^2 / V, f_s = SLSFAC)",
-    .dimensions = SLUICE_DIMS_ALL,
-    .flags = SLUICE_COMPONENT_WALL_SCHEME,
-    .params = params,
-    .param_count = SLUICE_COUNT(params),
-    .config_size = sizeof(penalty_config),
-    .particle_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
-    .create = penalty_create,
-    .destroy = penalty_destroy,
-    .bind = penalty_bind,
-    .particle = penalty_particle,
-    .time_step_limit = penalty_limit,
-}};
+static const sluice_component components[] = {
+    {
+        .name = "penalty_contact",
+        .summary = "penalty contact of fluid particles with rigid wall segments/triangles: spring "
+                   "force k (d0 - d) along the contact normal, optional Coulomb friction",
+        .reference = "Jonsson et al. (2016), seed 000, section 2.2; LS-DYNA Theory Manual, penalty "
+                     "method (k = f_s K A^2 / V, f_s = SLSFAC)",
+        .dimensions = SLUICE_DIMS_ALL,
+        .flags = SLUICE_COMPONENT_WALL_SCHEME,
+        .params = params,
+        .param_count = SLUICE_COUNT(params),
+        .config_size = sizeof(penalty_config),
+        .particle_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+        .create = penalty_create,
+        .destroy = penalty_destroy,
+        .bind = penalty_bind,
+        .particle = penalty_particle,
+        .time_step_limit = penalty_limit,
+    },
+    {
+        .name = "wall_backstop",
+        .summary = "penalty spring (penalty_contact's, frictionless) on fluid particles that come "
+                   "closer than d0 = dx/4 to the walls of the other schemes: a safety net under "
+                   "particle wall schemes",
+        .reference = "penalty_contact; docs/validation.md (the hydraulic jump with ghost and "
+                     "mdbc walls)",
+        .dimensions = SLUICE_DIMS_ALL,
+        .params = backstop_params,
+        .param_count = SLUICE_COUNT(backstop_params),
+        .config_size = sizeof(backstop_config),
+        .particle_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+        .create = backstop_create,
+        .destroy = penalty_destroy,
+        .bind = penalty_bind,
+        .particle = penalty_particle,
+        .time_step_limit = penalty_limit,
+    },
+};
 
-SLUICE_DEFINE_LIBRARY("penalty_contact", "1.0.0", "penalty contact walls (seed 000)",
+SLUICE_DEFINE_LIBRARY("penalty_contact", "1.1.0", "penalty contact walls (seed 000) and a "
+                      "penalty backstop for the other wall schemes",
                       SLUICE_DIMS_ALL, components)

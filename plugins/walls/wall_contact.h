@@ -95,10 +95,12 @@ static inline void contact_walls_free(contact_walls *cw)
     cw->count = 0;
 }
 
-/* Copies the walls whose scheme is `scheme`. Returns SLUICE_OK, or
- * SLUICE_ERROR after api->error (out of memory). */
-static inline int contact_walls_build(contact_walls *cw, const sluice_api *api, sluice_host *host,
-                                      const char *scheme, uint32_t dims)
+/* Copies the walls whose scheme is `scheme` (with `exclude`, those whose
+ * scheme is not). Returns SLUICE_OK, or SLUICE_ERROR after api->error (out
+ * of memory). */
+static inline int contact_walls_select(contact_walls *cw, const sluice_api *api,
+                                       sluice_host *host, const char *scheme, int exclude,
+                                       uint32_t dims)
 {
     memset(cw, 0, sizeof *cw);
     cw->dims = dims;
@@ -111,7 +113,7 @@ static inline int contact_walls_build(contact_walls *cw, const sluice_api *api, 
     const size_t corners = dims == 2 ? 2 : 3;
     for (uint32_t w = 0; w < total; w++) {
         const sluice_wall *wall = api->wall(host, w);
-        if (!wall || !wall->scheme || strcmp(wall->scheme, scheme) != 0 ||
+        if (!wall || !wall->scheme || (strcmp(wall->scheme, scheme) != 0) != (exclude != 0) ||
             wall->element_count == 0)
             continue;
         contact_wall *c = &cw->walls[cw->count];
@@ -153,6 +155,13 @@ static inline int contact_walls_build(contact_walls *cw, const sluice_api *api, 
         c->tolerance = (sluice_real)1e-9 * scale;
     }
     return SLUICE_OK;
+}
+
+/* The walls whose scheme is `scheme`. */
+static inline int contact_walls_build(contact_walls *cw, const sluice_api *api, sluice_host *host,
+                                      const char *scheme, uint32_t dims)
+{
+    return contact_walls_select(cw, api, host, scheme, 0, dims);
 }
 
 /* Is p within `margin` of the box (min xyz, max xyz)? */

@@ -622,6 +622,8 @@ static int cmd_conjugate(analyze_ctx *cx, const options *o)
     if (!source)
         goto done;
     printf("source = %s\n", source);
+    headline("d1", o->d1, "m");
+    headline("V1", v1, "m/s");
     headline("Fr1", fr1, NULL);
     headline("d2_Belanger", d2b, "m");
     print_window(&g);
@@ -1526,6 +1528,46 @@ static int cmd_classify(analyze_ctx *cx, const options *o)
     return 0;
 }
 
+/* A run made with an `inlet` knows its inflow: when --d1, --v1 and --fr are
+ * not given, take d1 and v1 from the inlet's depth and velocity (or
+ * discharge / depth) in RUN/scene.resolved.yaml. Options given on the
+ * command line win. */
+static int inflow_from_run(analyze_ctx *cx, options *o)
+{
+    if (o->positional_count != 1 || (!isnan(o->d1) && (!isnan(o->v1) || !isnan(o->fr))))
+        return 0;
+    struct stat st;
+    if (stat(o->positional[0], &st) != 0 || !S_ISDIR(st.st_mode))
+        return 0;
+    char *path = analyze_format(cx, "%s/scene.resolved.yaml", o->positional[0]);
+    if (!path)
+        return -1;
+    analyze_scene *scene = NULL;
+    int status = 0;
+    if (analyze_file_exists(path) && (status = analyze_scene_load(cx, path, &scene)) == 0 &&
+        analyze_scene_has(scene, "inlet")) {
+        double depth = NAN, velocity = NAN, discharge = NAN;
+        const char *text;
+        if ((text = analyze_scene_string(scene, "inlet", "depth")))
+            depth = strtod(text, NULL);
+        if ((text = analyze_scene_string(scene, "inlet", "velocity")))
+            velocity = strtod(text, NULL);
+        if ((text = analyze_scene_string(scene, "inlet", "discharge")))
+            discharge = strtod(text, NULL);
+        if (isnan(o->d1) && depth > 0)
+            o->d1 = depth;
+        if (isnan(o->v1) && isnan(o->fr)) {
+            if (velocity > 0)
+                o->v1 = velocity;
+            else if (discharge > 0 && o->d1 > 0)
+                o->v1 = discharge / o->d1;
+        }
+    }
+    analyze_scene_free(scene);
+    free(path);
+    return status;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -1572,7 +1614,7 @@ int main(int argc, char **argv)
             analyze_fail(&cx, SLUICE_ANALYZE_BAD_INPUT, "--min-wet must be in [0, 1]");
         else if (!(o.tolerance >= 0.0))
             analyze_fail(&cx, SLUICE_ANALYZE_BAD_INPUT, "--tolerance must be >= 0");
-        else
+        else if (inflow_from_run(&cx, &o) == 0)
             command(&cx, &o);
     }
     fflush(stdout);
