@@ -541,6 +541,83 @@ START_TEST(drop_limits_belanger)
 }
 END_TEST
 
+
+/* The instantaneous state at a drop from the upper reach's profile and the
+ * type over a series: gauges every 0.1 m up to the edge at 0.8 m, y1 = 0.035
+ * m, threshold 0.1 m, L_r = 0.5 m. */
+START_TEST(drop_states_and_type)
+{
+    const double x[9] = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9};
+    const double xd = 0.8, threshold = 0.1, Lr = 0.5;
+    double depth[9], x1;
+    /* supercritical to the edge: wave (the gauges past the edge are ignored
+     * even when deep) */
+    for (int k = 0; k < 9; k++)
+        depth[k] = k < 7 ? 0.035 : 0.2;
+    ck_assert_int_eq(sluice_hyd_drop_state_of(x, depth, 9, threshold, xd, Lr, &x1),
+                     SLUICE_HYD_STATE_WAVE);
+    ck_assert(isnan(x1));
+    /* toe between 0.2 and 0.3 m (crossing at 0.25 m): 0.55 m >= L_r from the edge: A */
+    for (int k = 0; k < 9; k++)
+        depth[k] = k < 2 ? 0.035 : 0.165;
+    ck_assert_int_eq(sluice_hyd_drop_state_of(x, depth, 9, threshold, xd, Lr, &x1),
+                     SLUICE_HYD_STATE_A);
+    ck_assert_double_eq_tol(x1, 0.25, 1e-12);
+    /* toe at 0.55 m: 0.25 m from the edge: B */
+    for (int k = 0; k < 9; k++)
+        depth[k] = k < 5 ? 0.035 : 0.165;
+    ck_assert_int_eq(sluice_hyd_drop_state_of(x, depth, 9, threshold, xd, Lr, &x1),
+                     SLUICE_HYD_STATE_B);
+    ck_assert_double_eq_tol(x1, 0.55, 1e-12);
+    /* the first wet gauge already in the jump: toe upstream of the gauges, A */
+    depth[0] = NAN;
+    for (int k = 1; k < 9; k++)
+        depth[k] = 0.15;
+    ck_assert_int_eq(sluice_hyd_drop_state_of(x, depth, 9, threshold, xd, Lr, &x1),
+                     SLUICE_HYD_STATE_A);
+    ck_assert(isinf(x1) && x1 < 0);
+    for (int k = 0; k < 9; k++)
+        depth[k] = k < 7 ? NAN : 0.2;
+    ck_assert_int_eq(sluice_hyd_drop_state_of(x, depth, 9, threshold, xd, Lr, &x1),
+                     SLUICE_HYD_STATE_NONE);
+
+    /* types: 20 samples */
+    const sluice_hyd_drop_state A = SLUICE_HYD_STATE_A, B = SLUICE_HYD_STATE_B,
+                                W = SLUICE_HYD_STATE_WAVE, N = SLUICE_HYD_STATE_NONE;
+    sluice_hyd_drop_state series[20];
+    double fa, fb, fw;
+    size_t episodes;
+    /* B with one wave sample in 20 (0.05 < 0.1) and a dry sample: B-jump */
+    for (int i = 0; i < 20; i++)
+        series[i] = i == 7 ? W : i == 3 ? N : B;
+    ck_assert_str_eq(sluice_hyd_drop_type(series, 20, 0.1, &fa, &fb, &fw, &episodes), "B-jump");
+    ck_assert_double_eq_tol(fw, 1.0 / 19, 1e-15);
+    ck_assert_double_eq_tol(fb, 18.0 / 19, 1e-15);
+    ck_assert_uint_eq(episodes, 1);
+    /* alternating 5 B, 5 W, twice: B-wave, two wave episodes */
+    for (int i = 0; i < 20; i++)
+        series[i] = (i / 5) % 2 ? W : B;
+    ck_assert_str_eq(sluice_hyd_drop_type(series, 20, 0.1, &fa, &fb, &fw, &episodes), "B-wave");
+    ck_assert_double_eq_tol(fw, 0.5, 1e-15);
+    ck_assert_uint_eq(episodes, 2);
+    /* A with waves a quarter of the time: A-wave */
+    for (int i = 0; i < 20; i++)
+        series[i] = i % 4 == 0 ? W : A;
+    ck_assert_str_eq(sluice_hyd_drop_type(series, 20, 0.1, &fa, &fb, &fw, &episodes), "A-wave");
+    ck_assert_uint_eq(episodes, 5);
+    for (int i = 0; i < 20; i++)
+        series[i] = A;
+    ck_assert_str_eq(sluice_hyd_drop_type(series, 20, 0.1, &fa, &fb, &fw, &episodes), "A-jump");
+    for (int i = 0; i < 20; i++)
+        series[i] = i ? W : B;
+    ck_assert_str_eq(sluice_hyd_drop_type(series, 20, 0.1, &fa, &fb, &fw, &episodes),
+                     "wave jump");
+    for (int i = 0; i < 20; i++)
+        series[i] = N;
+    ck_assert_ptr_null(sluice_hyd_drop_type(series, 20, 0.1, &fa, &fb, &fw, &episodes));
+}
+END_TEST
+
 /* Seed 004 table 1 (/work/shared/data/seed004_table1_abrupt_drop.csv): y1,
  * yt, s in cm, V1 in m/s, observed type. F1 = V1/sqrt(g y1) from the
  * columns, whose V1 y1 = Vt yt checks hold (the printed F1 of T6, 2.8,
@@ -869,6 +946,54 @@ START_TEST(cli)
     free(out);
     free(err);
 
+    /* drop-type on a synthetic abrupt-drop run (inflow from its inlet: y1 =
+     * 0.035 m over an upper bed at 0.032 m, V1 = 1.93 m/s; edge at 0.8 m):
+     * 2 s of supercritical stream to the edge (wave), then 2 s with the toe
+     * 0.26 m upstream of the edge, less than Hager's L_r (B): a B-wave, half
+     * the samples in the wave state, one wave episode */
+    {
+        char *drop_run = test_scratch("analysis-drop");
+        ck_assert_ptr_nonnull(drop_run);
+        ck_assert(asprintf(&path, "%s/scene.resolved.yaml", drop_run) > 0);
+        FILE *scene = fopen(path, "w");
+        ck_assert_ptr_nonnull(scene);
+        fputs("dimensions: 2\nplugins:\n  inlet:\n    bed: 0.032\n    depth: 0.035\n"
+              "    velocity: 1.93\n  free_surface_gauge:\n    positions: [0.1, 0.2, 0.3, 0.4, "
+              "0.5, 0.6, 0.7, 0.9, 1.0]\n",
+              scene);
+        fclose(scene);
+        free(path);
+        ck_assert(asprintf(&path, "%s/free_surface.csv", drop_run) > 0);
+        FILE *fs = fopen(path, "w");
+        ck_assert_ptr_nonnull(fs);
+        fputs("time,eta_x0,eta_x1,eta_x2,eta_x3,eta_x4,eta_x5,eta_x6,eta_x7,eta_x8\n", fs);
+        for (int i = 0; i < 400; i++) {
+            fprintf(fs, "%.17g", 0.01 * i);
+            for (int k = 0; k < 9; k++)
+                fprintf(fs, ",%.17g",
+                        k >= 7 ? 0.16 : (i >= 200 && k >= 5) ? 0.032 + 0.165 : 0.032 + 0.035);
+            fputc('\n', fs);
+        }
+        fclose(fs);
+        free(path);
+        ck_assert(asprintf(&args, "drop-type %s --drop-x 0.8 --no-plot", drop_run) > 0);
+        status = analyze(drop_run, args, &out, &err);
+        fprintf(stderr, "cli drop-type: exit %d\n%s%s", status, out, err);
+        ck_assert_int_eq(status, 0);
+        ck_assert_ptr_nonnull(strstr(out, "type = B-wave"));
+        ck_assert_double_eq_tol(headline(out, "fraction_wave"), 0.5, 1e-12);
+        ck_assert_double_eq_tol(headline(out, "fraction_B"), 0.5, 1e-12);
+        ck_assert_int_eq((int)headline(out, "wave_episodes"), 1);
+        ck_assert_double_eq_tol(headline(out, "drop"), 0.032, 1e-12);
+        free(args);
+        free(out);
+        free(err);
+        ck_assert(asprintf(&args, "rm -rf '%s'", drop_run) > 0);
+        ck_assert_int_eq(system(args), 0);
+        free(args);
+        free(drop_run);
+    }
+
     /* bad input: one line on stderr naming the problem, exit 2 */
     static const struct {
         const char *args, *needle;
@@ -917,6 +1042,7 @@ int main(void)
     tcase_add_test(c, profile_errors);
     tcase_add_test(c, drop_limits_belanger);
     tcase_add_test(c, drop_table1);
+    tcase_add_test(c, drop_states_and_type);
     tcase_add_test(c, cli);
     suite_add_tcase(s, c);
     return test_run_suite(s);

@@ -297,6 +297,66 @@ START_TEST(jump_scenes_start)
 }
 END_TEST
 
+/* dbc wall particles take no density rate from an open boundary's
+ * particles (plugins/continuity): under an inlet buffer moving at 1 m/s over
+ * a dbc bed, with the fluid and the walls at rest, every wall particle's
+ * continuity rate is exactly zero, while the fluid particles next to the
+ * buffer do see it move (a nonzero rate). Without the exclusion the wall
+ * particles under the buffer's upstream end get sum_j m_j (0 - v_j) . grad W
+ * != 0 there, the rate that rectified by dbc's clamp made the density of
+ * the gate's lowest wall particle in the Jonsson jump run away. */
+START_TEST(dbc_walls_ignore_open_particles)
+{
+    const char *yaml = "dimensions: 2\n"
+                       "particles: {spacing: 0.01, smoothing_length_ratio: 1.5}\n"
+                       "time: {end: 1}\n"
+                       "domain: {min: [-0.2, -0.1], max: [1.2, 0.3]}\n"
+                       "geometry:\n"
+                       "  fluid: [{shape: box, min: [0, 0], max: [1, 0.1]}]\n"
+                       "  walls: [{shape: polyline, points: [[-0.2, 0], [1, 0]]}]\n"
+                       "plugins:\n"
+                       "  wendland_c2: {}\n"
+                       "  tait: {speed_of_sound: 20}\n"
+                       "  continuity: {}\n"
+                       "  dbc: {}\n"
+                       "  gravity: {}\n"
+                       "  time_step: {}\n"
+                       "  symplectic: {}\n"
+                       "  inlet: {position: 0, depth: 0.1, velocity: 1}\n";
+    sluice_sim *sim = test_load("dbc-open", yaml, NULL, 0);
+    char *dir = test_scratch("dbc-open-run");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    /* the fluid at rest (the scene gives it no velocity): only the buffer moves */
+    ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
+    const sluice_view *v = sluice_sim_view(sim);
+    const sluice_real *rate = test_column(sim, "density_rate", 0);
+    const sluice_real *u = test_column(sim, "velocity", 0);
+    sluice_index open = 0, walls_near = 0, fluid_moved = 0;
+    for (sluice_index i = 0; i < v->count; i++) {
+        if (v->kind[i] == SLUICE_KIND_OPEN) {
+            ck_assert(u[i] == 1);
+            open++;
+        } else if (v->kind[i] == SLUICE_KIND_WALL) {
+            ck_assert_msg(rate[i] == 0, "wall particle at (%g, %g): density rate %g",
+                          (double)v->position[0][i], (double)v->position[1][i], (double)rate[i]);
+            if (v->position[0][i] < 0.02)
+                walls_near++;
+        } else if (v->position[0][i] < 0.02 && rate[i] != 0) {
+            fluid_moved++;
+        }
+    }
+    fprintf(stderr, "dbc under an inlet: %u open particles, %u wall particles near them, %u "
+                    "fluid particles with a rate\n",
+            open, walls_near, fluid_moved);
+    ck_assert_uint_gt(open, 0);
+    ck_assert_uint_gt(walls_near, 0);
+    ck_assert_uint_gt(fluid_moved, 0);
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    sluice_sim_free(sim);
+    free(dir);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("open_boundaries");
@@ -315,6 +375,9 @@ int main(void)
     tcase_add_loop_test(scenes, jump_scenes_start, 0,
                         (int)(sizeof jump_scenes / sizeof *jump_scenes));
     suite_add_tcase(s, scenes);
+    TCase *kinds = tcase_create("open_particles");
+    tcase_add_test(kinds, dbc_walls_ignore_open_particles);
+    suite_add_tcase(s, kinds);
     TCase *input = tcase_create("bad_input");
     tcase_add_test(input, bad_input_refused);
     suite_add_tcase(s, input);

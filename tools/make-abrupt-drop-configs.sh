@@ -38,6 +38,8 @@ cat > configs/abrupt_drop_$t.yaml <<EOF
 # The seed reports the jump type over tens of seconds (oscillations near
 # 0.1 Hz): time.end = 60 s; a reduced run:
 #   sluice run configs/abrupt_drop_$t.yaml --out runs/$t --set time.end=0.1
+# The jump type from the run's free surface (docs/analysis.md, drop-type):
+#   sluice-analyze drop-type runs/$t --drop-x $xd --from 10 --to 60
 title: abrupt drop $t (seed 004), Fr1 = $fr
 dimensions: 2
 
@@ -106,9 +108,9 @@ plugins:
     position: $xo
     depth: $ytm
     velocity: $vt
-  free_surface_gauge:
-    positions: [0.2, 0.4, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95, 1.0, 1.05, 1.1, 1.15, 1.2, 1.3,
-                1.4, 1.5, 1.6, 1.7, 1.8]
+  free_surface_gauge:            # every 5 cm on the upper reach (the toe: sluice-analyze drop-type)
+    positions: [0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.55, 0.6, 0.65, 0.7, 0.75,
+                0.8, 0.85, 0.9, 0.95, 1.0, 1.05, 1.1, 1.15, 1.2, 1.3, 1.4, 1.5, 1.6, 1.7, 1.8]
     interval: 0.02
   section_gauge:
     positions: [0.4, 0.7, 1.0, 1.2, 1.5, 1.8]

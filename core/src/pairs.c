@@ -128,8 +128,11 @@ static void flush(sluice_pair_engine *engine, const sluice_pair_pass *pass,
     const sluice_index *restrict nb = w->neighbour;
     const uint8_t *restrict kinds = view->kind;
     uint8_t *restrict nk = w->neighbour_kind;
-    for (sluice_index p = 0; p < pairs; p++)
+    uint32_t present = 0; /* the kinds that do appear as j */
+    for (sluice_index p = 0; p < pairs; p++) {
         nk[p] = kinds[nb[p]];
+        present |= 1u << nk[p];
+    }
     for (uint32_t g = 0; g < pass->gathered_count[kind]; g++) {
         uint32_t column = pass->gathered_columns[kind][g];
         const sluice_real *restrict src = view->columns[column];
@@ -146,7 +149,7 @@ static void flush(sluice_pair_engine *engine, const sluice_pair_pass *pass,
     batch.pair_count = pairs;
     batch.neighbour = w->neighbour;
     batch.neighbour_kind = w->neighbour_kind;
-    batch.neighbour_kinds = pass->neighbour_mask[kind];
+    batch.neighbour_kinds = pass->neighbour_mask[kind] & present;
     batch.offset[0] = w->offset[0];
     batch.offset[1] = w->offset[1];
     batch.offset[2] = view->dimensions == 3 ? w->offset[2] : NULL;

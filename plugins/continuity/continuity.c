@@ -7,6 +7,14 @@
  * L_i grad_i W_ij (seed 004 renormalises every term but the pressure
  * gradient); it needs the kernel_correction plugin.
  * Targets fluid and wall particles (dynamic boundary particles obey it too).
+ * A wall particle takes no rate from an open boundary's particles (kind
+ * OPEN): their state is imposed, not the fluid's response, and under a gate
+ * at an inlet the imposed stream on one side of the wall particle and the
+ * free fluid on the other leave a rate that dbc's clamp (rho >= rho0)
+ * rectifies into a density that grows without bound (the Jonsson jump with
+ * dbc walls stopped at 3.2 s this way; docs/validation.md). The batch's
+ * neighbour_kinds says whether an OPEN particle is among the pairs at all:
+ * a scene without open boundaries never takes that path.
  * Both forms vanish for a uniform velocity and are exact for the divergence
  * of a linear velocity field on a lattice (with renormalisation, on any
  * particle set). */
@@ -125,11 +133,33 @@ static inline void continuity_pairs(const continuity_state *s, const sluice_view
     const sluice_real *restrict vxj = vj[0], *restrict vyj = vj[1];
     const sluice_real *restrict vzj = dims == 3 ? vj[2] : vj[1];
     sluice_real *restrict rate = sluice_real_column(v, s->density_rate, 0);
+    const int open_pairs = (b->neighbour_kinds & SLUICE_KIND_MASK(SLUICE_KIND_OPEN)) != 0;
     for (sluice_index t = 0; t < b->target_count; t++) {
         const sluice_index i = b->target[t];
         const sluice_real vxi = vel[0][i], vyi = vel[1][i], vzi = dims == 3 ? vel[2][i] : 0;
         sluice_real sum = 0;
-        if (!renormalise) {
+        if (open_pairs && v->kind[i] == SLUICE_KIND_WALL) {
+            /* a wall particle next to an open boundary: no rate from the
+             * open boundary's particles (see the header) */
+            const uint8_t *restrict kj = b->neighbour_kind;
+            sluice_real m[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+            for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
+                if (kj[k] == SLUICE_KIND_OPEN)
+                    continue;
+                const sluice_real weight = volume ? mj[k] / rhoj[k] * F[k] : mj[k] * F[k];
+                const sluice_real u[3] = {(vxi - vxj[k]) * weight, (vyi - vyj[k]) * weight,
+                                          dims == 3 ? (vzi - vzj[k]) * weight : 0};
+                const sluice_real r[3] = {rx[k], ry[k], dims == 3 ? rz[k] : 0};
+                for (uint32_t a = 0; a < dims; a++)
+                    for (uint32_t c = 0; c < dims; c++)
+                        m[3 * a + c] += u[a] * r[c];
+            }
+            for (uint32_t a = 0; a < dims; a++)
+                for (uint32_t c = 0; c < dims; c++)
+                    sum += (renormalise ? sluice_real_column(v, s->correction, a * dims + c)[i]
+                                        : (sluice_real)(a == c)) *
+                           m[3 * a + c];
+        } else if (!renormalise) {
             for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
                 const sluice_real weight = volume ? mj[k] / rhoj[k] * F[k] : mj[k] * F[k];
                 sluice_real dot = (vxi - vxj[k]) * rx[k] + (vyi - vyj[k]) * ry[k];

@@ -534,3 +534,58 @@ int sluice_hyd_drop_regime_of(double F1, double Y, double S, sluice_hyd_drop_reg
     *t = fb > fa ? (F1 - fa) / (fb - fa) : (F1 <= fa ? 0.0 : 1.0);
     return 0;
 }
+
+sluice_hyd_drop_state sluice_hyd_drop_state_of(const double *x, const double *depth, size_t n,
+                                               double threshold, double x_drop,
+                                               double roller_length, double *x1)
+{
+    *x1 = NAN;
+    size_t m = 0, first = n; /* gauges of the upper reach; its first wet one */
+    while (m < n && x[m] < x_drop)
+        m++;
+    for (size_t k = 0; k < m && first == n; k++)
+        if (isfinite(depth[k]))
+            first = k;
+    if (first == n)
+        return SLUICE_HYD_STATE_NONE;
+    if (depth[first] >= threshold) {
+        *x1 = -INFINITY;
+        return SLUICE_HYD_STATE_A;
+    }
+    const double toe = sluice_hyd_toe_position(x, depth, m, threshold);
+    if (!isfinite(toe))
+        return SLUICE_HYD_STATE_WAVE;
+    *x1 = toe;
+    return x_drop - toe >= roller_length ? SLUICE_HYD_STATE_A : SLUICE_HYD_STATE_B;
+}
+
+const char *sluice_hyd_drop_type(const sluice_hyd_drop_state *state, size_t n, double wave_min,
+                                 double *fraction_a, double *fraction_b, double *fraction_wave,
+                                 size_t *wave_episodes)
+{
+    size_t count[3] = {0, 0, 0}, used = 0, episodes = 0;
+    int in_wave = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (state[i] == SLUICE_HYD_STATE_NONE)
+            continue;
+        count[state[i]]++;
+        used++;
+        if (state[i] == SLUICE_HYD_STATE_WAVE && !in_wave)
+            episodes++;
+        in_wave = state[i] == SLUICE_HYD_STATE_WAVE;
+    }
+    *wave_episodes = episodes;
+    if (used == 0) {
+        *fraction_a = *fraction_b = *fraction_wave = NAN;
+        return NULL;
+    }
+    *fraction_a = (double)count[SLUICE_HYD_STATE_A] / (double)used;
+    *fraction_b = (double)count[SLUICE_HYD_STATE_B] / (double)used;
+    *fraction_wave = (double)count[SLUICE_HYD_STATE_WAVE] / (double)used;
+    const int a_family = count[SLUICE_HYD_STATE_A] >= count[SLUICE_HYD_STATE_B];
+    if (*fraction_wave < wave_min)
+        return a_family ? "A-jump" : "B-jump";
+    if (*fraction_wave > 1 - wave_min)
+        return "wave jump";
+    return a_family ? "A-wave" : "B-wave";
+}

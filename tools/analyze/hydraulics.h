@@ -193,4 +193,42 @@ typedef enum sluice_hyd_drop_regime {
 int sluice_hyd_drop_regime_of(double F1, double Y, double S, sluice_hyd_drop_regime *regime,
                               double *t);
 
+/* Instantaneous flow state at an abrupt drop, from one free-surface profile
+ * of the upper reach (Ohtsu & Yasuda 1991, seed 004 Figure 1): depth[k] =
+ * eta - upper-bed elevation at gauges x[k] < x_drop (ascending), the toe
+ * threshold depth (y1 + fraction (d2_B - y1)) and the roller length L_r:
+ *   WAVE    no gauge of the upper reach reaches the threshold: the
+ *           supercritical stream runs to the edge and leaves it as a jet
+ *           (wave jump);
+ *   A       the toe x1 is at least L_r upstream of the edge (x_drop - x1 >=
+ *           L_r), or upstream of the first gauge: the roller ends on the
+ *           upper bed (A-jump);
+ *   B       the toe is on the upper reach less than L_r from the edge: the
+ *           roller reaches over the drop (B-jump).
+ * NONE when every gauge is dry. *x1 receives the toe (NaN for WAVE and
+ * NONE, -inf upstream of the first gauge). */
+typedef enum sluice_hyd_drop_state {
+    SLUICE_HYD_STATE_NONE = -1,
+    SLUICE_HYD_STATE_A = 0,
+    SLUICE_HYD_STATE_B = 1,
+    SLUICE_HYD_STATE_WAVE = 2
+} sluice_hyd_drop_state;
+
+sluice_hyd_drop_state sluice_hyd_drop_state_of(const double *x, const double *depth, size_t n,
+                                               double threshold, double x_drop,
+                                               double roller_length, double *x1);
+
+/* Jump type over a series of states (NONE samples left out): the fractions
+ * of A, B and WAVE samples, and the type
+ *   A-jump / B-jump   WAVE fraction < wave_min (stable; A or B by the larger
+ *                     fraction),
+ *   wave jump         WAVE fraction > 1 - wave_min,
+ *   A-wave / B-wave   otherwise (oscillation between the wave jump and the
+ *                     larger of A and B),
+ * and the wave episodes (maximal runs of WAVE samples). Returns the type's
+ * name, or NULL when no sample has a state. */
+const char *sluice_hyd_drop_type(const sluice_hyd_drop_state *state, size_t n, double wave_min,
+                                 double *fraction_a, double *fraction_b, double *fraction_wave,
+                                 size_t *wave_episodes);
+
 #endif

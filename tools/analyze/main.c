@@ -35,7 +35,7 @@ typedef struct options {
     const char *positional[MAX_POSITIONAL];
     size_t positional_count;
     double d1, v1, fr, g, x, from, to, fraction, x1, bed, drop, y1, yt, min_wet, fmin, fmax,
-        tolerance;
+        tolerance, drop_x, wave_min;
     const char *column, *reference, *out, *positions, *points, *field;
     double times[MAX_TIMES];
     size_t time_count;
@@ -66,6 +66,8 @@ static const struct option_spec {
     {"fmin", OPT_NUMBER, offsetof(options, fmin)},
     {"fmax", OPT_NUMBER, offsetof(options, fmax)},
     {"tolerance", OPT_NUMBER, offsetof(options, tolerance)},
+    {"drop-x", OPT_NUMBER, offsetof(options, drop_x)},
+    {"wave-min", OPT_NUMBER, offsetof(options, wave_min)},
     {"column", OPT_STRING, offsetof(options, column)},
     {"reference", OPT_STRING, offsetof(options, reference)},
     {"out", OPT_STRING, offsetof(options, out)},
@@ -88,6 +90,7 @@ static const char usage[] =
     "  correlate A.csv:COL B.csv:COL               Pearson r (seed 004)\n"
     "  l2        RUN --reference REF.csv [--time]  free-surface L2 error, RMSE (seed 002)\n"
     "  classify  --y1 --yt --v1 --drop S           jump at an abrupt drop (momentum limits)\n"
+    "  drop-type RUN --drop-x X [--drop S]         jump type at an abrupt drop from a run\n"
     "options: --from T0 --to T1 (window, s), --out DIR (default RUN/analysis), --g 9.81,\n"
     "  --bed B (bed elevation, m), --positions a,b,.. --points x,y;x,y.. (instead of\n"
     "  RUN/scene.resolved.yaml), --field velocity, --min-wet 0.5, --fmin, --fmax,\n"
@@ -1528,6 +1531,121 @@ static int cmd_classify(analyze_ctx *cx, const options *o)
     return 0;
 }
 
+/* The jump type at an abrupt drop from a run's free surface
+ * (sluice_hyd_drop_state_of / sluice_hyd_drop_type; docs/analysis.md). */
+static int cmd_drop_type(analyze_ctx *cx, const options *o)
+{
+    const char *run = run_dir(cx, o);
+    double fr1, v1;
+    if (!run || inflow(cx, o, &fr1, &v1) != 0 || need(cx, o, o->drop_x, "drop-x", 0) != 0)
+        return -1;
+    if (!(o->fraction > 0.0 && o->fraction < 1.0))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--fraction must be in (0, 1)");
+    if (!(o->wave_min > 0.0 && o->wave_min < 0.5))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--wave-min must be in (0, 0.5)");
+    run_data r;
+    if (run_open(cx, run, &r) != 0)
+        return -1;
+    int status = -1;
+    surface_gauges s;
+    memset(&s, 0, sizeof s);
+    double *depth = NULL, *x1 = NULL;
+    sluice_hyd_drop_state *state = NULL;
+    char *dir = NULL;
+    /* the step height: --drop, else the inlet's bed elevation (the upper bed) */
+    double drop = o->drop;
+    const char *text = r.scene ? analyze_scene_string(r.scene, "inlet", "bed") : NULL;
+    if (isnan(drop) && text)
+        drop = strtod(text, NULL);
+    if (!(drop > 0.0)) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                     "drop-type needs --drop S > 0 (the upper bed's elevation above the lower "
+                     "bed; the run's inlet has no bed above 0)");
+        goto done;
+    }
+    if (surface_load(cx, o, &r, &s) != 0)
+        goto done;
+    size_t upper = 0;
+    while (upper < s.n && s.x[upper] < o->drop_x)
+        upper++;
+    if (upper < 2) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                     "drop-type needs at least two free-surface gauges upstream of the drop "
+                     "(x < %g m); %s has %zu",
+                     o->drop_x, run, upper);
+        goto done;
+    }
+    const double d2 = sluice_hyd_belanger_depth(o->d1, fr1);
+    const double threshold = o->d1 + o->fraction * (d2 - o->d1);
+    const double roller = sluice_hyd_hager_roller_length(o->d1, fr1);
+    depth = analyze_alloc(cx, upper, sizeof *depth);
+    x1 = analyze_alloc(cx, s.g.table.rows, sizeof *x1);
+    state = analyze_alloc(cx, s.g.table.rows, sizeof *state);
+    if (!depth || !x1 || !state)
+        goto done;
+    for (size_t i = 0; i < s.g.table.rows; i++) {
+        for (size_t k = 0; k < upper; k++)
+            depth[k] = cell(&s.g, i, s.col[k]) - drop;
+        state[i] =
+            sluice_hyd_drop_state_of(s.x, depth, upper, threshold, o->drop_x, roller, &x1[i]);
+    }
+    double fa, fb, fw;
+    size_t episodes;
+    const char *type = sluice_hyd_drop_type(state + s.g.first, s.g.last - s.g.first, o->wave_min,
+                                            &fa, &fb, &fw, &episodes);
+    const double span = s.g.time[s.g.last - 1] - s.g.time[s.g.first];
+    headline("F1", fr1, NULL);
+    headline("y1", o->d1, "m");
+    headline("drop", drop, "m");
+    headline("drop_x", o->drop_x, "m");
+    headline("threshold_depth", threshold, "m");
+    headline("L_r_Hager", roller, "m");
+    print_window(&s.g);
+    printf("upper_gauges = %zu\n", upper);
+    headline("fraction_A", fa, NULL);
+    headline("fraction_B", fb, NULL);
+    headline("fraction_wave", fw, NULL);
+    printf("wave_episodes = %zu\n", episodes);
+    headline("wave_episode_rate", span > 0 ? (double)episodes / span : NAN, "Hz");
+    printf("type = %s\n", type ? type : "none");
+
+    dir = out_dir(cx, o, run);
+    if (!dir)
+        goto done;
+    char *csv;
+    FILE *f = open_csv(cx, dir, "drop_type.csv", &csv);
+    if (!f) {
+        free(csv);
+        goto done;
+    }
+    fprintf(f, "time,x1,state\n");
+    for (size_t i = 0; i < s.g.table.rows; i++)
+        fprintf(f, "%.10g,%.10g,%d\n", s.g.time[i], x1[i], (int)state[i]);
+    if (close_csv(cx, f, csv) != 0)
+        goto done;
+    if (!type) {
+        analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND,
+                     "every free-surface gauge upstream of the drop is dry in the window");
+        goto done;
+    }
+    char body[1024];
+    snprintf(body, sizeof body,
+             "set xlabel 'time (s)'\nset ylabel 'state (0 A, 1 B, 2 wave)'\nset yrange [-0.5:2.5]\n"
+             "set title '%s: A %.2f, B %.2f, wave %.2f over [%g, %g] s'\n"
+             "plot 'drop_type.csv' using 1:3 skip 1 with steps title 'state'\n",
+             type, fa, fb, fw, s.g.time[s.g.first], s.g.time[s.g.last - 1]);
+    plot(cx, o, dir, "drop_type", body);
+    status = 0;
+done:
+    surface_free(&s);
+    analyze_scene_free(r.scene);
+    free(depth);
+    free(x1);
+    free(state);
+    free(dir);
+    return status;
+}
+
 /* A run made with an `inlet` knows its inflow: when --d1, --v1 and --fr are
  * not given, take d1 and v1 from the inlet's depth and velocity (or
  * discharge / depth) in RUN/scene.resolved.yaml. Options given on the
@@ -1582,7 +1700,8 @@ int main(int argc, char **argv)
     analyze_ctx cx = {{0}, SLUICE_ANALYZE_OK};
     options o = {0};
     o.command = argv[1];
-    o.d1 = o.v1 = o.fr = o.x = o.x1 = o.drop = o.y1 = o.yt = o.fmin = o.fmax = NAN;
+    o.d1 = o.v1 = o.fr = o.x = o.x1 = o.drop = o.y1 = o.yt = o.fmin = o.fmax = o.drop_x = NAN;
+    o.wave_min = 0.1;
     o.g = 9.81;
     o.from = -INFINITY;
     o.to = INFINITY;
@@ -1598,7 +1717,7 @@ int main(int argc, char **argv)
         {"belanger", cmd_belanger}, {"conjugate", cmd_conjugate}, {"toe", cmd_toe},
         {"roller", cmd_roller},     {"vmax", cmd_vmax},           {"surface", cmd_surface},
         {"spectrum", cmd_spectrum}, {"correlate", cmd_correlate}, {"l2", cmd_l2},
-        {"classify", cmd_classify},
+        {"classify", cmd_classify}, {"drop-type", cmd_drop_type},
     };
     int (*command)(analyze_ctx *, const options *) = NULL;
     for (size_t k = 0; k < sizeof commands / sizeof *commands; k++)

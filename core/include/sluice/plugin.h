@@ -207,7 +207,8 @@ typedef struct sluice_pair_batch {
     sluice_index pair_count;
     const sluice_index *neighbour;  /* particle index j of each pair */
     const uint8_t *neighbour_kind;  /* kind of j */
-    uint32_t neighbour_kinds;       /* kinds that may appear as j in this batch */
+    uint32_t neighbour_kinds;       /* kinds that appear as j in this batch (a term may
+                                       take a slower path only when a kind is present) */
     const sluice_real *offset[3];   /* r_ij = r_i - r_j (periodic image applied); [2] NULL in 2D */
     const sluice_real *distance;    /* |r_ij|, > 0 */
     const sluice_real *kernel;      /* W(r_ij), or NULL unless requested
