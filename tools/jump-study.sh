@@ -7,7 +7,8 @@
 # from the section gauge's depth at x = 1 m (every 0.01 s, as the paper's
 # output), next to the paper's values; and, through build/tools/sluice-analyze
 # (docs/analysis.md), the toe position, the roller length against Hager et
-# al., the largest free-surface fluctuation against Murzyn & Chanson and the
+# al., the largest free-surface fluctuation against Murzyn & Chanson, the
+# decay of the largest mean velocity against Chanson (2010) and the
 # dominant free-surface frequency as a Strouhal number against Chachereau &
 # Chanson.
 #
@@ -35,7 +36,7 @@ analyze="$build/tools/sluice-analyze"
 # value of `key = value` in an analysis's output
 pick() { sed -n "s|^$1 = \([^ ]*\).*|\1|p" "$2" | head -n 1; }
 
-echo "divisor,dx_m,scheme,end_s,window,particles_final,steps,wall_s,threads,mean_d2_m,A,P,paper_A,paper_P,toe_mean_m,toe_std_m,roller_length_m,roller_hager_m,eta_std_max_over_d1,murzyn_chanson,f_peak_hz,strouhal,strouhal_chachereau_chanson" >"$out/summary.csv"
+echo "divisor,dx_m,scheme,end_s,window,particles_final,steps,wall_s,threads,mean_d2_m,A,P,paper_A,paper_P,toe_mean_m,toe_std_m,roller_length_m,roller_hager_m,eta_std_max_over_d1,murzyn_chanson,vmax_decay_rate,vmax_decay_chanson,f_peak_hz,strouhal,strouhal_chachereau_chanson" >"$out/summary.csv"
 for n in $divisors; do
     dx=$(awk -v n="$n" 'BEGIN { printf "%.10g", 0.02 / n }')
     run="$out/d1_$n-$scheme-$end"
@@ -47,16 +48,17 @@ for n in $divisors; do
     "$analyze" toe "$run" $w >"$run/toe.txt" || true
     "$analyze" roller "$run" $w >"$run/roller.txt" || true
     "$analyze" surface "$run" $w >"$run/surface.txt" || true
+    "$analyze" vmax "$run" $w >"$run/vmax.txt" || true
     # the free surface 0.1 m downstream of the basin's middle (x = 0.75 m)
     "$analyze" spectrum "$run" $w --column free_surface.csv:eta_x29 >"$run/spectrum.txt" || true
     json() { sed -n "s/.*\"$1\": \([0-9.eE+-]*\).*/\1/p" "$run/run.json" | head -n 1; }
     paper=$(awk -F, -v c="d1/$n" -v w="$from-$to" '$1 == c && $3 == w { print $4 "," $5 }' "$table")
     [ -n "$paper" ] || paper=","
-    echo "$n,$dx,$scheme,$end,$from-$to,$(json particles_final),$(json steps),$(json wall_seconds),$(json threads),$(pick d2_mean "$run/conjugate.txt"),$(pick A "$run/conjugate.txt"),$(pick P "$run/conjugate.txt"),$paper,$(pick x1_mean "$run/toe.txt"),$(pick x1_std "$run/toe.txt"),$(pick L_r "$run/roller.txt"),$(pick L_r_Hager "$run/roller.txt"),$(pick eta_std_max/d1 "$run/surface.txt"),$(pick eta_std_max/d1_Murzyn_Chanson "$run/surface.txt"),$(pick f_peak "$run/spectrum.txt"),$(pick St "$run/spectrum.txt"),$(pick St_Chachereau_Chanson "$run/spectrum.txt")" >>"$out/summary.csv"
+    echo "$n,$dx,$scheme,$end,$from-$to,$(json particles_final),$(json steps),$(json wall_seconds),$(json threads),$(pick d2_mean "$run/conjugate.txt"),$(pick A "$run/conjugate.txt"),$(pick P "$run/conjugate.txt"),$paper,$(pick x1_mean "$run/toe.txt"),$(pick x1_std "$run/toe.txt"),$(pick L_r "$run/roller.txt"),$(pick L_r_Hager "$run/roller.txt"),$(pick eta_std_max/d1 "$run/surface.txt"),$(pick eta_std_max/d1_Murzyn_Chanson "$run/surface.txt"),$(pick decay_rate "$run/vmax.txt"),$(pick decay_rate_Chanson "$run/vmax.txt"),$(pick f_peak "$run/spectrum.txt"),$(pick St "$run/spectrum.txt"),$(pick St_Chachereau_Chanson "$run/spectrum.txt")" >>"$out/summary.csv"
 done
 {
-    echo "| dx | wall scheme | simulated | window | particles | wall time (s) | threads | mean d2 (m) | A | P | paper's A | paper's P | toe x1 (m) | roller (m) / Hager | max eta'/d1 / Murzyn-Chanson | f (Hz), St / Chachereau-Chanson |"
-    echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
-    awk -F, 'NR > 1 { printf "| d1/%s | %s | %s s | %s s | %s | %.0f | %s | %.4f | %.3f | %.3f | %s | %s | %s +- %s | %s / %s | %s / %s | %s, %s / %s |\n", $1, $3, $4, $5, $6, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18, $19, $20, $21, $22, $23 }' "$out/summary.csv"
+    echo "| dx | wall scheme | simulated | window | particles | wall time (s) | threads | mean d2 (m) | A | P | paper's A | paper's P | toe x1 (m) | roller (m) / Hager | max eta'/d1 / Murzyn-Chanson | Vmax decay k / Chanson | f (Hz), St / Chachereau-Chanson |"
+    echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    awk -F, 'NR > 1 { printf "| d1/%s | %s | %s s | %s s | %s | %.0f | %s | %.4f | %.3f | %.3f | %s | %s | %s +- %s | %s / %s | %s / %s | %s / %s | %s, %s / %s |\n", $1, $3, $4, $5, $6, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17, $18, $19, $20, $21, $22, $23, $24, $25 }' "$out/summary.csv"
 } >"$out/summary.md"
 cat "$out/summary.md"
