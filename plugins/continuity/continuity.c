@@ -7,14 +7,20 @@
  * L_i grad_i W_ij (seed 004 renormalises every term but the pressure
  * gradient); it needs the kernel_correction plugin.
  * Targets fluid and wall particles (dynamic boundary particles obey it too).
- * A wall particle takes no rate from an open boundary's particles (kind
- * OPEN): their state is imposed, not the fluid's response, and under a gate
- * at an inlet the imposed stream on one side of the wall particle and the
- * free fluid on the other leave a rate that dbc's clamp (rho >= rho0)
- * rectifies into a density that grows without bound (the Jonsson jump with
- * dbc walls stopped at 3.2 s this way; docs/validation.md). The batch's
- * neighbour_kinds says whether an OPEN particle is among the pairs at all:
- * a scene without open boundaries never takes that path.
+ * A wall particle is compressed only by the fluid: a pair with an open
+ * boundary's particle (kind OPEN, whose motion is imposed) may lower its
+ * density rate (a negative pair term, the particle moving away) but not
+ * raise it (a positive one, the particle approaching). Under a gate at an
+ * inlet, the imposed stream flowing in on one side of the gate's lowest wall
+ * particle and the free fluid leaving on the other leave a positive rate
+ * whenever the fluid there thins, which dbc's clamp (rho >= rho0) rectifies
+ * into a density that grows without bound (the Jonsson jump with dbc walls
+ * stopped at 3.2 s this way; docs/validation.md). At an outlet the roles
+ * swap: the fluid arrives at the end of the bed and the open layer leaves,
+ * and its expanding pairs are what balance the fluid's compressing ones (a
+ * bed ending under an outlet without them runs away as the gate did). The
+ * batch's neighbour_kinds says whether an OPEN particle is among the pairs
+ * at all: a scene without open boundaries never takes that path.
  * Both forms vanish for a uniform velocity and are exact for the divergence
  * of a linear velocity field on a lattice (with renormalisation, on any
  * particle set). */
@@ -139,26 +145,32 @@ static inline void continuity_pairs(const continuity_state *s, const sluice_view
         const sluice_real vxi = vel[0][i], vyi = vel[1][i], vzi = dims == 3 ? vel[2][i] : 0;
         sluice_real sum = 0;
         if (open_pairs && v->kind[i] == SLUICE_KIND_WALL) {
-            /* a wall particle next to an open boundary: no rate from the
-             * open boundary's particles (see the header) */
+            /* a wall particle next to an open boundary: the open boundary's
+             * particles may expand it but not compress it (see the header) */
             const uint8_t *restrict kj = b->neighbour_kind;
-            sluice_real m[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+            const sluice_real *L[9] = {NULL};
+            if (renormalise)
+                for (uint32_t a = 0; a < dims * dims; a++)
+                    L[a] = sluice_real_column(v, s->correction, a) + i;
             for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
-                if (kj[k] == SLUICE_KIND_OPEN)
-                    continue;
                 const sluice_real weight = volume ? mj[k] / rhoj[k] * F[k] : mj[k] * F[k];
-                const sluice_real u[3] = {(vxi - vxj[k]) * weight, (vyi - vyj[k]) * weight,
-                                          dims == 3 ? (vzi - vzj[k]) * weight : 0};
+                const sluice_real u[3] = {vxi - vxj[k], vyi - vyj[k], dims == 3 ? vzi - vzj[k] : 0};
                 const sluice_real r[3] = {rx[k], ry[k], dims == 3 ? rz[k] : 0};
-                for (uint32_t a = 0; a < dims; a++)
-                    for (uint32_t c = 0; c < dims; c++)
-                        m[3 * a + c] += u[a] * r[c];
+                sluice_real dot = 0;
+                for (uint32_t a = 0; a < dims; a++) {
+                    sluice_real ra = r[a];
+                    if (renormalise) {
+                        ra = 0;
+                        for (uint32_t c = 0; c < dims; c++)
+                            ra += *L[a * dims + c] * r[c];
+                    }
+                    dot += u[a] * ra;
+                }
+                const sluice_real term = weight * dot;
+                if (kj[k] == SLUICE_KIND_OPEN && term > 0)
+                    continue;
+                sum += term;
             }
-            for (uint32_t a = 0; a < dims; a++)
-                for (uint32_t c = 0; c < dims; c++)
-                    sum += (renormalise ? sluice_real_column(v, s->correction, a * dims + c)[i]
-                                        : (sluice_real)(a == c)) *
-                           m[3 * a + c];
         } else if (!renormalise) {
             for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
                 const sluice_real weight = volume ? mj[k] / rhoj[k] * F[k] : mj[k] * F[k];
