@@ -137,28 +137,8 @@ static const sluice_param_spec backstop_params[] = {
      0, 2, POSITIVE | SLUICE_PARAM_HAS_MAX, "1", "C_p in dt <= C_p sqrt(m/k)", NULL, 0},
 };
 
-static int penalty_create_common(const sluice_api *api, sluice_host *host, penalty_state **out,
-                                 sluice_real contact_distance, sluice_real default_fraction,
-                                 sluice_real scale, sluice_real friction, sluice_real factor,
-                                 const char *scheme, int exclude);
-
-static int penalty_create(const sluice_api *api, sluice_host *host, const void *config,
-                          void **state)
-{
-    const penalty_config *c = config;
-    return penalty_create_common(api, host, (penalty_state **)state, c->contact_distance, 0.5,
-                                 c->penalty_scale, c->friction, c->time_step_factor,
-                                 "penalty_contact", 0);
-}
-
-static int backstop_create(const sluice_api *api, sluice_host *host, const void *config,
-                           void **state)
-{
-    const backstop_config *c = config;
-    return penalty_create_common(api, host, (penalty_state **)state, c->distance, 0.25,
-                                 c->penalty_scale, 0, c->time_step_factor, "penalty_contact", 1);
-}
-
+/* penalty_contact (the walls of its scheme) and wall_backstop (every other
+ * wall) share the state and the spring. */
 static int penalty_create_common(const sluice_api *api, sluice_host *host, penalty_state **out,
                                  sluice_real contact_distance, sluice_real default_fraction,
                                  sluice_real scale, sluice_real friction, sluice_real factor,
@@ -198,6 +178,23 @@ static int penalty_create_common(const sluice_api *api, sluice_host *host, penal
         }
     *out = s;
     return SLUICE_OK;
+}
+
+static int penalty_create(const sluice_api *api, sluice_host *host, const void *config,
+                          void **state)
+{
+    const penalty_config *c = config;
+    return penalty_create_common(api, host, (penalty_state **)state, c->contact_distance, 0.5,
+                                 c->penalty_scale, c->friction, c->time_step_factor,
+                                 "penalty_contact", 0);
+}
+
+static int backstop_create(const sluice_api *api, sluice_host *host, const void *config,
+                           void **state)
+{
+    const backstop_config *c = config;
+    return penalty_create_common(api, host, (penalty_state **)state, c->distance, 0.25,
+                                 c->penalty_scale, 0, c->time_step_factor, "penalty_contact", 1);
 }
 
 static int penalty_bind(void *state, sluice_host *host)

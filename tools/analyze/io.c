@@ -359,6 +359,12 @@ static int scalar_number(yaml_node_t *n, double *value)
     return end != text && *end == '\0' ? 0 : -1;
 }
 
+int analyze_scene_number(const analyze_scene *scene, const char *plugin, const char *key,
+                         double *value)
+{
+    return scene ? scalar_number(plugin_key(scene, plugin, key), value) : -1;
+}
+
 long analyze_scene_numbers(analyze_ctx *cx, const analyze_scene *scene, const char *plugin,
                            const char *key, double **values)
 {

@@ -54,6 +54,10 @@ long analyze_scene_points(analyze_ctx *cx, const analyze_scene *scene, const cha
                           const char *key, double **xs, double **ys);
 /* plugins.<plugin>.<key> as a string, or NULL. */
 const char *analyze_scene_string(const analyze_scene *scene, const char *plugin, const char *key);
+/* plugins.PLUGIN.KEY as a number: 0 with *value set, -1 when absent or not a
+ * number. */
+int analyze_scene_number(const analyze_scene *scene, const char *plugin, const char *key,
+                         double *value);
 /* Whether plugins.<plugin> exists. */
 int analyze_scene_has(const analyze_scene *scene, const char *plugin);
 

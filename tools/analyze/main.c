@@ -1554,9 +1554,8 @@ static int cmd_drop_type(analyze_ctx *cx, const options *o)
     char *dir = NULL;
     /* the step height: --drop, else the inlet's bed elevation (the upper bed) */
     double drop = o->drop;
-    const char *text = r.scene ? analyze_scene_string(r.scene, "inlet", "bed") : NULL;
-    if (isnan(drop) && text)
-        drop = strtod(text, NULL);
+    if (isnan(drop))
+        analyze_scene_number(r.scene, "inlet", "bed", &drop);
     if (!(drop > 0.0)) {
         analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
                      "drop-type needs --drop S > 0 (the upper bed's elevation above the lower "
@@ -1656,34 +1655,24 @@ static int inflow_from_run(analyze_ctx *cx, options *o)
         return 0;
     struct stat st;
     if (stat(o->positional[0], &st) != 0 || !S_ISDIR(st.st_mode))
-        return 0;
-    char *path = analyze_format(cx, "%s/scene.resolved.yaml", o->positional[0]);
-    if (!path)
+        return 0; /* the command reports a missing run itself */
+    run_data r;
+    if (run_open(cx, o->positional[0], &r) != 0)
         return -1;
-    analyze_scene *scene = NULL;
-    int status = 0;
-    if (analyze_file_exists(path) && (status = analyze_scene_load(cx, path, &scene)) == 0 &&
-        analyze_scene_has(scene, "inlet")) {
-        double depth = NAN, velocity = NAN, discharge = NAN;
-        const char *text;
-        if ((text = analyze_scene_string(scene, "inlet", "depth")))
-            depth = strtod(text, NULL);
-        if ((text = analyze_scene_string(scene, "inlet", "velocity")))
-            velocity = strtod(text, NULL);
-        if ((text = analyze_scene_string(scene, "inlet", "discharge")))
-            discharge = strtod(text, NULL);
-        if (isnan(o->d1) && depth > 0)
-            o->d1 = depth;
-        if (isnan(o->v1) && isnan(o->fr)) {
-            if (velocity > 0)
-                o->v1 = velocity;
-            else if (discharge > 0 && o->d1 > 0)
-                o->v1 = discharge / o->d1;
-        }
+    double depth = NAN, velocity = NAN, discharge = NAN;
+    analyze_scene_number(r.scene, "inlet", "depth", &depth);
+    analyze_scene_number(r.scene, "inlet", "velocity", &velocity);
+    analyze_scene_number(r.scene, "inlet", "discharge", &discharge);
+    if (isnan(o->d1) && depth > 0)
+        o->d1 = depth;
+    if (isnan(o->v1) && isnan(o->fr)) {
+        if (velocity > 0)
+            o->v1 = velocity;
+        else if (discharge > 0 && o->d1 > 0)
+            o->v1 = discharge / o->d1;
     }
-    analyze_scene_free(scene);
-    free(path);
-    return status;
+    analyze_scene_free(r.scene);
+    return 0;
 }
 
 int main(int argc, char **argv)
