@@ -48,6 +48,21 @@ static char *scene_text(int line, const char *replacement, const char *extra)
     return text;
 }
 
+/* The base scene without lines first..last (1-based), `extra` appended. */
+static char *scene_without(int first, int last, const char *extra)
+{
+    char *text = NULL;
+    size_t size = 0;
+    FILE *f = open_memstream(&text, &size);
+    for (size_t i = 0; i < BASE_COUNT; i++)
+        if ((int)i + 1 < first || (int)i + 1 > last)
+            fprintf(f, "%s\n", base_lines[i]);
+    if (extra)
+        fputs(extra, f);
+    fclose(f);
+    return text;
+}
+
 typedef struct outcome {
     int status;
     char *output;
@@ -324,6 +339,114 @@ START_TEST(geometry_errors)
 }
 END_TEST
 
+/* ------------------------------------------------ invalid combinations -- */
+/* Plugins that load one by one but cannot work together: refused at load
+ * with one message at the plugin that makes the combination invalid. */
+
+static void expect_combination(const char *text, int line, int column, const char *needle)
+{
+    outcome o = run_case(text, NULL);
+    expect_error(&o, line, column, needle);
+    done(&o);
+}
+
+START_TEST(field_written_by_two_plugins)
+{
+    /* two turbulence models: both compute the eddy viscosity */
+    char *text = scene_text(0, NULL,
+                            "  velocity_gradient: {}\n"        /* 25 */
+                            "  mixing_length: {l_max: 0.1}\n"  /* 26 */
+                            "  k_epsilon: {length_scale: 0.01}\n"); /* 27 */
+    expect_combination(text, 27, 3, "both write field 'eddy_viscosity'");
+    free(text);
+}
+END_TEST
+
+START_TEST(constant_published_by_two_plugins)
+{
+    /* two equations of state */
+    char *text = scene_text(0, NULL, "  linear_eos: {speed_of_sound: 20}\n");
+    expect_combination(text, 25, 3, "published by both 'tait' and 'linear_eos'");
+    free(text);
+}
+END_TEST
+
+START_TEST(turbulence_without_its_fields)
+{
+    /* the Reynolds stress needs an eddy viscosity and the velocity gradient */
+    char *text = scene_text(0, NULL, "  turbulent_stress: {}\n");
+    expect_combination(text, 25, 3,
+                       "fields 'eddy_viscosity' (read by 'turbulent_stress'), 'velocity_gradient' "
+                       "(read by 'turbulent_stress') are computed by no loaded plugin");
+    free(text);
+}
+END_TEST
+
+START_TEST(no_equation_of_state)
+{
+    /* without tait (lines 16-17) nothing computes pressure or sound speed;
+     * pressure_gradient moves to line 17 */
+    char *text = scene_without(16, 17, NULL);
+    expect_combination(text, 17, 3, "'pressure' (read by 'pressure_gradient')");
+    free(text);
+}
+END_TEST
+
+START_TEST(renormalised_without_kernel_correction)
+{
+    char *text = scene_text(18, "  continuity: {renormalise: true}", NULL);
+    expect_combination(text, 18, 3, "field 'kernel_correction' (read by 'continuity')");
+    free(text);
+}
+END_TEST
+
+START_TEST(two_integrators_or_kernels)
+{
+    char *text = scene_text(0, NULL, "  predictor_corrector: {}\n");
+    expect_combination(text, 25, 3, "two integrators are loaded");
+    free(text);
+    text = scene_text(0, NULL, "  cubic_spline: {}\n");
+    expect_combination(text, 25, 3, "two kernels are loaded");
+    free(text);
+}
+END_TEST
+
+START_TEST(no_integrator)
+{
+    char *text = scene_without(24, 24, NULL);
+    expect_combination(text, 1, 1, "no integrator is loaded");
+    free(text);
+}
+END_TEST
+
+START_TEST(spacing_larger_than_geometry)
+{
+    /* the fluid box is 0.5 m across */
+    char *text = scene_text(3, "  spacing: 0.6", NULL);
+    expect_combination(text, 11, 7, "less than particles.spacing = 0.6 m");
+    free(text);
+}
+END_TEST
+
+START_TEST(inlet_outside_the_domain)
+{
+    char *text = scene_text(0, NULL,
+                            "  inlet:\n"             /* 25 */
+                            "    position: 1.5\n"
+                            "    depth: 0.1\n"
+                            "    velocity: 1\n");
+    expect_combination(text, 25, 3, "the inflow section (x = 1.5 m");
+    free(text);
+    text = scene_text(0, NULL,
+                      "  inlet:\n"
+                      "    position: 0\n"
+                      "    depth: 2\n" /* water column above domain.max */
+                      "    velocity: 1\n");
+    expect_combination(text, 25, 3, "lies outside the domain");
+    free(text);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("input errors");
@@ -346,5 +469,17 @@ int main(void)
     tcase_add_test(tc, bad_command_line_override);
     tcase_add_test(tc, geometry_errors);
     suite_add_tcase(s, tc);
+    TCase *combinations = tcase_create("invalid combinations");
+    tcase_set_timeout(combinations, 300);
+    tcase_add_test(combinations, field_written_by_two_plugins);
+    tcase_add_test(combinations, constant_published_by_two_plugins);
+    tcase_add_test(combinations, turbulence_without_its_fields);
+    tcase_add_test(combinations, no_equation_of_state);
+    tcase_add_test(combinations, renormalised_without_kernel_correction);
+    tcase_add_test(combinations, two_integrators_or_kernels);
+    tcase_add_test(combinations, no_integrator);
+    tcase_add_test(combinations, spacing_larger_than_geometry);
+    tcase_add_test(combinations, inlet_outside_the_domain);
+    suite_add_tcase(s, combinations);
     return test_run_suite(s);
 }

@@ -1186,6 +1186,9 @@ static int build_schedule(sluice_sim *sim)
 {
     const uint32_t n = sim->instance_count;
     int errors = 0;
+    char missing[1024] = "";
+    size_t missing_used = 0;
+    uint32_t missing_count = 0, missing_reader = SLUICE_CORE_INSTANCE;
     /* conflicts and missing providers */
     for (uint32_t f = 0; f < sim->field_count; f++) {
         const sluice_field_entry *field = &sim->fields[f];
@@ -1222,14 +1225,20 @@ static int build_schedule(sluice_sim *sim)
             errors++;
         }
         if (!provided) {
+            /* gathered into one message below: one missing plugin (an
+             * equation of state, a turbulence model) often leaves several
+             * fields without a provider */
             for (uint32_t d = 0; d < field->declarer_count; d++) {
                 const sluice_declarer *dec = &field->declarers[d];
                 if (dec->access & (SLUICE_READ | SLUICE_READ_NEIGHBOUR)) {
-                    report(sim, dec->instance,
-                           "plugin '%s' reads field '%s', which no loaded plugin computes; load "
-                           "the plugin that provides it",
-                           instance_name(sim, dec->instance), field->name);
-                    errors++;
+                    if (missing_count == 0)
+                        missing_reader = dec->instance;
+                    int w = snprintf(missing + missing_used, sizeof missing - missing_used,
+                                     "%s'%s' (read by '%s')", missing_count ? ", " : "",
+                                     field->name, instance_name(sim, dec->instance));
+                    if (w > 0 && (size_t)w < sizeof missing - missing_used)
+                        missing_used += (size_t)w;
+                    missing_count++;
                     break;
                 }
             }
@@ -1240,6 +1249,17 @@ static int build_schedule(sluice_sim *sim)
                    field->name, field->rate_of);
             errors++;
         }
+    }
+    if (missing_count == 1) {
+        report(sim, missing_reader,
+               "field %s is computed by no loaded plugin; load the plugin that provides it",
+               missing);
+        errors++;
+    } else if (missing_count > 1) {
+        report(sim, missing_reader,
+               "fields %s are computed by no loaded plugin; load the plugins that provide them",
+               missing);
+        errors++;
     }
     if (errors)
         return errors;
@@ -1475,6 +1495,25 @@ static int fill_fluid(sluice_sim *sim)
     int errors = 0;
     for (size_t r = 0; r < scene->fluid_count && !errors; r++) {
         const sluice_scene_fluid *fluid = &scene->fluids[r];
+        /* a fluid region thinner than one spacing is resolved by at most
+         * one row of particles: almost always a spacing meant for another
+         * scale (mm for m) */
+        sluice_real lo[3], hi[3];
+        sluice_region_bounds(&fluid->region, dims, lo, hi);
+        for (uint32_t d = 0; d < dims; d++)
+            if (hi[d] - lo[d] < sim->spacing) {
+                const sluice_node *node = fluid->node;
+                sluice_diag_add(sim->diag, SLUICE_SEVERITY_ERROR, node->file, node->line,
+                                node->column,
+                                "geometry.fluid.%zu is %g m across in %c, less than "
+                                "particles.spacing = %g m: refine the spacing (at least one "
+                                "spacing, better several, across every fluid region)",
+                                r, (double)(hi[d] - lo[d]), "xyz"[d], (double)sim->spacing);
+                errors++;
+                break;
+            }
+        if (errors)
+            break;
         sluice_points pts = {0};
         if (sluice_region_fill(&fluid->region, dims, sim->spacing, fluid->lattice_origin, &pts) !=
             0) {
@@ -1889,8 +1928,14 @@ static int load(sluice_sim *sim, const char *scene_path, const sluice_load_optio
         sluice_instance *in = &sim->instances[k];
         sim->creating = k;
         sim->pending[0] = '\0';
+        size_t reported = sim->diag ? sluice_diag_error_count(sim->diag) : 0;
         int rc = in->component->create(&api_table, &in->host, in->config, &in->state);
         sim->creating = -1;
+        if (rc != SLUICE_OK && !sim->pending[0] && sim->diag &&
+            sluice_diag_error_count(sim->diag) > reported) {
+            /* the core already said why (e.g. a constant published twice) */
+            return errors + 1;
+        }
         if (rc != SLUICE_OK || sim->pending[0]) {
             /* one message: the plugin, its library, versions and path, and why */
             report(sim, k,
@@ -1986,13 +2031,21 @@ static int load(sluice_sim *sim, const char *scene_path, const sluice_load_optio
             if (!scene->domain.periodic[d] &&
                 !(x >= scene->domain.min[d] && x < scene->domain.max[d])) {
                 const sluice_node *domain = sluice_node_get(scene->root, "domain");
+                char hint[160] = "";
+                if (sim->view.kind[i] == SLUICE_KIND_WALL)
+                    snprintf(hint, sizeof hint,
+                             " (wall particles lie in layers %g m apart behind each wall: is "
+                             "particles.spacing too large for the geometry?)",
+                             (double)sim->spacing);
                 sluice_diag_add(diag, SLUICE_SEVERITY_ERROR,
                                 domain ? domain->file : scene->path, domain ? domain->line : 1,
                                 domain ? domain->column : 1,
-                                "a %s particle at %c = %g m lies outside the domain [%g, %g): "
-                                "enlarge domain.min/max to hold the geometry and its walls",
+                                "%s %s particle at %c = %g m lies outside the domain [%g, %g): "
+                                "enlarge domain.min/max to hold the geometry and its walls%s",
+                                sim->view.kind[i] == SLUICE_KIND_OPEN ? "an" : "a",
                                 sluice_kind_name(sim->view.kind[i]), "xyz"[d],
-                                x, (double)scene->domain.min[d], (double)scene->domain.max[d]);
+                                x, (double)scene->domain.min[d], (double)scene->domain.max[d],
+                                hint);
                 return 1;
             }
         }

@@ -292,6 +292,21 @@ static int boundary_bind(void *state, sluice_host *host)
         s->domain_max[d] = hi[d];
     }
     if (s->inlet) {
+        /* the inflow's section must lie inside the domain: its plane, the
+         * water column bed .. bed + d1 and, in 3D, the span */
+        const int v = (int)s->vertical;
+        if (!(s->position >= s->domain_min[0] && s->position < s->domain_max[0]) ||
+            !(s->bed >= s->domain_min[v] && s->bed + s->depth <= s->domain_max[v]) ||
+            (s->dims == 3 &&
+             !(s->span[0] >= s->domain_min[1] && s->span[1] <= s->domain_max[1]))) {
+            api->error(host,
+                       "the inflow section (x = %g m, %c from %g to %g m%s) lies outside the "
+                       "domain [%g, %g) x [%g, %g) m: move the inlet or enlarge the domain",
+                       s->position, "xyz"[v], s->bed, s->bed + s->depth,
+                       s->dims == 3 ? ", across the span" : "", s->domain_min[0],
+                       s->domain_max[0], s->domain_min[v], s->domain_max[v]);
+            return SLUICE_ERROR;
+        }
         if (s->position - s->width < s->domain_min[0] && s->form == INLET_BUFFER) {
             api->error(host,
                        "the inlet buffer [%g, %g) m reaches below domain.min x = %g m: move the "
