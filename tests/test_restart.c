@@ -439,12 +439,14 @@ START_TEST(bad_checkpoints_refused)
     char *dir = test_scratch("restart-bad");
     char *scene = test_write_file(dir, "scene.yaml", yaml);
     char *args = NULL;
-    ck_assert_int_ge(asprintf(&args, "run %s --out %s/out --quiet", scene, dir), 0);
+    ck_assert_int_ge(
+        asprintf(&args, "run %s --out %s/out --quiet --set checkpoint.keep=1", scene, dir), 0);
     ck_assert_int_eq(test_sluice(args, NULL), 0);
     char *out = NULL;
     ck_assert_int_ge(asprintf(&out, "%s/out", dir), 0);
     int checkpoints = 0;
     char *good = first_checkpoint(out, &checkpoints);
+    ck_assert_int_eq(checkpoints, 1); /* at 0.01 s and 0.02 s, keep: 1 */
 
     /* truncated: the first half of it */
     FILE *f = fopen(good, "rb");

@@ -425,6 +425,7 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
         path = full;
     }
     sim->state_file = path;
+    const double started = sluice_wall_clock();
     void *image = NULL;
     size_t size = 0;
     char why[1024];
@@ -442,6 +443,11 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
         return SLUICE_ERROR;
     }
     sim->checkpoint_step = sim->step;
+    if (!sim->quiet)
+        fprintf(stderr, "%ssluice: checkpoint %s: step %lld, t = %.9g s, %u particles, %zu bytes, "
+                        "%.3f s\n",
+                sim->progress ? "\n" : "", path, (long long)sim->step, sim->time,
+                sim->particles.count, size, sluice_wall_clock() - started);
     if (path != full)
         return SLUICE_OK;
     /* this run's checkpoints in the output directory: keep the newest */
