@@ -748,7 +748,10 @@ static void api_request_time(sluice_host *host, double t)
 
 void sluice_sim_request_time(sluice_sim *sim, double t)
 {
-    if (!(t > sim->time) || !(t < sim->end))
+    /* times at or past the end are kept too: a checkpoint records them, and a
+     * run restarted with a later time.end then stops on them as a run
+     * started with that end would */
+    if (!(t > sim->time) || !isfinite(t))
         return;
     for (size_t i = 0; i < sim->request_count; i++)
         if (sim->requests[i] == t)
