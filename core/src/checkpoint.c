@@ -364,7 +364,8 @@ static void write_state(sluice_sim *sim, hid_t file, ck_error *e)
     close_id(&group, H5Gclose);
 }
 
-int sluice_checkpoint_image(sluice_sim *sim, void **image, size_t *size, char *error,
+/* The checkpoint of the current state as a file image in memory. */
+static int checkpoint_image(sluice_sim *sim, void **image, size_t *size, char *error,
                             size_t error_size)
 {
     *image = NULL;
@@ -429,7 +430,7 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
     void *image = NULL;
     size_t size = 0;
     char why[1024];
-    int rc = sluice_checkpoint_image(sim, &image, &size, why, sizeof why);
+    int rc = checkpoint_image(sim, &image, &size, why, sizeof why);
     sim->state_file = NULL;
     if (rc != 0) {
         sluice_sim_fail(sim, "cannot write checkpoint '%s' (step %lld, t = %.9g s): %s", path,

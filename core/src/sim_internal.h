@@ -184,8 +184,6 @@ int sluice_write_file_atomic(const char *path, const void *data, size_t size, ch
                              size_t error_size);
 
 /* checkpoint.c */
-int sluice_checkpoint_image(sluice_sim *sim, void **image, size_t *size, char *error,
-                            size_t error_size);
 int sluice_api_state_write(sluice_host *host, const char *name, sluice_state_type type,
                            uint64_t count, const void *data);
 int sluice_api_state_read(sluice_host *host, const char *name, sluice_state_type type,
