@@ -238,6 +238,41 @@ START_TEST(plugin_built_for_abi_1_2_loads)
 }
 END_TEST
 
+/* A plugin built for ABI 1.4 (before save_state / load_state) loads, has no
+ * state callbacks, and a run that loads it checkpoints and restarts. */
+START_TEST(plugin_built_for_abi_1_4_checkpoints)
+{
+    char yaml[1024];
+    snprintf(yaml, sizeof yaml,
+             "dimensions: 2\n"
+             "plugin_path: %s\n"
+             "particles: {spacing: 0.05}\n"
+             "time: {end: 0.01, max_step: 0.001}\n"
+             "domain: {min: [0, 0], max: [1, 1]}\n"
+             "geometry: {fluid: [{shape: box, min: [0, 0], max: [0.5, 0.5]}]}\n"
+             "initial: {density: rest}\n"
+             "plugins: {wendland_c2: {}, abi14_second: {}, symplectic: {}}\n",
+             fixture_dir());
+    sluice_sim *sim = test_load("abi14", yaml, NULL, 0);
+    sluice_instance *in = instance_named(sim, "abi14_second");
+    ck_assert_str_eq(in->component->summary, "ABI 1.4 fixture, second component");
+    ck_assert_uint_eq(in->library->abi_minor, 4);
+    ck_assert_ptr_null(in->component->save_state);
+    ck_assert_ptr_null(in->component->load_state);
+    ck_assert_int_eq(sluice_sim_begin(sim, NULL), SLUICE_RUN_COMPLETE);
+    ck_assert_int_eq(sluice_sim_step(sim), SLUICE_RUN_COMPLETE);
+    char *dir = test_scratch("abi14-checkpoint"), path[512], error[1024];
+    snprintf(path, sizeof path, "%s/checkpoint_test.h5", dir);
+    ck_assert_msg(sluice_sim_checkpoint(sim, path) == SLUICE_OK, "%s", sluice_sim_failure(sim));
+    sluice_sim *again = test_load("abi14", yaml, NULL, 0);
+    ck_assert_msg(sluice_sim_restart(again, path, error, sizeof error) == SLUICE_OK, "%s", error);
+    ck_assert_int_eq(sluice_sim_steps(again), 1);
+    sluice_sim_free(again);
+    sluice_sim_free(sim);
+    free(dir);
+}
+END_TEST
+
 /* Per-region and per-wall lattice origins: an upper reach whose bed lies
  * 0.032 m up (3.2 dx at dx = 0.01 m) is filled on its own lattice, rows at
  * 0.032 + (k + 1/2) dx, and its bed's dbc layers at 0.032 - (k + 1/2) dx,
@@ -308,6 +343,7 @@ int main(void)
     tcase_add_test(c, point_pass_periodic);
     tcase_add_test(c, wall_nearest_in_a_tank);
     tcase_add_test(c, plugin_built_for_abi_1_2_loads);
+    tcase_add_test(c, plugin_built_for_abi_1_4_checkpoints);
     tcase_add_test(c, region_and_wall_lattice_origin);
     suite_add_tcase(s, c);
     return test_run_suite(s);

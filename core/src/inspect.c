@@ -45,6 +45,7 @@ static const char *roles(const sluice_component *c, char *buffer, size_t size)
         {c->before_step != NULL, "before-step hook"},
         {c->after_step != NULL, "after-step hook"},
         {c->finish != NULL, "finish hook"},
+        {c->save_state != NULL && c->load_state != NULL, "state in checkpoints"},
     };
     for (size_t i = 0; i < sizeof list / sizeof list[0]; i++)
         if (list[i].present) {

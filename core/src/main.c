@@ -14,7 +14,7 @@ static void usage(FILE *out)
     fprintf(out,
             "usage:\n"
             "  sluice run SCENE.yaml --out DIR [--set key=value ...] [--threads N]\n"
-            "             [--progress | --no-progress] [--quiet]\n"
+            "             [--restart CHECKPOINT.h5] [--progress | --no-progress] [--quiet]\n"
             "  sluice check SCENE.yaml [--set key=value ...]\n"
             "  sluice inspect [PLUGIN] [--markdown]\n"
             "  sluice version\n"
@@ -22,11 +22,14 @@ static void usage(FILE *out)
             "--set overrides any scene key by its dotted path, e.g. --set time.end=0.2 or\n"
             "--set plugins.tait.speed_of_sound=60. Plugins are searched in the scene's\n"
             "plugin_path, SLUICE_PLUGIN_PATH, then next to the program.\n"
-            "Exit status: 0 success, 2 bad input, 3 the run went unstable, 4 other failure.\n");
+            "--restart continues the run of SCENE from a checkpoint (DIR/checkpoint_*.h5,\n"
+            "written every checkpoint.interval s and when SIGINT or SIGTERM stops a run).\n"
+            "Exit status: 0 success, 2 bad input, 3 the run went unstable, 4 other failure,\n"
+            "5 stopped by SIGINT/SIGTERM after a whole step (a checkpoint was written).\n");
 }
 
 typedef struct arguments {
-    const char *scene, *out, *plugin;
+    const char *scene, *out, *plugin, *restart;
     const char **sets;
     size_t set_count;
     int threads, progress, quiet, markdown;
@@ -58,6 +61,14 @@ static int parse(int argc, char **argv, int first, arguments *a, int allow_out)
             a->out = argv[++i];
         } else if (allow_out && strncmp(arg, "--out=", 6) == 0) {
             a->out = arg + 6;
+        } else if (allow_out && strcmp(arg, "--restart") == 0) {
+            if (i + 1 >= argc) {
+                fprintf(stderr, "sluice: error: --restart needs a checkpoint file\n");
+                return -1;
+            }
+            a->restart = argv[++i];
+        } else if (allow_out && strncmp(arg, "--restart=", 10) == 0) {
+            a->restart = arg + 10;
         } else if (strcmp(arg, "--threads") == 0 || strcmp(arg, "-j") == 0) {
             char *end = NULL;
             if (i + 1 >= argc || (a->threads = (int)strtol(argv[i + 1], &end, 10), *end) ||
@@ -121,6 +132,20 @@ static int command_run(int argc, char **argv)
     free(a.sets);
     if (!sim)
         return 2;
+    if (a.restart) {
+        char error[2048];
+        if (sluice_sim_restart(sim, a.restart, error, sizeof error) != 0) {
+            fprintf(stderr, "sluice: error: %s\n", error);
+            sluice_sim_free(sim);
+            return 2;
+        }
+        if (!a.quiet)
+            fprintf(stderr, "sluice: restarting from %s at step %lld, t = %.9g s\n", a.restart,
+                    (long long)sluice_sim_steps(sim), sluice_sim_time(sim));
+    }
+    if (sluice_install_stop_handlers() != 0)
+        fprintf(stderr, "sluice: warning: cannot catch SIGINT/SIGTERM; an interrupted run "
+                        "writes no checkpoint\n");
     sluice_run_options options = {a.out, a.progress >= 0 ? a.progress : isatty(STDERR_FILENO),
                                   a.quiet};
     int status = sluice_sim_run(sim, &options);
@@ -130,6 +155,11 @@ static int command_run(int argc, char **argv)
             fprintf(stderr, "sluice: completed %lld steps, %.6g s simulated, %u particles; output "
                             "in %s\n",
                     (long long)sluice_sim_steps(sim), sluice_sim_time(sim), v->count, a.out);
+    } else if (status == SLUICE_RUN_INTERRUPTED) {
+        fprintf(stderr, "sluice: stopped by a signal after step %lld, t = %.9g s; continue with "
+                        "--restart %s/checkpoint_%09lld.h5\n",
+                (long long)sluice_sim_steps(sim), sluice_sim_time(sim), a.out,
+                (long long)sluice_sim_steps(sim));
     } else {
         fprintf(stderr, "sluice: error: %s\n", sluice_sim_failure(sim));
         if (status == SLUICE_RUN_UNSTABLE)

@@ -119,7 +119,9 @@ static int compare_strings(const void *a, const void *b)
  * component array has that stride. */
 static size_t component_size(uint16_t minor)
 {
-    return minor >= 3 ? sizeof(sluice_component) : offsetof(sluice_component, prepare);
+    return minor >= 5   ? sizeof(sluice_component)
+           : minor >= 3 ? offsetof(sluice_component, save_state)
+                        : offsetof(sluice_component, prepare);
 }
 
 static const sluice_component *component_at(const sluice_library *lib, uint32_t i)

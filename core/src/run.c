@@ -4,6 +4,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -79,6 +80,27 @@ static int write_all(int fd, const char *data, size_t size)
     return 0;
 }
 
+/* A restarted run continues a table that is in the output directory (the
+ * same directory as the checkpointed run) from its length at the checkpoint:
+ * the rows written after the checkpoint (by the run that went on, or by
+ * its finish) are cut off. Returns the open descriptor, or -1 when the file
+ * is missing or shorter (then a new file with the header is started). */
+static int resume_table(sluice_table *table)
+{
+    int fd = open(table->path, O_WRONLY | O_APPEND | O_CLOEXEC);
+    if (fd < 0)
+        return -1;
+    struct stat st;
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) ||
+        (uint64_t)st.st_size < table->resume_bytes ||
+        ftruncate(fd, (off_t)table->resume_bytes) != 0) {
+        close(fd);
+        return -1;
+    }
+    table->bytes = table->resume_bytes;
+    return fd;
+}
+
 /* Appends one complete line (one write call) to a table, creating the file
  * with its header first. */
 int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t length)
@@ -93,6 +115,17 @@ int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t len
         snprintf(full, n, "%s/%s", table->sim->output_directory, table->path);
         free(table->path);
         table->path = full;
+        if (table->resume && table->resume_bytes > 0 &&
+            (table->fd = resume_table(table)) >= 0) {
+            if (write_all(table->fd, line, length) != 0) {
+                table->failed = 1;
+                sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path,
+                                strerror(errno));
+                return SLUICE_ERROR;
+            }
+            table->bytes += length;
+            return SLUICE_OK;
+        }
         table->fd = open(table->path, O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
         if (table->fd < 0) {
             table->failed = 1;
@@ -109,6 +142,7 @@ int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t len
         header[hl] = '\n';
         int rc = write_all(table->fd, header, hl + 1);
         free(header);
+        table->bytes = hl + 1;
         if (rc != 0) {
             table->failed = 1;
             sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path, strerror(errno));
@@ -120,7 +154,39 @@ int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t len
         sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path, strerror(errno));
         return SLUICE_ERROR;
     }
+    table->bytes += length;
     return SLUICE_OK;
+}
+
+/* ------------------------------------------------------------- signals -- */
+
+/* The only global mutable state of Sluice: SIGINT and SIGTERM set it (a
+ * handler may do nothing else safely: C11 7.14.1.1, a volatile sig_atomic_t),
+ * and sluice_sim_run reads it between steps, then stops after the current
+ * step and writes a checkpoint. A second signal gets the default action
+ * (SA_RESETHAND): it ends the process at once. */
+static volatile sig_atomic_t stop_signal = 0;
+
+static void on_stop_signal(int signum)
+{
+    stop_signal = signum;
+}
+
+int sluice_install_stop_handlers(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESTART | SA_RESETHAND;
+    if (sigaction(SIGINT, &sa, NULL) != 0 || sigaction(SIGTERM, &sa, NULL) != 0)
+        return -1;
+    return 0;
+}
+
+int sluice_stop_requested(void)
+{
+    return stop_signal != 0;
 }
 
 static int make_directory(const char *path, char *error, size_t size)
@@ -345,9 +411,38 @@ int sluice_sim_begin(sluice_sim *sim, const char *output_directory)
     }
     sim->wall_start = sluice_wall_clock();
     sluice_sim_refresh_view(sim);
-    if (call_hooks(sim, 1) != 0)
+    /* periodic checkpoints: the first scheduled after the current time (a
+     * restart requested it already, in its saved requests) */
+    const double interval = (double)sim->scene.checkpoint.interval;
+    if (interval > 0) {
+        const double tolerance = 1e-9 * interval;
+        sim->checkpoint_next = 1;
+        while ((double)sim->checkpoint_next * interval <= sim->time + tolerance)
+            sim->checkpoint_next++;
+        sluice_sim_request_time(sim, (double)sim->checkpoint_next * interval);
+    }
+    /* after a restart the hooks ran already on this state, before the checkpoint */
+    if (!sim->restarted && call_hooks(sim, 1) != 0)
         return SLUICE_RUN_FAILED;
     return SLUICE_RUN_COMPLETE;
+}
+
+/* Writes the periodic checkpoint when the step ended on its time. */
+static int periodic_checkpoint(sluice_sim *sim)
+{
+    const double interval = (double)sim->scene.checkpoint.interval;
+    if (!(interval > 0))
+        return SLUICE_OK;
+    const double tolerance = 1e-9 * interval;
+    if (sim->time + tolerance < (double)sim->checkpoint_next * interval)
+        return SLUICE_OK;
+    if (sim->output_directory && sim->checkpoint_step != sim->step &&
+        sluice_sim_checkpoint(sim, NULL) != SLUICE_OK)
+        return SLUICE_ERROR;
+    while ((double)sim->checkpoint_next * interval <= sim->time + tolerance)
+        sim->checkpoint_next++;
+    sluice_sim_request_time(sim, (double)sim->checkpoint_next * interval);
+    return SLUICE_OK;
 }
 
 int sluice_sim_step(sluice_sim *sim)
@@ -379,6 +474,8 @@ int sluice_sim_step(sluice_sim *sim)
         return SLUICE_RUN_UNSTABLE;
     if (call_hooks(sim, 1) != 0)
         return SLUICE_RUN_FAILED;
+    if (periodic_checkpoint(sim) != SLUICE_OK)
+        return SLUICE_RUN_FAILED;
     return SLUICE_RUN_COMPLETE;
 }
 
@@ -404,9 +501,9 @@ static int write_run_json(sluice_sim *sim, int status)
     FILE *f = open_memstream(&text, &size);
     if (!f)
         return -1;
-    const char *names[] = {"complete", "?", "input_error", "unstable", "failed"};
+    const char *names[] = {"complete", "?", "input_error", "unstable", "failed", "interrupted"};
     double rate = sim->wall_seconds > 0 ? (double)sim->particle_steps / sim->wall_seconds : 0;
-    fprintf(f, "{\n  \"status\": \"%s\",\n", status >= 0 && status <= 4 ? names[status] : "failed");
+    fprintf(f, "{\n  \"status\": \"%s\",\n", status >= 0 && status <= 5 ? names[status] : "failed");
     fprintf(f, "  \"scene\": ");
     json_string(f, sim->scene.path);
     fprintf(f, ",\n  \"sluice_version\": \"%s\",\n", SLUICE_VERSION);
@@ -461,12 +558,16 @@ static int write_run_json(sluice_sim *sim, int status)
 int sluice_sim_end(sluice_sim *sim, int status)
 {
     sim->wall_seconds = sluice_wall_clock() - sim->wall_start;
-    int finish_status = status == SLUICE_RUN_COMPLETE ? SLUICE_FINISH_COMPLETE : SLUICE_FINISH_FAILED;
     for (uint32_t k = 0; k < sim->instance_count; k++) {
         sluice_instance *in = &sim->instances[k];
+        /* SLUICE_FINISH_INTERRUPTED is 1.5: older plugins see a complete run */
+        int finish_status = status == SLUICE_RUN_COMPLETE ? SLUICE_FINISH_COMPLETE
+                            : status != SLUICE_RUN_INTERRUPTED ? SLUICE_FINISH_FAILED
+                            : in->library->abi_minor >= 5      ? SLUICE_FINISH_INTERRUPTED
+                                                               : SLUICE_FINISH_COMPLETE;
         if (in->component->finish && in->component->finish(in->state, &in->host, finish_status) != SLUICE_OK) {
             sluice_sim_fail(sim, "plugin '%s' failed to finish its output", in->name);
-            if (status == SLUICE_RUN_COMPLETE)
+            if (status == SLUICE_RUN_COMPLETE || status == SLUICE_RUN_INTERRUPTED)
                 status = SLUICE_RUN_FAILED;
         }
     }
@@ -475,7 +576,8 @@ int sluice_sim_end(sluice_sim *sim, int status)
             close(sim->tables[t]->fd);
             sim->tables[t]->fd = -1;
         }
-    if (sim->output_directory && write_run_json(sim, status) != 0 && status == SLUICE_RUN_COMPLETE)
+    if (sim->output_directory && write_run_json(sim, status) != 0 &&
+        (status == SLUICE_RUN_COMPLETE || status == SLUICE_RUN_INTERRUPTED))
         status = SLUICE_RUN_FAILED;
     return status;
 }
@@ -511,6 +613,14 @@ int sluice_sim_run(sluice_sim *sim, const sluice_run_options *options)
     }
     const double end = sim->end;
     while (sim->time < end - 1e-12 * (end > 1 ? end : 1)) {
+        if (stop_signal) {
+            /* SIGINT/SIGTERM: the last step is whole; keep it */
+            status = SLUICE_RUN_INTERRUPTED;
+            if (sim->output_directory && sim->checkpoint_step != sim->step &&
+                sluice_sim_checkpoint(sim, NULL) != SLUICE_OK)
+                status = SLUICE_RUN_FAILED;
+            break;
+        }
         status = sluice_sim_step(sim);
         if (status != SLUICE_RUN_COMPLETE)
             break;

@@ -104,6 +104,24 @@ static const sluice_param_spec watchdog_specs[] = {
      NULL, 0},
 };
 
+typedef struct {
+    sluice_real interval;
+    int64_t keep;
+} checkpoint_config;
+
+static const sluice_param_spec checkpoint_specs[] = {
+    {"interval", SLUICE_PARAM_REAL, OFF(checkpoint_config, interval), "0", 0, 0,
+     SLUICE_PARAM_HAS_MIN, "s",
+     "simulated time between checkpoints (DIR/checkpoint_<step>.h5, at t = interval, 2 interval, "
+     "...; steps end exactly on them); 0: none (a run stopped by SIGINT or SIGTERM still writes "
+     "one)",
+     NULL, 0},
+    {"keep", SLUICE_PARAM_INT, OFF(checkpoint_config, keep), "2", 0, 1000000,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
+     "checkpoints of this run kept on disk, the newest (older ones are deleted); 0: keep all",
+     NULL, 0},
+};
+
 /* ------------------------------------------------------------ geometry -- */
 
 typedef struct {
@@ -201,6 +219,7 @@ static const sluice_param_spec wall_line_specs[] = {
 static const char *const top_level_keys[] = {
     "title",    "description", "dimensions", "particles", "time",       "domain",
     "geometry", "initial",     "neighbour_search", "watchdog", "plugins", "plugin_path",
+    "checkpoint",
 };
 
 const char *sluice_node_file(const sluice_node *node, const sluice_scene *scene)
@@ -664,7 +683,7 @@ int sluice_scene_load(sluice_scene *scene, const char *path, const char *const *
             error_at(diag, scene, scene->root->keys[i],
                      "unknown key '%s' at the top level (valid keys: title, description, "
                      "dimensions, particles, time, domain, geometry, initial, neighbour_search, "
-                     "watchdog, plugins, plugin_path)",
+                     "watchdog, checkpoint, plugins, plugin_path)",
                      key);
         errors++;
     }
@@ -751,6 +770,13 @@ int sluice_scene_load(sluice_scene *scene, const char *path, const char *const *
     scene->watchdog.density_band = wc.density_band;
     scene->watchdog.min_time_step = wc.min_time_step;
     scene->watchdog.every = wc.every;
+
+    checkpoint_config kc;
+    memset(&kc, 0, sizeof kc);
+    errors += bind_section(scene, "checkpoint", checkpoint_specs, SLUICE_COUNT(checkpoint_specs),
+                           &kc, diag);
+    scene->checkpoint.interval = kc.interval;
+    scene->checkpoint.keep = kc.keep;
 
     sluice_node **geometry_slot = section_slot(scene->root, "geometry", 0);
     if (geometry_slot) {

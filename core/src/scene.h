@@ -68,6 +68,10 @@ typedef struct sluice_scene {
         sluice_real min_time_step;
         int64_t every;
     } watchdog;
+    struct {
+        sluice_real interval; /* s; 0: no periodic checkpoints */
+        int64_t keep;         /* newest checkpoints kept; 0: all */
+    } checkpoint;
     char **plugin_path; /* absolute directories */
     size_t plugin_path_count;
 

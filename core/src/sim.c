@@ -743,8 +743,15 @@ static void api_parallel_for(sluice_host *host, sluice_index count, sluice_range
 
 static void api_request_time(sluice_host *host, double t)
 {
-    sluice_sim *sim = host->sim;
-    if (!(t > sim->time) || !(t < sim->end))
+    sluice_sim_request_time(host->sim, t);
+}
+
+void sluice_sim_request_time(sluice_sim *sim, double t)
+{
+    /* times at or past the end are kept too: a checkpoint records them, and a
+     * run restarted with a later time.end then stops on them as a run
+     * started with that end would */
+    if (!(t > sim->time) || !isfinite(t))
         return;
     for (size_t i = 0; i < sim->request_count; i++)
         if (sim->requests[i] == t)
@@ -904,9 +911,6 @@ static int api_table_row(sluice_table *table, const double *values, uint32_t cou
         free(line);
     return rc;
 }
-
-int sluice_write_file_atomic(const char *path, const void *data, size_t size, char *error,
-                             size_t error_size);
 
 static int api_write_file_atomic(sluice_host *host, const char *path, const void *data, size_t size)
 {
@@ -1089,6 +1093,9 @@ static const sluice_api api_table = {
     api_remove_particles,
     api_set_kind,
     api_removed_count,
+    sluice_api_state_write,
+    sluice_api_state_read,
+    sluice_api_state_length,
 };
 
 /* ------------------------------------------------------------ schedule -- */
@@ -2096,6 +2103,8 @@ sluice_sim *sluice_sim_load(const char *scene_path, const sluice_load_options *o
     sim->diag = diag;
     omp_init_lock(&sim->message_lock);
     sim->creating = -1;
+    sim->state_group = -1;
+    sim->checkpoint_step = -1;
     sim->kernel = sim->integrator = -1;
     sim->position.column = sim->kind.column = sim->id.column = -1;
     sim->mass.column = sim->velocity.column = sim->density.column = -1;
@@ -2131,6 +2140,9 @@ void sluice_sim_free(sluice_sim *sim)
         free(sim->tables[t]);
     }
     free(sim->tables);
+    for (size_t c = 0; c < sim->checkpoint_file_count; c++)
+        free(sim->checkpoint_files[c]);
+    free(sim->checkpoint_files);
     for (uint32_t f = 0; f < sim->field_count; f++) {
         free(sim->fields[f].name);
         free(sim->fields[f].units);

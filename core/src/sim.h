@@ -29,7 +29,9 @@ typedef enum sluice_run_status {
     SLUICE_RUN_COMPLETE = 0,
     SLUICE_RUN_INPUT_ERROR = 2,   /* bad scene or plugin: nothing was run */
     SLUICE_RUN_UNSTABLE = 3,      /* the watchdog stopped the run */
-    SLUICE_RUN_FAILED = 4         /* I/O error, out of memory, a plugin failed */
+    SLUICE_RUN_FAILED = 4,        /* I/O error, out of memory, a plugin failed */
+    SLUICE_RUN_INTERRUPTED = 5    /* stopped by SIGINT/SIGTERM after a whole step; a
+                                     checkpoint of that step was written */
 } sluice_run_status;
 
 /* Loads and validates a scene, loads its plugins and builds the initial
@@ -46,6 +48,25 @@ int sluice_sim_run(sluice_sim *sim, const sluice_run_options *options);
 int sluice_sim_begin(sluice_sim *sim, const char *output_directory);
 int sluice_sim_step(sluice_sim *sim);
 int sluice_sim_end(sluice_sim *sim, int status);
+
+/* Checkpoints and restart (docs/reliability.md). sluice_sim_checkpoint
+ * writes the complete state after the last whole step to `path` (HDF5,
+ * atomically); with path NULL to DIR/checkpoint_<step>.h5 of the output
+ * directory (and deletes the oldest beyond checkpoint.keep). Returns
+ * SLUICE_OK or SLUICE_ERROR with the reason in sluice_sim_failure().
+ * sluice_sim_restart replaces the freshly loaded state of `sim` (before
+ * sluice_sim_begin/run) with the checkpoint's; it refuses a missing,
+ * truncated or malformed file and one that does not match the scene
+ * (dimensions, plugins, field layout) with one message naming the file in
+ * `error`, and leaves `sim` unusable then. */
+int sluice_sim_checkpoint(sluice_sim *sim, const char *path);
+int sluice_sim_restart(sluice_sim *sim, const char *checkpoint, char *error, size_t error_size);
+
+/* SIGINT and SIGTERM set a flag (the only global mutable state of Sluice):
+ * sluice_sim_run then stops after the current step, writes a checkpoint and
+ * returns SLUICE_RUN_INTERRUPTED. Installed by the sluice program. */
+int sluice_install_stop_handlers(void);
+int sluice_stop_requested(void);
 
 /* Introspection. */
 const sluice_view *sluice_sim_view(sluice_sim *sim);

@@ -68,6 +68,9 @@ struct sluice_table {
     char *header;
     int fd;
     int failed;
+    uint64_t bytes;         /* written so far, header included (checkpoints record it) */
+    int resume;             /* restarted: continue the file at resume_bytes when it is there */
+    uint64_t resume_bytes;
 };
 
 typedef enum sluice_phase {
@@ -139,6 +142,18 @@ struct sluice_sim {
     double last_progress;
     int evaluating;   /* inside an evaluation or a pass: particles may not come or go */
     uint64_t removed; /* particles removed since the start (api->remove_particles) */
+
+    /* checkpoints (checkpoint.c) */
+    int64_t checkpoint_next;      /* the next scheduled one is at checkpoint_next * interval */
+    int64_t checkpoint_step;      /* step of the last checkpoint written, or -1 */
+    char **checkpoint_files;      /* written by this run, oldest first (checkpoint.keep) */
+    size_t checkpoint_file_count;
+    int restarted;                /* state restored from a checkpoint (begin() does not call
+                                     the after_step hooks again) */
+    int64_t state_group;          /* HDF5 group of api->state_write/read, or -1 */
+    uint32_t state_instance;      /* the component whose save_state/load_state runs */
+    int state_writing;
+    const char *state_file;       /* the checkpoint read or written (messages) */
 };
 
 /* The kinds a term that asked for `kinds` as neighbours receives: fluid
@@ -164,5 +179,15 @@ int sluice_sim_evaluate(sluice_sim *sim);
 const char *sluice_field_writers(const sluice_sim *sim, const sluice_field_entry *field,
                                  char *buffer, size_t size);
 double sluice_wall_clock(void);
+void sluice_sim_request_time(sluice_sim *sim, double t);
+int sluice_write_file_atomic(const char *path, const void *data, size_t size, char *error,
+                             size_t error_size);
+
+/* checkpoint.c */
+int sluice_api_state_write(sluice_host *host, const char *name, sluice_state_type type,
+                           uint64_t count, const void *data);
+int sluice_api_state_read(sluice_host *host, const char *name, sluice_state_type type,
+                          uint64_t count, void *data);
+int64_t sluice_api_state_length(sluice_host *host, const char *name);
 
 #endif

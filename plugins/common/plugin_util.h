@@ -79,4 +79,30 @@ static inline sluice_real sluice_util_from_bits(int64_t bits)
     return value;
 }
 
+/* 1.5: named scalars of a component's state in a checkpoint, from its
+ * save_state / load_state callbacks (api->state_write / state_read). */
+static inline int sluice_util_save_double(const sluice_api *api, sluice_host *host,
+                                          const char *name, double value)
+{
+    return api->state_write(host, name, SLUICE_STATE_DOUBLE, 1, &value);
+}
+
+static inline int sluice_util_load_double(const sluice_api *api, sluice_host *host,
+                                          const char *name, double *value)
+{
+    return api->state_read(host, name, SLUICE_STATE_DOUBLE, 1, value);
+}
+
+static inline int sluice_util_save_int(const sluice_api *api, sluice_host *host, const char *name,
+                                       int64_t value)
+{
+    return api->state_write(host, name, SLUICE_STATE_INT64, 1, &value);
+}
+
+static inline int sluice_util_load_int(const sluice_api *api, sluice_host *host, const char *name,
+                                       int64_t *value)
+{
+    return api->state_read(host, name, SLUICE_STATE_INT64, 1, value);
+}
+
 #endif

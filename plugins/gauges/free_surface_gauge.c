@@ -282,6 +282,19 @@ static int fs_after_step(void *state, sluice_host *host)
     return SLUICE_OK;
 }
 
+/* Checkpoints: the rows written (the next row is at rows_written x interval). */
+static int fs_save(void *state, sluice_host *host)
+{
+    const fs_state *s = state;
+    return sluice_util_save_int(s->api, host, "rows_written", s->written);
+}
+
+static int fs_load(void *state, sluice_host *host)
+{
+    fs_state *s = state;
+    return sluice_util_load_int(s->api, host, "rows_written", &s->written);
+}
+
 static const sluice_component components[] = {{
     .name = "free_surface_gauge",
     .summary = "free-surface elevation above listed positions (kernel-sum threshold on a "
@@ -299,6 +312,8 @@ static const sluice_component components[] = {{
     .bind = fs_bind,
     .initialise = fs_initialise,
     .after_step = fs_after_step,
+    .save_state = fs_save,
+    .load_state = fs_load,
 }};
 
 SLUICE_DEFINE_LIBRARY("free_surface_gauge", "1.0.0", "free-surface elevation gauges",

@@ -74,6 +74,19 @@ static int front_after_step(void *state, sluice_host *host)
     return SLUICE_OK;
 }
 
+/* Checkpoints: the rows written (the next row is at rows_written x interval). */
+static int front_save(void *state, sluice_host *host)
+{
+    const front_state *s = state;
+    return sluice_util_save_int(s->api, host, "rows_written", s->written);
+}
+
+static int front_load(void *state, sluice_host *host)
+{
+    front_state *s = state;
+    return sluice_util_load_int(s->api, host, "rows_written", &s->written);
+}
+
 static const sluice_component components[] = {{
     .name = "front_gauge",
     .summary = "dam-break surge front: largest x of the fluid, as time,x_front",
@@ -85,6 +98,8 @@ static const sluice_component components[] = {{
     .destroy = front_destroy,
     .initialise = front_initialise,
     .after_step = front_after_step,
+    .save_state = front_save,
+    .load_state = front_load,
 }};
 
 SLUICE_DEFINE_LIBRARY("front_gauge", "1.0.0", "surge-front gauge", SLUICE_DIMS_ALL, components)

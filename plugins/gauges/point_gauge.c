@@ -256,6 +256,19 @@ static int gauge_after_step(void *state, sluice_host *host)
     return SLUICE_OK;
 }
 
+/* Checkpoints: the rows written (the next row is at rows_written x interval). */
+static int gauge_save(void *state, sluice_host *host)
+{
+    const gauge_state *s = state;
+    return sluice_util_save_int(s->api, host, "rows_written", s->written);
+}
+
+static int gauge_load(void *state, sluice_host *host)
+{
+    gauge_state *s = state;
+    return sluice_util_load_int(s->api, host, "rows_written", &s->written);
+}
+
 static const sluice_component components[] = {{
     .name = "point_gauge",
     .summary = "fields interpolated at fixed points (Shepard kernel sum), as a CSV time series",
@@ -271,6 +284,8 @@ static const sluice_component components[] = {{
     .bind = gauge_bind,
     .initialise = gauge_initialise,
     .after_step = gauge_after_step,
+    .save_state = gauge_save,
+    .load_state = gauge_load,
 }};
 
 SLUICE_DEFINE_LIBRARY("point_gauge", "1.0.0", "point gauges", SLUICE_DIMS_ALL, components)

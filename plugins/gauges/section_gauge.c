@@ -341,6 +341,19 @@ static int sg_after_step(void *state, sluice_host *host)
     return SLUICE_OK;
 }
 
+/* Checkpoints: the rows written (the next row is at rows_written x interval). */
+static int sg_save(void *state, sluice_host *host)
+{
+    const sg_state *s = state;
+    return sluice_util_save_int(s->api, host, "rows_written", s->written);
+}
+
+static int sg_load(void *state, sluice_host *host)
+{
+    sg_state *s = state;
+    return sluice_util_load_int(s->api, host, "rows_written", &s->written);
+}
+
 static const sluice_component components[] = {{
     .name = "section_gauge",
     .summary = "2D cross-sections: depth, discharge per unit width, mean velocity and Froude "
@@ -358,6 +371,8 @@ static const sluice_component components[] = {{
     .bind = sg_bind,
     .initialise = sg_initialise,
     .after_step = sg_after_step,
+    .save_state = sg_save,
+    .load_state = sg_load,
 }};
 
 SLUICE_DEFINE_LIBRARY("section_gauge", "1.0.0", "2D section gauges: depth, discharge, Froude",

@@ -322,6 +322,33 @@ static int vort_finish(void *state, sluice_host *host, int status)
     return SLUICE_OK;
 }
 
+/* Checkpoints: the schedule and which state the vorticity field holds. */
+static int vort_save(void *state, sluice_host *host)
+{
+    const vort_state *s = state;
+    const sluice_api *api = s->api;
+    if (sluice_util_save_int(api, host, "scheduled", s->scheduled) != SLUICE_OK ||
+        sluice_util_save_int(api, host, "computed", s->computed) != SLUICE_OK ||
+        sluice_util_save_int(api, host, "computed_step", s->computed_step) != SLUICE_OK ||
+        sluice_util_save_double(api, host, "computed_time", s->computed_time) != SLUICE_OK)
+        return SLUICE_ERROR;
+    return SLUICE_OK;
+}
+
+static int vort_load(void *state, sluice_host *host)
+{
+    vort_state *s = state;
+    const sluice_api *api = s->api;
+    int64_t computed = 0;
+    if (sluice_util_load_int(api, host, "scheduled", &s->scheduled) != SLUICE_OK ||
+        sluice_util_load_int(api, host, "computed", &computed) != SLUICE_OK ||
+        sluice_util_load_int(api, host, "computed_step", &s->computed_step) != SLUICE_OK ||
+        sluice_util_load_double(api, host, "computed_time", &s->computed_time) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->computed = computed != 0;
+    return SLUICE_OK;
+}
+
 static const sluice_component components[] = {{
     .name = "vorticity",
     .summary = "vorticity curl v of the fluid (SPH curl, optionally renormalised), computed on "
@@ -342,6 +369,8 @@ static const sluice_component components[] = {{
     .bind = vort_bind,
     .pair = vort_pair,
     .after_step = vort_after_step,
+    .save_state = vort_save,
+    .load_state = vort_load,
     .finish = vort_finish,
 }};
 

@@ -234,6 +234,37 @@ static int monitor_after_step(void *state, sluice_host *host)
     return SLUICE_OK;
 }
 
+/* Checkpoints: the rows written and the (sorted) ids of the particles already reported behind a wall. */
+static int monitor_save(void *state, sluice_host *host)
+{
+    const monitor_state *s = state;
+    if (sluice_util_save_int(s->api, host, "rows_written", s->written) != SLUICE_OK)
+        return SLUICE_ERROR;
+    return s->api->state_write(host, "crossed_ids", SLUICE_STATE_UINT64, s->crossed_count,
+                               s->crossed_ids);
+}
+
+static int monitor_load(void *state, sluice_host *host)
+{
+    monitor_state *s = state;
+    int64_t length = s->api->state_length(host, "crossed_ids");
+    if (sluice_util_load_int(s->api, host, "rows_written", &s->written) != SLUICE_OK ||
+        length < 0)
+        return SLUICE_ERROR;
+    if ((size_t)length > s->crossed_capacity) {
+        sluice_id *ids = realloc(s->crossed_ids, (size_t)length * sizeof *ids);
+        if (!ids) {
+            s->api->error(host, "out of memory");
+            return SLUICE_ERROR;
+        }
+        s->crossed_ids = ids;
+        s->crossed_capacity = (size_t)length;
+    }
+    s->crossed_count = (size_t)length;
+    return s->api->state_read(host, "crossed_ids", SLUICE_STATE_UINT64, (uint64_t)length,
+                              s->crossed_ids);
+}
+
 static const sluice_component components[] = {{
     .name = "wall_monitor",
     .summary = "fluid against the walls: particles behind walls, smallest gap, first-layer gap",
@@ -245,6 +276,8 @@ static const sluice_component components[] = {{
     .destroy = monitor_destroy,
     .initialise = monitor_initialise,
     .after_step = monitor_after_step,
+    .save_state = monitor_save,
+    .load_state = monitor_load,
 }};
 
 SLUICE_DEFINE_LIBRARY("wall_monitor", "1.0.0", "wall monitor", SLUICE_DIMS_ALL, components)

@@ -167,6 +167,25 @@ static int verlet_advance(void *state, sluice_host *host)
     return SLUICE_OK;
 }
 
+/* Checkpoints: the steps taken (the Euler-step cycle) and the previous step size; q^{n-1} is a particle field. */
+static int verlet_save(void *state, sluice_host *host)
+{
+    const verlet_state *s = state;
+    if (sluice_util_save_int(s->api, host, "steps", s->steps) != SLUICE_OK ||
+        sluice_util_save_double(s->api, host, "dt_previous", s->dt_previous) != SLUICE_OK)
+        return SLUICE_ERROR;
+    return SLUICE_OK;
+}
+
+static int verlet_load(void *state, sluice_host *host)
+{
+    verlet_state *s = state;
+    if (sluice_util_load_int(s->api, host, "steps", &s->steps) != SLUICE_OK ||
+        sluice_util_load_double(s->api, host, "dt_previous", &s->dt_previous) != SLUICE_OK)
+        return SLUICE_ERROR;
+    return SLUICE_OK;
+}
+
 static const sluice_component components[] = {{
     .name = "verlet",
     .summary = "Verlet (Monaghan 1989, DualSPHysics) with an Euler step every euler_every "
@@ -183,6 +202,8 @@ static const sluice_component components[] = {{
     .destroy = verlet_destroy,
     .bind = verlet_bind,
     .advance = verlet_advance,
+    .save_state = verlet_save,
+    .load_state = verlet_load,
 }};
 
 SLUICE_DEFINE_LIBRARY("verlet", "1.0.0", "Verlet integrator (Monaghan 1989, DualSPHysics)",

@@ -657,6 +657,47 @@ static int boundary_finish(void *state, sluice_host *host, int status)
     return SLUICE_OK;
 }
 
+/* Checkpoints: the between-step bookkeeping and the flux sums of the
+ * interval under way (the open particles themselves are particles). */
+static int boundary_save(void *state, sluice_host *host)
+{
+    const boundary_state *s = state;
+    const sluice_api *api = s->api;
+    const double values[6] = {s->last_time,        s->newest_column, s->mass_interval,
+                              s->momentum_interval, s->mass_total,    s->row_time};
+    const int64_t counts[2] = {s->written, (int64_t)s->open_count};
+    if (api->state_write(host, "last_time,newest_column,mass_interval,momentum_interval,"
+                               "mass_total,row_time",
+                         SLUICE_STATE_DOUBLE, 6, values) != SLUICE_OK ||
+        api->state_write(host, "rows_written,open_count", SLUICE_STATE_INT64, 2, counts) !=
+            SLUICE_OK)
+        return SLUICE_ERROR;
+    return SLUICE_OK;
+}
+
+static int boundary_load(void *state, sluice_host *host)
+{
+    boundary_state *s = state;
+    const sluice_api *api = s->api;
+    double values[6];
+    int64_t counts[2];
+    if (api->state_read(host, "last_time,newest_column,mass_interval,momentum_interval,"
+                              "mass_total,row_time",
+                        SLUICE_STATE_DOUBLE, 6, values) != SLUICE_OK ||
+        api->state_read(host, "rows_written,open_count", SLUICE_STATE_INT64, 2, counts) !=
+            SLUICE_OK)
+        return SLUICE_ERROR;
+    s->last_time = values[0];
+    s->newest_column = values[1];
+    s->mass_interval = values[2];
+    s->momentum_interval = values[3];
+    s->mass_total = values[4];
+    s->row_time = values[5];
+    s->written = counts[0];
+    s->open_count = (sluice_index)counts[1];
+    return SLUICE_OK;
+}
+
 static const sluice_component components[] = {
     {
         .name = "inlet",
@@ -675,6 +716,8 @@ static const sluice_component components[] = {
         .initialise = inlet_initialise,
         .after_step = inlet_after_step,
         .finish = boundary_finish,
+        .save_state = boundary_save,
+        .load_state = boundary_load,
     },
     {
         .name = "outlet",
@@ -693,6 +736,8 @@ static const sluice_component components[] = {
         .initialise = outlet_initialise,
         .after_step = outlet_after_step,
         .finish = boundary_finish,
+        .save_state = boundary_save,
+        .load_state = boundary_load,
     },
 };
 

@@ -39,6 +39,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <hdf5.h>
 
@@ -111,6 +112,9 @@ typedef struct h5w_state {
      * Polyvertex connectivity every grid takes its first n entries of, so
      * that ParaView makes one cell per particle */
     uint64_t vertex_capacity;
+    /* restarted: the records are those of the checkpointed run; the first
+     * XDMF rewrite keeps those whose files are in this output directory */
+    int prune_records;
 } h5w_state;
 
 static const sluice_param_spec params[] = {
@@ -910,6 +914,18 @@ static int write_vertex_index(h5w_state *s, sluice_host *host, uint64_t capacity
 static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v, const char *stem)
 {
     const sluice_api *api = s->api;
+    if (s->prune_records) {
+        size_t kept = 0;
+        for (size_t r = 0; r < s->record_count; r++) {
+            char name[H5W_PREFIX_MAX + 40], path[H5W_PATH_MAX];
+            snprintf(name, sizeof name, "%s.h5", s->records[r].stem);
+            if (api->output_path(host, name, path, sizeof path) == SLUICE_OK &&
+                access(path, F_OK) == 0)
+                s->records[kept++] = s->records[r];
+        }
+        s->record_count = kept;
+        s->prune_records = 0;
+    }
     if (v->count > s->vertex_capacity) {
         uint64_t capacity = s->vertex_capacity * 2 > v->count ? s->vertex_capacity * 2 : v->count;
         if (capacity < 1024)
@@ -1085,6 +1101,87 @@ static int h5w_finish(void *state, sluice_host *host, int status)
     return write_snapshot(s, host, status == SLUICE_FINISH_FAILED ? "failed" : "ok");
 }
 
+/* Checkpoints: the schedule, the file index, the last snapshot and the
+ * XDMF records (time and particle count of every snapshot so far). */
+static int h5w_save(void *state, sluice_host *host)
+{
+    const h5w_state *s = state;
+    const sluice_api *api = s->api;
+    const size_t n = s->record_count;
+    double *times = malloc((n + 1) * sizeof *times);
+    uint64_t *counts = malloc((n + 1) * sizeof *counts);
+    int rc = SLUICE_ERROR;
+    if (!times || !counts) {
+        api->error(host, "out of memory");
+    } else {
+        for (size_t r = 0; r < n; r++) {
+            times[r] = s->records[r].time;
+            counts[r] = s->records[r].count;
+        }
+        if (sluice_util_save_int(api, host, "schedule", s->schedule) == SLUICE_OK &&
+            sluice_util_save_int(api, host, "snapshots", (int64_t)s->snapshots) == SLUICE_OK &&
+            sluice_util_save_int(api, host, "have_last", s->have_last) == SLUICE_OK &&
+            sluice_util_save_int(api, host, "last_step", s->last_step) == SLUICE_OK &&
+            sluice_util_save_double(api, host, "last_time", s->last_time) == SLUICE_OK &&
+            api->state_write(host, "record_times", SLUICE_STATE_DOUBLE, n, times) == SLUICE_OK &&
+            api->state_write(host, "record_counts", SLUICE_STATE_UINT64, n, counts) == SLUICE_OK)
+            rc = SLUICE_OK;
+    }
+    free(times);
+    free(counts);
+    return rc;
+}
+
+static int h5w_load(void *state, sluice_host *host)
+{
+    h5w_state *s = state;
+    const sluice_api *api = s->api;
+    int64_t snapshots = 0, have_last = 0;
+    const int64_t n = api->state_length(host, "record_times");
+    if (sluice_util_load_int(api, host, "schedule", &s->schedule) != SLUICE_OK ||
+        sluice_util_load_int(api, host, "snapshots", &snapshots) != SLUICE_OK ||
+        sluice_util_load_int(api, host, "have_last", &have_last) != SLUICE_OK ||
+        sluice_util_load_int(api, host, "last_step", &s->last_step) != SLUICE_OK ||
+        sluice_util_load_double(api, host, "last_time", &s->last_time) != SLUICE_OK || n < 0 ||
+        snapshots < 0)
+        return SLUICE_ERROR;
+    s->snapshots = (uint64_t)snapshots;
+    s->have_last = have_last != 0;
+    double *times = malloc(((size_t)n + 1) * sizeof *times);
+    uint64_t *counts = malloc(((size_t)n + 1) * sizeof *counts);
+    h5w_record *records = calloc((size_t)n + 1, sizeof *records);
+    int rc = SLUICE_ERROR;
+    if (!times || !counts || !records) {
+        api->error(host, "out of memory");
+    } else if (api->state_read(host, "record_times", SLUICE_STATE_DOUBLE, (uint64_t)n, times) ==
+                   SLUICE_OK &&
+               api->state_read(host, "record_counts", SLUICE_STATE_UINT64, (uint64_t)n,
+                               counts) == SLUICE_OK) {
+        const sluice_view *v = api->view(host);
+        /* snapshot r is <prefix>_r; the last n of them are recorded */
+        const uint64_t first = s->snapshots >= (uint64_t)n ? s->snapshots - (uint64_t)n : 0;
+        for (int64_t r = 0; r < n; r++) {
+            snprintf(records[r].stem, sizeof records[r].stem, "%s_%06llu", s->prefix,
+                     (unsigned long long)(first + (uint64_t)r));
+            records[r].time = times[r];
+            records[r].count = counts[r];
+            records[r].dimensions = v->dimensions;
+        }
+        free(s->records);
+        s->records = records;
+        records = NULL;
+        s->record_count = (size_t)n;
+        s->record_capacity = (size_t)n + 1;
+        s->vertex_capacity = 0; /* rewritten with the next snapshot */
+        s->prune_records = 1;
+        rc = SLUICE_OK;
+    }
+    free(times);
+    free(counts);
+    free(records);
+    return rc;
+}
+
 static const sluice_component components[] = {{
     .name = "hdf5",
     .summary = "particle snapshots in HDF5 (one file per output time) with an XDMF index",
@@ -1099,6 +1196,8 @@ static const sluice_component components[] = {{
     .initialise = h5w_initialise,
     .after_step = h5w_after_step,
     .finish = h5w_finish,
+    .save_state = h5w_save,
+    .load_state = h5w_load,
 }};
 
 SLUICE_DEFINE_LIBRARY("hdf5_writer", "1.0.0", "HDF5 particle snapshots with an XDMF index",

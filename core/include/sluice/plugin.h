@@ -33,7 +33,7 @@ extern "C" {
 #endif
 
 #define SLUICE_ABI_MAJOR 1
-#define SLUICE_ABI_MINOR 4
+#define SLUICE_ABI_MINOR 5
 #define SLUICE_PLUGIN_MAGIC 0x534c4349u /* "SLCI" */
 
 #if defined(__GNUC__)
@@ -87,6 +87,14 @@ typedef enum sluice_type {
     SLUICE_TYPE_UINT8 = 3,
     SLUICE_TYPE_ID = 4 /* sluice_id */
 } sluice_type;
+
+/* 1.5: element types of the plugin state arrays stored in checkpoints
+ * (api->state_write / state_read). */
+typedef enum sluice_state_type {
+    SLUICE_STATE_DOUBLE = 1, /* double */
+    SLUICE_STATE_INT64 = 2,  /* int64_t */
+    SLUICE_STATE_UINT64 = 3  /* uint64_t (sluice_id) */
+} sluice_state_type;
 
 /* A field declaration's access, as seen by the component that declares it. */
 enum sluice_access {
@@ -396,6 +404,19 @@ typedef struct sluice_api {
                     uint8_t kind);
     /* Particles removed since the start of the run (all kinds). */
     uint64_t (*removed_count)(sluice_host *host);
+
+    /* -- 1.5: plugin state in checkpoints (docs/reliability.md, "Checkpoints
+     * and restart"). Only inside the component's own save_state (write) or
+     * load_state (read, length) callback. Arrays are named (a plain name, no
+     * '/'), stored under the component's group of the checkpoint, with an
+     * element type and count (0 is allowed). state_read fails with a message naming the checkpoint when
+     * the array is missing or its type or count differ; state_length returns
+     * the element count, or -1 when the array is missing. */
+    int (*state_write)(sluice_host *host, const char *name, sluice_state_type type,
+                       uint64_t count, const void *data);
+    int (*state_read)(sluice_host *host, const char *name, sluice_state_type type,
+                      uint64_t count, void *data);
+    int64_t (*state_length)(sluice_host *host, const char *name);
 } sluice_api;
 
 /* ----------------------------------------------------------- components -- */
@@ -408,7 +429,14 @@ enum sluice_component_flags {
                                                 api->pair_pass() */
 };
 
-enum sluice_finish_status { SLUICE_FINISH_COMPLETE = 0, SLUICE_FINISH_FAILED = 1 };
+/* SLUICE_FINISH_INTERRUPTED (1.5): the run was stopped by SIGINT/SIGTERM after a
+ * whole step and a checkpoint was written; plugins built for an older minor
+ * receive SLUICE_FINISH_COMPLETE instead. */
+enum sluice_finish_status {
+    SLUICE_FINISH_COMPLETE = 0,
+    SLUICE_FINISH_FAILED = 1,
+    SLUICE_FINISH_INTERRUPTED = 2
+};
 
 typedef struct sluice_component {
     const char *name;    /* unique name used in scene files */
@@ -475,6 +503,20 @@ typedef struct sluice_component {
      * values from the fluid, with api->point_pass). Must not add, remove or
      * move particles. */
     int (*prepare)(void *state, sluice_host *host);
+
+    /* -- 1.5 (read only from plugins built for ABI 1.5 or later) */
+    /* Checkpoints: a component that keeps state across steps outside the
+     * particle fields (counters, next output times, running sums) stores it
+     * with api->state_write in save_state, and reads it back with
+     * api->state_read in load_state. A restart loads the scene (create,
+     * bind, initialise run as usual), replaces the particles, the time and
+     * the core's counters with the checkpoint's, then calls load_state; the
+     * after_step call before the first step is not repeated. Particle fields
+     * are saved by the core (every field, not only those flagged
+     * SLUICE_FIELD_RESTART). save_state is called after the after_step hooks
+     * of the step the checkpoint holds; it must not change the state. */
+    int (*save_state)(void *state, sluice_host *host);
+    int (*load_state)(void *state, sluice_host *host);
 } sluice_component;
 
 /* Build signature: must equal the core's. */

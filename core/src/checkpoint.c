@@ -1,0 +1,981 @@
+/* Checkpoints: the complete state of a run after a whole step, in one HDF5
+ * file, and the restart from one (docs/reliability.md, "Checkpoints and
+ * restart").
+ *
+ * Layout (format "sluice checkpoint", version 1):
+ *  - root attributes: format, format_version, sluice_version, abi_major,
+ *    abi_minor, real_size, dimensions, time, dt, dt_limit, step, next_id,
+ *    removed, particles_initial, particle_count, particle_steps,
+ *    max_density_deviation, neighbour_list_rebuilds, grid_valid, scene (the
+ *    resolved scene), plugins (component names in scene order, one a line),
+ *    fields (one line per field: name, type, components, in declaration
+ *    order);
+ *  - /particles/<field>: every field (not only those flagged
+ *    SLUICE_FIELD_RESTART: derived fields a hook reads before the first
+ *    evaluation of the continued run must be the ones of the checkpointed
+ *    step for the continuation to be bit-identical), [components][N] in the
+ *    core's own types, particles in the current (sorted) order;
+ *  - /core/requests: the requested output times still ahead;
+ *    /core/grid_built: [dims][N] positions at the last neighbour-list build
+ *    (when the list is valid): the restart rebuilds the same Verlet list
+ *    from them, so the continuation rebuilds it exactly when the
+ *    uninterrupted run does, and a checkpoint never perturbs the run;
+ *    /core/table_bytes with attribute table_names: the length of every table
+ *    (CSV) at the checkpoint;
+ *  - /plugins/<component>/: the arrays a component stored with
+ *    api->state_write in its save_state callback.
+ *
+ * The file is built in memory (HDF5's core driver) and reaches the disk
+ * through sluice_write_file_atomic: a killed run never leaves a half-written
+ * checkpoint. */
+#define _GNU_SOURCE
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <hdf5.h>
+
+#include "build_config.h"
+#include "sim_internal.h"
+
+#define CHECKPOINT_FORMAT "sluice checkpoint"
+#define CHECKPOINT_VERSION 1
+
+typedef struct ck_error {
+    char text[1024];
+} ck_error;
+
+static herr_t innermost_error(unsigned n, const H5E_error2_t *e, void *data)
+{
+    ck_error *f = data;
+    if (n == 0 && e && e->desc && e->desc[0]) {
+        size_t used = strlen(f->text);
+        snprintf(f->text + used, sizeof f->text - used, " (HDF5: %s)", e->desc);
+        for (char *p = f->text + used; *p; p++)
+            if (*p == '\n' || *p == '\r' || *p == '\t')
+                *p = ' ';
+    }
+    return 0;
+}
+
+static void fail(ck_error *e, const char *format, ...) SLUICE_PRINTF(2, 3);
+static void fail(ck_error *e, const char *format, ...)
+{
+    if (e->text[0])
+        return; /* keep the first cause */
+    va_list ap;
+    va_start(ap, format);
+    vsnprintf(e->text, sizeof e->text, format, ap);
+    va_end(ap);
+    H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, innermost_error, e);
+    H5Eclear2(H5E_DEFAULT);
+}
+
+static void close_id(hid_t *id, herr_t (*closer)(hid_t))
+{
+    if (*id >= 0)
+        closer(*id);
+    *id = -1;
+}
+
+/* HDF5 prints nothing: errors are reported once, by us. */
+typedef struct quiet_hdf5 {
+    H5E_auto2_t func;
+    void *data;
+} quiet_hdf5;
+
+static void quiet_begin(quiet_hdf5 *q)
+{
+    H5Eget_auto2(H5E_DEFAULT, &q->func, &q->data);
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+}
+
+static void quiet_end(const quiet_hdf5 *q)
+{
+    H5Eclear2(H5E_DEFAULT);
+    H5Eset_auto2(H5E_DEFAULT, q->func, q->data);
+}
+
+/* Element types of the datasets: the field types (sluice_type) and, above
+ * them, those of plugin state arrays (sluice_state_type). */
+enum { CK_DOUBLE = 101, CK_INT64 = 102, CK_UINT64 = 103 };
+
+static int state_kind(sluice_state_type t)
+{
+    switch (t) {
+    case SLUICE_STATE_DOUBLE: return CK_DOUBLE;
+    case SLUICE_STATE_INT64: return CK_INT64;
+    case SLUICE_STATE_UINT64: return CK_UINT64;
+    }
+    return -1;
+}
+
+static const char *type_label(int t)
+{
+    switch (t) {
+    case SLUICE_TYPE_REAL: return "real";
+    case SLUICE_TYPE_INT32: return "int32";
+    case SLUICE_TYPE_UINT8: return "uint8";
+    case SLUICE_TYPE_ID: return "id";
+    case CK_DOUBLE: return "double";
+    case CK_INT64: return "int64";
+    case CK_UINT64: return "uint64";
+    }
+    return "unknown";
+}
+
+static hid_t native_type(int t)
+{
+    switch (t) {
+    case SLUICE_TYPE_REAL:
+        return sizeof(sluice_real) == sizeof(float) ? H5T_NATIVE_FLOAT : H5T_NATIVE_DOUBLE;
+    case SLUICE_TYPE_INT32: return H5T_NATIVE_INT32;
+    case SLUICE_TYPE_UINT8: return H5T_NATIVE_UINT8;
+    case SLUICE_TYPE_ID:
+    case CK_UINT64: return H5T_NATIVE_UINT64;
+    case CK_DOUBLE: return H5T_NATIVE_DOUBLE;
+    case CK_INT64: return H5T_NATIVE_INT64;
+    }
+    return -1;
+}
+
+/* 1 when the stored type is the memory type (same class, size and sign). */
+static int same_type(hid_t stored, hid_t memory)
+{
+    H5T_class_t c = H5Tget_class(stored);
+    if (c != H5Tget_class(memory) || H5Tget_size(stored) != H5Tget_size(memory))
+        return 0;
+    return c != H5T_INTEGER || H5Tget_sign(stored) == H5Tget_sign(memory);
+}
+
+/* ------------------------------------------------------------- writing -- */
+
+static void put_attr(hid_t object, const char *name, hid_t type, const void *value, ck_error *e)
+{
+    if (e->text[0])
+        return;
+    hid_t space = H5Screate(H5S_SCALAR), attr = -1;
+    if (space < 0 || (attr = H5Acreate2(object, name, type, space, H5P_DEFAULT, H5P_DEFAULT)) < 0 ||
+        H5Awrite(attr, type, value) < 0)
+        fail(e, "writing attribute '%s' failed", name);
+    close_id(&attr, H5Aclose);
+    close_id(&space, H5Sclose);
+}
+
+static void put_string(hid_t object, const char *name, const char *value, ck_error *e)
+{
+    if (e->text[0])
+        return;
+    hid_t type = H5Tcopy(H5T_C_S1);
+    if (type < 0 || H5Tset_size(type, H5T_VARIABLE) < 0 || H5Tset_cset(type, H5T_CSET_UTF8) < 0) {
+        fail(e, "making the string type of attribute '%s' failed", name);
+    } else {
+        const char *text = value ? value : "";
+        put_attr(object, name, type, &text, e);
+    }
+    close_id(&type, H5Tclose);
+}
+
+/* A dataset of `rank` 1 (length elements at rows[0]) or 2 (`rows` rows of
+ * `length` elements, row r at data[r]). */
+static void put_rows(hid_t loc, const char *name, int type, int rank, hsize_t rows,
+                     hsize_t length, const void *const *data, ck_error *e)
+{
+    if (e->text[0])
+        return;
+    hsize_t dims[2] = {rank == 2 ? rows : length, length};
+    hid_t t = native_type(type);
+    hid_t space = H5Screate_simple(rank, dims, NULL), set = -1, memory = -1;
+    if (space < 0 ||
+        (set = H5Dcreate2(loc, name, t, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT)) < 0) {
+        fail(e, "creating dataset '%s' failed", name);
+    } else if (length > 0) {
+        hsize_t one[1] = {length};
+        memory = H5Screate_simple(1, one, NULL);
+        for (hsize_t r = 0; r < (rank == 2 ? rows : 1) && !e->text[0]; r++) {
+            if (rank == 2) {
+                hsize_t start[2] = {r, 0}, count[2] = {1, length};
+                if (H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, count, NULL) < 0) {
+                    fail(e, "selecting row %llu of dataset '%s' failed", (unsigned long long)r,
+                         name);
+                    break;
+                }
+            }
+            if (memory < 0 ||
+                H5Dwrite(set, t, rank == 2 ? memory : H5S_ALL, rank == 2 ? space : H5S_ALL,
+                         H5P_DEFAULT, data[r]) < 0)
+                fail(e, "writing dataset '%s' failed", name);
+        }
+    }
+    close_id(&memory, H5Sclose);
+    close_id(&set, H5Dclose);
+    close_id(&space, H5Sclose);
+}
+
+/* The layout lines the restart compares: plugins and fields. */
+static char *plugin_lines(const sluice_sim *sim)
+{
+    size_t size = 1;
+    for (uint32_t k = 0; k < sim->instance_count; k++)
+        size += strlen(sim->instances[k].name) + 1;
+    char *text = malloc(size), *p = text;
+    if (!text)
+        return NULL;
+    for (uint32_t k = 0; k < sim->instance_count; k++)
+        p += sprintf(p, "%s\n", sim->instances[k].name);
+    *p = '\0';
+    return text;
+}
+
+static char *field_lines(const sluice_sim *sim)
+{
+    size_t size = 1;
+    for (uint32_t f = 0; f < sim->field_count; f++)
+        size += strlen(sim->fields[f].name) + 32;
+    char *text = malloc(size), *p = text;
+    if (!text)
+        return NULL;
+    for (uint32_t f = 0; f < sim->field_count; f++)
+        p += sprintf(p, "%s %s %u\n", sim->fields[f].name, type_label(sim->fields[f].type),
+                     sim->fields[f].components);
+    *p = '\0';
+    return text;
+}
+
+static void write_state(sluice_sim *sim, hid_t file, ck_error *e)
+{
+    const sluice_index n = sim->particles.count;
+    const uint32_t dims = sim->scene.dimensions;
+    char *plugins = plugin_lines(sim), *fields = field_lines(sim);
+    if (!plugins || !fields)
+        fail(e, "out of memory");
+    int version = CHECKPOINT_VERSION, major = SLUICE_ABI_MAJOR, minor = SLUICE_ABI_MINOR;
+    int real_size = (int)sizeof(sluice_real), dimensions = (int)dims;
+    int grid_valid = sim->grid.valid && sim->grid.count == n;
+    uint64_t count = n, next_id = sim->next_id, removed = sim->removed,
+             initial = sim->particles_initial, steps = sim->particle_steps,
+             rebuilds = sim->grid.rebuilds;
+    int64_t step = sim->step;
+    put_string(file, "format", CHECKPOINT_FORMAT, e);
+    put_attr(file, "format_version", H5T_NATIVE_INT, &version, e);
+    put_string(file, "sluice_version", SLUICE_VERSION, e);
+    put_attr(file, "abi_major", H5T_NATIVE_INT, &major, e);
+    put_attr(file, "abi_minor", H5T_NATIVE_INT, &minor, e);
+    put_attr(file, "real_size", H5T_NATIVE_INT, &real_size, e);
+    put_attr(file, "dimensions", H5T_NATIVE_INT, &dimensions, e);
+    put_attr(file, "time", H5T_NATIVE_DOUBLE, &sim->time, e);
+    put_attr(file, "dt", H5T_NATIVE_DOUBLE, &sim->dt, e);
+    put_attr(file, "dt_limit", H5T_NATIVE_DOUBLE, &sim->dt_limit, e);
+    put_attr(file, "step", H5T_NATIVE_INT64, &step, e);
+    put_attr(file, "next_id", H5T_NATIVE_UINT64, &next_id, e);
+    put_attr(file, "removed", H5T_NATIVE_UINT64, &removed, e);
+    put_attr(file, "particles_initial", H5T_NATIVE_UINT64, &initial, e);
+    put_attr(file, "particle_count", H5T_NATIVE_UINT64, &count, e);
+    put_attr(file, "particle_steps", H5T_NATIVE_UINT64, &steps, e);
+    put_attr(file, "max_density_deviation", H5T_NATIVE_DOUBLE, &sim->max_density_deviation, e);
+    put_attr(file, "neighbour_list_rebuilds", H5T_NATIVE_UINT64, &rebuilds, e);
+    put_attr(file, "grid_valid", H5T_NATIVE_INT, &grid_valid, e);
+    put_string(file, "scene", sim->resolved_scene, e);
+    put_string(file, "plugins", plugins, e);
+    put_string(file, "fields", fields, e);
+    free(plugins);
+    free(fields);
+
+    hid_t group = e->text[0] ? -1 : H5Gcreate2(file, "particles", H5P_DEFAULT, H5P_DEFAULT,
+                                                H5P_DEFAULT);
+    if (group < 0)
+        fail(e, "creating group 'particles' failed");
+    for (uint32_t f = 0; f < sim->field_count && !e->text[0]; f++) {
+        const sluice_field_entry *field = &sim->fields[f];
+        const void *rows[16];
+        for (uint32_t c = 0; c < field->components; c++)
+            rows[c] = sim->particles.columns[field->column + (int32_t)c];
+        put_rows(group, field->name, field->type, 2, field->components, n, rows, e);
+    }
+    close_id(&group, H5Gclose);
+
+    group = e->text[0] ? -1 : H5Gcreate2(file, "core", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (group < 0)
+        fail(e, "creating group 'core' failed");
+    /* requests still ahead */
+    double *ahead = malloc((sim->request_count + 1) * sizeof *ahead);
+    uint64_t *bytes = malloc((sim->table_count + 1) * sizeof *bytes);
+    size_t names_size = 1;
+    for (size_t t = 0; t < sim->table_count; t++)
+        names_size += strlen(sim->tables[t]->path) + 1;
+    char *names = malloc(names_size);
+    if (!ahead || !bytes || !names) {
+        fail(e, "out of memory");
+    } else {
+        size_t m = 0;
+        for (size_t i = 0; i < sim->request_count; i++)
+            if (sim->requests[i] > sim->time)
+                ahead[m++] = sim->requests[i];
+        const void *row[1] = {ahead};
+        put_rows(group, "requests", CK_DOUBLE, 1, 1, m, row, e);
+        char *p = names;
+        *p = '\0';
+        for (size_t t = 0; t < sim->table_count; t++) {
+            const char *path = sim->tables[t]->path, *slash = strrchr(path, '/');
+            p += sprintf(p, "%s\n", slash ? slash + 1 : path);
+            bytes[t] = sim->tables[t]->bytes;
+        }
+        row[0] = bytes;
+        put_rows(group, "table_bytes", CK_UINT64, 1, 1, sim->table_count, row, e);
+        put_string(group, "table_names", names, e);
+    }
+    free(ahead);
+    free(bytes);
+    free(names);
+    if (grid_valid && !e->text[0]) {
+        const void *rows[3] = {sim->grid.built[0], sim->grid.built[1], sim->grid.built[2]};
+        put_rows(group, "grid_built", SLUICE_TYPE_REAL, 2, dims, n, rows, e);
+    }
+    close_id(&group, H5Gclose);
+
+    group = e->text[0] ? -1 : H5Gcreate2(file, "plugins", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (group < 0)
+        fail(e, "creating group 'plugins' failed");
+    for (uint32_t k = 0; k < sim->instance_count && !e->text[0]; k++) {
+        sluice_instance *in = &sim->instances[k];
+        if (!in->component->save_state)
+            continue;
+        hid_t own = H5Gcreate2(group, in->name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+        if (own < 0) {
+            fail(e, "creating group 'plugins/%s' failed", in->name);
+            break;
+        }
+        sim->state_group = own;
+        sim->state_instance = k;
+        sim->state_writing = 1;
+        int rc = in->component->save_state(in->state, &in->host);
+        sim->state_group = -1;
+        sim->state_writing = 0;
+        H5Gclose(own);
+        if (rc != SLUICE_OK || sim->failure[0])
+            fail(e, "plugin '%s' failed to save its state%s%s", in->name,
+                 sim->failure[0] ? ": " : "", sim->failure);
+    }
+    close_id(&group, H5Gclose);
+}
+
+/* The checkpoint of the current state as a file image in memory. */
+static int checkpoint_image(sluice_sim *sim, void **image, size_t *size, char *error,
+                            size_t error_size)
+{
+    *image = NULL;
+    *size = 0;
+    quiet_hdf5 q;
+    quiet_begin(&q);
+    ck_error e = {{0}};
+    size_t estimate = 65536 + strlen(sim->resolved_scene ? sim->resolved_scene : "") +
+                      (size_t)sim->particles.count * (sim->column_count + 3) * 8;
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), file = -1;
+    if (fapl < 0 || H5Pset_fapl_core(fapl, estimate, 0) < 0)
+        fail(&e, "H5Pset_fapl_core failed");
+    if (!e.text[0] &&
+        (file = H5Fcreate("sluice-checkpoint-image", H5F_ACC_TRUNC, H5P_DEFAULT, fapl)) < 0)
+        fail(&e, "H5Fcreate failed");
+    close_id(&fapl, H5Pclose);
+    if (!e.text[0])
+        write_state(sim, file, &e);
+    if (!e.text[0] && H5Fflush(file, H5F_SCOPE_LOCAL) < 0)
+        fail(&e, "H5Fflush failed");
+    if (!e.text[0]) {
+        ssize_t bytes = H5Fget_file_image(file, NULL, 0);
+        void *buffer = bytes > 0 ? malloc((size_t)bytes) : NULL;
+        if (!buffer || H5Fget_file_image(file, buffer, (size_t)bytes) != bytes) {
+            free(buffer);
+            fail(&e, "H5Fget_file_image failed (%zd bytes)", bytes);
+        } else {
+            *image = buffer;
+            *size = (size_t)bytes;
+        }
+    }
+    if (file >= 0 && H5Fclose(file) < 0)
+        fail(&e, "H5Fclose failed");
+    quiet_end(&q);
+    if (e.text[0]) {
+        free(*image);
+        *image = NULL;
+        *size = 0;
+        snprintf(error, error_size, "%s", e.text);
+        return -1;
+    }
+    return 0;
+}
+
+int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
+{
+    char name[64], full[4096], error[1200];
+    if (!path) {
+        if (!sim->output_directory) {
+            sluice_sim_fail(sim, "a checkpoint needs an output directory");
+            return SLUICE_ERROR;
+        }
+        snprintf(name, sizeof name, "checkpoint_%09lld.h5", (long long)sim->step);
+        if (snprintf(full, sizeof full, "%s/%s", sim->output_directory, name) >= (int)sizeof full) {
+            sluice_sim_fail(sim, "the checkpoint path in '%s' is too long", sim->output_directory);
+            return SLUICE_ERROR;
+        }
+        path = full;
+    }
+    sim->state_file = path;
+    const double started = sluice_wall_clock();
+    void *image = NULL;
+    size_t size = 0;
+    char why[1024];
+    int rc = checkpoint_image(sim, &image, &size, why, sizeof why);
+    sim->state_file = NULL;
+    if (rc != 0) {
+        sluice_sim_fail(sim, "cannot write checkpoint '%s' (step %lld, t = %.9g s): %s", path,
+                        (long long)sim->step, sim->time, why);
+        return SLUICE_ERROR;
+    }
+    rc = sluice_write_file_atomic(path, image, size, error, sizeof error);
+    free(image);
+    if (rc != 0) {
+        sluice_sim_fail(sim, "%s", error);
+        return SLUICE_ERROR;
+    }
+    sim->checkpoint_step = sim->step;
+    if (!sim->quiet)
+        fprintf(stderr, "%ssluice: checkpoint %s: step %lld, t = %.9g s, %u particles, %zu bytes, "
+                        "%.3f s\n",
+                sim->progress ? "\n" : "", path, (long long)sim->step, sim->time,
+                sim->particles.count, size, sluice_wall_clock() - started);
+    if (path != full)
+        return SLUICE_OK;
+    /* this run's checkpoints in the output directory: keep the newest */
+    char **grown = realloc(sim->checkpoint_files,
+                           (sim->checkpoint_file_count + 1) * sizeof *grown);
+    char *copy = strdup(full);
+    if (grown)
+        sim->checkpoint_files = grown;
+    if (!grown || !copy) {
+        free(copy);
+        sluice_sim_fail(sim, "out of memory");
+        return SLUICE_ERROR;
+    }
+    size_t same = sim->checkpoint_file_count;
+    for (size_t c = 0; c < sim->checkpoint_file_count; c++)
+        if (strcmp(sim->checkpoint_files[c], copy) == 0)
+            same = c;
+    if (same < sim->checkpoint_file_count) { /* rewritten: it is the newest now */
+        free(sim->checkpoint_files[same]);
+        memmove(sim->checkpoint_files + same, sim->checkpoint_files + same + 1,
+                (sim->checkpoint_file_count - same - 1) * sizeof *sim->checkpoint_files);
+        sim->checkpoint_file_count--;
+    }
+    sim->checkpoint_files[sim->checkpoint_file_count++] = copy;
+    const size_t keep = (size_t)sim->scene.checkpoint.keep;
+    while (keep > 0 && sim->checkpoint_file_count > keep) {
+        if (unlink(sim->checkpoint_files[0]) != 0 && errno != ENOENT)
+            fprintf(stderr, "sluice: warning: cannot delete old checkpoint '%s': %s\n",
+                    sim->checkpoint_files[0], strerror(errno));
+        free(sim->checkpoint_files[0]);
+        memmove(sim->checkpoint_files, sim->checkpoint_files + 1,
+                (sim->checkpoint_file_count - 1) * sizeof *sim->checkpoint_files);
+        sim->checkpoint_file_count--;
+    }
+    return SLUICE_OK;
+}
+
+/* ------------------------------------------------------------- reading -- */
+
+static int get_attr(hid_t object, const char *name, hid_t memory, void *value, ck_error *e)
+{
+    if (e->text[0])
+        return -1;
+    if (H5Aexists(object, name) <= 0) {
+        fail(e, "attribute '%s' is missing", name);
+        return -1;
+    }
+    hid_t attr = H5Aopen(object, name, H5P_DEFAULT), type = -1, space = -1;
+    if (attr < 0 || (type = H5Aget_type(attr)) < 0 || (space = H5Aget_space(attr)) < 0)
+        fail(e, "attribute '%s' cannot be read", name);
+    else if (!same_type(type, memory) || H5Sget_simple_extent_npoints(space) != 1)
+        fail(e, "attribute '%s' has the wrong type", name);
+    else if (H5Aread(attr, memory, value) < 0)
+        fail(e, "attribute '%s' cannot be read", name);
+    close_id(&space, H5Sclose);
+    close_id(&type, H5Tclose);
+    close_id(&attr, H5Aclose);
+    return e->text[0] ? -1 : 0;
+}
+
+/* A variable-length string attribute, copied (malloc'd). */
+static char *get_string(hid_t object, const char *name, ck_error *e)
+{
+    if (e->text[0])
+        return NULL;
+    if (H5Aexists(object, name) <= 0) {
+        fail(e, "attribute '%s' is missing", name);
+        return NULL;
+    }
+    char *copy = NULL;
+    hid_t attr = H5Aopen(object, name, H5P_DEFAULT), type = -1, memory = -1, space = -1;
+    if (attr < 0 || (type = H5Aget_type(attr)) < 0 || (space = H5Aget_space(attr)) < 0) {
+        fail(e, "attribute '%s' cannot be read", name);
+    } else if (H5Tget_class(type) != H5T_STRING || H5Tis_variable_str(type) <= 0 ||
+               H5Sget_simple_extent_npoints(space) != 1) {
+        fail(e, "attribute '%s' is not a string", name);
+    } else if ((memory = H5Tget_native_type(type, H5T_DIR_ASCEND)) < 0) {
+        fail(e, "attribute '%s' cannot be read", name);
+    } else {
+        char *text = NULL;
+        if (H5Aread(attr, memory, &text) < 0 || !text) {
+            fail(e, "attribute '%s' cannot be read", name);
+        } else {
+            copy = strdup(text);
+            if (!copy)
+                fail(e, "out of memory");
+        }
+        if (text)
+            H5Dvlen_reclaim(memory, space, H5P_DEFAULT, &text);
+    }
+    close_id(&memory, H5Tclose);
+    close_id(&space, H5Sclose);
+    close_id(&type, H5Tclose);
+    close_id(&attr, H5Aclose);
+    return copy;
+}
+
+/* Length of the last dimension of dataset `name` of the given rank (its
+ * first dimension `rows` for rank 2), or -1 when absent or of another
+ * shape. */
+static int64_t rows_length(hid_t loc, const char *name, int rank, hsize_t rows)
+{
+    if (H5Lexists(loc, name, H5P_DEFAULT) <= 0)
+        return -1;
+    hid_t set = H5Dopen2(loc, name, H5P_DEFAULT), space = -1;
+    int64_t length = -1;
+    hsize_t dims[2] = {0, 0};
+    if (set >= 0 && (space = H5Dget_space(set)) >= 0 &&
+        H5Sget_simple_extent_ndims(space) == rank && H5Sget_simple_extent_dims(space, dims, NULL) == rank &&
+        (rank == 1 || dims[0] == rows))
+        length = (int64_t)dims[rank - 1];
+    close_id(&space, H5Sclose);
+    close_id(&set, H5Dclose);
+    return length;
+}
+
+/* Reads a dataset written by put_rows, checking its type and shape. */
+static int get_rows(hid_t loc, const char *name, int type, int rank, hsize_t rows,
+                    hsize_t length, void *const *data, ck_error *e)
+{
+    if (e->text[0])
+        return -1;
+    if (rows_length(loc, name, rank, rows) != (int64_t)length) {
+        if (rank == 2)
+            fail(e, "dataset '%s' is missing or is not %llu x %llu", name,
+                 (unsigned long long)rows, (unsigned long long)length);
+        else
+            fail(e, "dataset '%s' is missing or does not hold %llu values", name,
+                 (unsigned long long)length);
+        return -1;
+    }
+    hid_t t = native_type(type);
+    hid_t set = H5Dopen2(loc, name, H5P_DEFAULT), stored = -1, space = -1, memory = -1;
+    if (set < 0 || (stored = H5Dget_type(set)) < 0 || (space = H5Dget_space(set)) < 0) {
+        fail(e, "dataset '%s' cannot be read", name);
+    } else if (!same_type(stored, t)) {
+        fail(e, "dataset '%s' is not of type %s", name, type_label(type));
+    } else if (length > 0) {
+        hsize_t one[1] = {length};
+        memory = H5Screate_simple(1, one, NULL);
+        for (hsize_t r = 0; r < (rank == 2 ? rows : 1) && !e->text[0]; r++) {
+            if (rank == 2) {
+                hsize_t start[2] = {r, 0}, count[2] = {1, length};
+                if (H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, count, NULL) < 0) {
+                    fail(e, "dataset '%s' cannot be read", name);
+                    break;
+                }
+            }
+            if (memory < 0 || H5Dread(set, t, rank == 2 ? memory : H5S_ALL,
+                                      rank == 2 ? space : H5S_ALL, H5P_DEFAULT, data[r]) < 0)
+                fail(e, "dataset '%s' cannot be read (is the file truncated?)", name);
+        }
+    }
+    close_id(&memory, H5Sclose);
+    close_id(&space, H5Sclose);
+    close_id(&stored, H5Tclose);
+    close_id(&set, H5Dclose);
+    return e->text[0] ? -1 : 0;
+}
+
+/* The first line in which two layouts differ, for the mismatch message. */
+static void first_difference(const char *have, const char *want, char *out, size_t size)
+{
+    while (*have && *want) {
+        size_t a = strcspn(have, "\n"), b = strcspn(want, "\n");
+        if (a != b || memcmp(have, want, a) != 0) {
+            snprintf(out, size, "'%.*s' in the checkpoint, '%.*s' in the scene", (int)a, have,
+                     (int)b, want);
+            return;
+        }
+        have += a + (have[a] == '\n');
+        want += b + (want[b] == '\n');
+    }
+    if (*have)
+        snprintf(out, size, "'%.*s' only in the checkpoint", (int)strcspn(have, "\n"), have);
+    else
+        snprintf(out, size, "'%.*s' only in the scene", (int)strcspn(want, "\n"), want);
+}
+
+/* Rebuilds the neighbour list from the positions of its last build (the
+ * particles are still in the order of that build: the stable counting sort
+ * leaves them in place), then puts the current positions back. */
+static int restore_grid(sluice_sim *sim, sluice_real *const *built, ck_error *e)
+{
+    const sluice_index n = sim->particles.count;
+    const uint32_t dims = sim->scene.dimensions;
+    sluice_real *current = malloc((size_t)dims * n * sizeof *current + 1);
+    if (!current) {
+        fail(e, "out of memory");
+        return -1;
+    }
+    for (uint32_t d = 0; d < dims; d++) {
+        sluice_real *x = sim->particles.columns[sim->position.column + (int32_t)d];
+        memcpy(current + (size_t)d * n, x, (size_t)n * sizeof *x);
+        memcpy(x, built[d], (size_t)n * sizeof *x);
+    }
+    sluice_index bad = 0;
+    sim->grid.valid = 0;
+    int rc = sluice_grid_build(&sim->grid, &sim->particles, (uint32_t)sim->position.column, &bad);
+    int identity = rc == 0;
+    for (sluice_index i = 0; identity && i < n; i++)
+        identity = sim->grid.order[i] == i;
+    for (uint32_t d = 0; d < dims; d++)
+        memcpy(sim->particles.columns[sim->position.column + (int32_t)d], current + (size_t)d * n,
+               (size_t)n * sizeof *current);
+    free(current);
+    if (!identity) {
+        sim->grid.valid = 0;
+        fail(e, rc == -1 ? "out of memory rebuilding the neighbour list"
+                         : "the neighbour-list positions do not match the particle order");
+        return -1;
+    }
+    return 0;
+}
+
+static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
+{
+    char *format = get_string(file, "format", e);
+    if (format && strcmp(format, CHECKPOINT_FORMAT) != 0)
+        fail(e, "it is not a Sluice checkpoint (format '%s')", format);
+    free(format);
+    int version = 0, real_size = 0, dimensions = 0, grid_valid = 0;
+    get_attr(file, "format_version", H5T_NATIVE_INT, &version, e);
+    if (!e->text[0] && version != CHECKPOINT_VERSION)
+        fail(e, "it has checkpoint format version %d; this sluice reads version %d", version,
+             CHECKPOINT_VERSION);
+    get_attr(file, "real_size", H5T_NATIVE_INT, &real_size, e);
+    if (!e->text[0] && real_size != (int)sizeof(sluice_real))
+        fail(e, "it was written by a sluice with %d-byte reals; this one has %d-byte reals",
+             real_size, (int)sizeof(sluice_real));
+    get_attr(file, "dimensions", H5T_NATIVE_INT, &dimensions, e);
+    if (!e->text[0] && dimensions != (int)sim->scene.dimensions)
+        fail(e, "it holds a %dD run and the scene is %uD: it does not match the scene",
+             dimensions, sim->scene.dimensions);
+    char *plugins = get_string(file, "plugins", e), *fields = get_string(file, "fields", e);
+    char *want_plugins = plugin_lines(sim), *want_fields = field_lines(sim);
+    char difference[512];
+    if (!e->text[0] && (!want_plugins || !want_fields))
+        fail(e, "out of memory");
+    if (!e->text[0] && strcmp(plugins, want_plugins) != 0) {
+        first_difference(plugins, want_plugins, difference, sizeof difference);
+        fail(e, "its plugins do not match the scene's (%s)", difference);
+    }
+    if (!e->text[0] && strcmp(fields, want_fields) != 0) {
+        first_difference(fields, want_fields, difference, sizeof difference);
+        fail(e, "its field layout (name type components) does not match the scene's (%s)",
+             difference);
+    }
+    free(plugins);
+    free(fields);
+    free(want_plugins);
+    free(want_fields);
+
+    uint64_t count = 0, next_id = 0, removed = 0, initial = 0, steps = 0, rebuilds = 0;
+    int64_t step = 0;
+    double time = 0, dt = 0, dt_limit = 0, deviation = 0;
+    get_attr(file, "particle_count", H5T_NATIVE_UINT64, &count, e);
+    get_attr(file, "time", H5T_NATIVE_DOUBLE, &time, e);
+    get_attr(file, "dt", H5T_NATIVE_DOUBLE, &dt, e);
+    get_attr(file, "dt_limit", H5T_NATIVE_DOUBLE, &dt_limit, e);
+    get_attr(file, "step", H5T_NATIVE_INT64, &step, e);
+    get_attr(file, "next_id", H5T_NATIVE_UINT64, &next_id, e);
+    get_attr(file, "removed", H5T_NATIVE_UINT64, &removed, e);
+    get_attr(file, "particles_initial", H5T_NATIVE_UINT64, &initial, e);
+    get_attr(file, "particle_steps", H5T_NATIVE_UINT64, &steps, e);
+    get_attr(file, "max_density_deviation", H5T_NATIVE_DOUBLE, &deviation, e);
+    get_attr(file, "neighbour_list_rebuilds", H5T_NATIVE_UINT64, &rebuilds, e);
+    get_attr(file, "grid_valid", H5T_NATIVE_INT, &grid_valid, e);
+    if (e->text[0])
+        return;
+    if (count == 0 || count > UINT32_MAX - 1 || !isfinite(time) || step < 0 ||
+        next_id < count) {
+        fail(e, "its run state is inconsistent (%llu particles, step %lld, t = %g s)",
+             (unsigned long long)count, (long long)step, time);
+        return;
+    }
+    if (!(time < sim->end)) {
+        fail(e, "it holds t = %.9g s, not before the scene's end time %.9g s (raise time.end "
+                "with --set time.end=...)",
+             time, sim->end);
+        return;
+    }
+
+    /* particles: every field, in the checkpoint's order */
+    sim->particles.count = 0;
+    if (sluice_particles_append(&sim->particles, (sluice_index)count, NULL) != 0) {
+        fail(e, "out of memory for %llu particles", (unsigned long long)count);
+        return;
+    }
+    hid_t group = H5Gopen2(file, "particles", H5P_DEFAULT);
+    if (group < 0)
+        fail(e, "group 'particles' is missing");
+    for (uint32_t f = 0; f < sim->field_count && !e->text[0]; f++) {
+        const sluice_field_entry *field = &sim->fields[f];
+        void *rows[16];
+        for (uint32_t c = 0; c < field->components; c++)
+            rows[c] = sim->particles.columns[field->column + (int32_t)c];
+        get_rows(group, field->name, field->type, 2, field->components, count, rows, e);
+    }
+    close_id(&group, H5Gclose);
+    if (e->text[0])
+        return;
+    const uint8_t *kind = sim->particles.columns[sim->kind.column];
+    for (sluice_index i = 0; i < (sluice_index)count; i++)
+        if (kind[i] >= SLUICE_KIND_COUNT) {
+            fail(e, "particle %u has the unknown kind %u", i, kind[i]);
+            return;
+        }
+
+    sim->time = time;
+    sim->dt = dt;
+    sim->dt_limit = dt_limit;
+    sim->step = step;
+    sim->next_id = next_id;
+    sim->removed = removed;
+    sim->particles_initial = (sluice_index)initial;
+    sim->particle_steps = steps;
+    sim->max_density_deviation = deviation;
+
+    /* core: requests, tables, neighbour list */
+    group = H5Gopen2(file, "core", H5P_DEFAULT);
+    if (group < 0) {
+        fail(e, "group 'core' is missing");
+        return;
+    }
+    int64_t requests = rows_length(group, "requests", 1, 1);
+    int64_t tables = rows_length(group, "table_bytes", 1, 1);
+    if (requests < 0 || tables < 0)
+        fail(e, "the requested times or the table lengths are missing");
+    double *times = malloc(((size_t)(requests > 0 ? requests : 0) + 1) * sizeof *times);
+    uint64_t *bytes = malloc(((size_t)(tables > 0 ? tables : 0) + 1) * sizeof *bytes);
+    if (!e->text[0] && (!times || !bytes))
+        fail(e, "out of memory");
+    void *row[1] = {times};
+    get_rows(group, "requests", CK_DOUBLE, 1, 1, (hsize_t)requests, row, e);
+    row[0] = bytes;
+    get_rows(group, "table_bytes", CK_UINT64, 1, 1, (hsize_t)tables, row, e);
+    char *names = get_string(group, "table_names", e);
+    if (!e->text[0]) {
+        sim->request_count = 0;
+        for (int64_t i = 0; i < requests; i++)
+            sluice_sim_request_time(sim, times[i]);
+        /* each table of the scene continues from its length at the checkpoint */
+        const char *p = names;
+        for (int64_t t = 0; t < tables && *p; t++) {
+            size_t len = strcspn(p, "\n");
+            for (size_t k = 0; k < sim->table_count; k++) {
+                sluice_table *table = sim->tables[k];
+                if (table->fd < 0 && strlen(table->path) == len &&
+                    memcmp(table->path, p, len) == 0) {
+                    table->resume = 1;
+                    table->resume_bytes = bytes[t];
+                }
+            }
+            p += len + (p[len] == '\n');
+        }
+    }
+    free(names);
+    free(times);
+    free(bytes);
+    if (!e->text[0] && grid_valid) {
+        const uint32_t dims = sim->scene.dimensions;
+        sluice_real *built = malloc((size_t)dims * count * sizeof *built + 1);
+        void *rows[3] = {NULL, NULL, NULL};
+        sluice_real *columns[3] = {NULL, NULL, NULL};
+        for (uint32_t d = 0; built && d < dims; d++)
+            rows[d] = columns[d] = built + (size_t)d * count;
+        if (!built)
+            fail(e, "out of memory");
+        else if (get_rows(group, "grid_built", SLUICE_TYPE_REAL, 2, dims, count, rows, e) == 0)
+            restore_grid(sim, columns, e);
+        free(built);
+    } else {
+        sim->grid.valid = 0;
+    }
+    sim->grid.rebuilds = rebuilds;
+    close_id(&group, H5Gclose);
+    if (e->text[0])
+        return;
+
+    /* plugins */
+    group = H5Gopen2(file, "plugins", H5P_DEFAULT);
+    if (group < 0) {
+        fail(e, "group 'plugins' is missing");
+        return;
+    }
+    for (uint32_t k = 0; k < sim->instance_count && !e->text[0]; k++) {
+        sluice_instance *in = &sim->instances[k];
+        if (!in->component->load_state)
+            continue;
+        if (H5Lexists(group, in->name, H5P_DEFAULT) <= 0) {
+            fail(e, "it holds no state of plugin '%s' (was it written by an older version of "
+                    "the plugin?)",
+                 in->name);
+            break;
+        }
+        hid_t own = H5Gopen2(group, in->name, H5P_DEFAULT);
+        if (own < 0) {
+            fail(e, "the state of plugin '%s' cannot be read", in->name);
+            break;
+        }
+        sim->state_group = own;
+        sim->state_instance = k;
+        sim->state_writing = 0;
+        sluice_sim_refresh_view(sim);
+        int rc = in->component->load_state(in->state, &in->host);
+        sim->state_group = -1;
+        H5Gclose(own);
+        if (rc != SLUICE_OK || sim->failure[0])
+            fail(e, "plugin '%s' could not load its state%s%s", in->name,
+                 sim->failure[0] ? ": " : "", sim->failure);
+    }
+    close_id(&group, H5Gclose);
+}
+
+int sluice_sim_restart(sluice_sim *sim, const char *path, char *error, size_t error_size)
+{
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        snprintf(error, error_size, "cannot read checkpoint '%s': %s", path, strerror(errno));
+        return SLUICE_ERROR;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        snprintf(error, error_size, "checkpoint '%s' is not a regular file", path);
+        return SLUICE_ERROR;
+    }
+    quiet_hdf5 q;
+    quiet_begin(&q);
+    ck_error e = {{0}};
+    hid_t file = -1;
+    htri_t is_hdf5 = H5Fis_hdf5(path);
+    if (is_hdf5 <= 0)
+        fail(&e, "it is not an HDF5 file");
+    else if ((file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT)) < 0)
+        fail(&e, "it cannot be opened: the file is truncated or damaged");
+    sim->state_file = path;
+    if (!e.text[0])
+        read_state(sim, file, &e);
+    sim->state_file = NULL;
+    if (file >= 0 && H5Fclose(file) < 0)
+        fail(&e, "closing it failed");
+    quiet_end(&q);
+    if (e.text[0]) {
+        snprintf(error, error_size, "cannot restart from checkpoint '%s': %s", path, e.text);
+        return SLUICE_ERROR;
+    }
+    sim->restarted = 1;
+    sim->checkpoint_step = sim->step; /* this state is on disk already */
+    sluice_sim_refresh_view(sim);
+    return SLUICE_OK;
+}
+
+/* --------------------------------------------------- api->state_* (1.5) -- */
+
+static int state_access(sluice_host *host, const char *name, int type, int writing)
+{
+    sluice_sim *sim = host->sim;
+    const char *who = sim->instances[host->instance].name;
+    if (sim->state_group < 0 || sim->state_instance != host->instance ||
+        sim->state_writing != writing) {
+        sluice_sim_fail(sim, "plugin '%s': api->state_%s outside its own %s callback", who,
+                        writing ? "write" : "read", writing ? "save_state" : "load_state");
+        return SLUICE_ERROR;
+    }
+    if (!name || !*name || strchr(name, '/') || strcmp(name, ".") == 0) {
+        sluice_sim_fail(sim, "plugin '%s': state array name '%s' is not a plain name", who,
+                        name ? name : "");
+        return SLUICE_ERROR;
+    }
+    if (type < 0) {
+        sluice_sim_fail(sim, "plugin '%s': state array '%s' has the unknown type %d", who, name,
+                        (int)type);
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
+int sluice_api_state_write(sluice_host *host, const char *name, sluice_state_type state_type,
+                           uint64_t count, const void *data)
+{
+    sluice_sim *sim = host->sim;
+    const int type = state_kind(state_type);
+    if (state_access(host, name, type, 1) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (count > 0 && !data) {
+        sluice_sim_fail(sim, "plugin '%s': api->state_write('%s') without data",
+                        sim->instances[host->instance].name, name);
+        return SLUICE_ERROR;
+    }
+    ck_error e = {{0}};
+    const void *row[1] = {data};
+    if (H5Lexists((hid_t)sim->state_group, name, H5P_DEFAULT) > 0)
+        fail(&e, "it is written twice");
+    put_rows((hid_t)sim->state_group, name, type, 1, 1, count, row, &e);
+    if (e.text[0]) {
+        sluice_sim_fail(sim, "plugin '%s': state array '%s': %s",
+                        sim->instances[host->instance].name, name, e.text);
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
+int sluice_api_state_read(sluice_host *host, const char *name, sluice_state_type state_type,
+                          uint64_t count, void *data)
+{
+    sluice_sim *sim = host->sim;
+    const int type = state_kind(state_type);
+    if (state_access(host, name, type, 0) != SLUICE_OK)
+        return SLUICE_ERROR;
+    ck_error e = {{0}};
+    void *row[1] = {data};
+    if (count > 0 && !data)
+        fail(&e, "no buffer given");
+    get_rows((hid_t)sim->state_group, name, type, 1, 1, count, row, &e);
+    if (e.text[0]) {
+        sluice_sim_fail(sim, "plugin '%s': state array '%s' in checkpoint '%s': %s",
+                        sim->instances[host->instance].name, name,
+                        sim->state_file ? sim->state_file : "?", e.text);
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
+int64_t sluice_api_state_length(sluice_host *host, const char *name)
+{
+    sluice_sim *sim = host->sim;
+    if (state_access(host, name, CK_DOUBLE, 0) != SLUICE_OK)
+        return -1;
+    return rows_length((hid_t)sim->state_group, name, 1, 1);
+}
