@@ -213,8 +213,9 @@ START_TEST(killed_runs_leave_readable_outputs)
     ck_assert_ptr_nonnull(scratch);
     char *program = NULL, *scene = test_config("dam_break_2d.yaml");
     ck_assert_int_ge(asprintf(&program, "%s/sluice", test_build_dir()), 0);
-    /* A snapshot every 2 ms of simulated time (every few steps) and the
-     * front gauge every step or so: kills land in writes often. The kill
+    /* A snapshot every 2 ms of simulated time (every few steps), a
+     * checkpoint every 4 ms and the front gauge every step or so: kills
+     * land in writes often. The kill
      * times are spread over 20-900 ms of wall time, from before the output
      * directory exists to well into the run. */
     const char *requested = getenv("SLUICE_KILL_COUNT"); /* a longer campaign: docs/reliability.md */
@@ -226,7 +227,8 @@ START_TEST(killed_runs_leave_readable_outputs)
         ck_assert_int_ge(asprintf(&out, "%s/run%02d", scratch, k), 0);
         char *argv[] = {program, "run", scene, "--out", out, "--quiet", "--no-progress",
                         "--threads", "1", "--set", "plugins.hdf5.interval=0.002",
-                        "--set", "plugins.front_gauge.interval=0.0005", NULL};
+                        "--set", "plugins.front_gauge.interval=0.0005",
+                        "--set", "checkpoint.interval=0.004", NULL};
         posix_spawn_file_actions_t actions;
         posix_spawn_file_actions_init(&actions);
         posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
@@ -249,7 +251,7 @@ START_TEST(killed_runs_leave_readable_outputs)
     }
     fprintf(stderr,
             "output_safety: %d runs killed with SIGKILL (%d had ended first): %d snapshots "
-            "(%d datasets) opened and read, %d tables and %d indexes whole, %d temporary "
+            "and checkpoints (%d datasets) opened and read, %d tables and %d indexes whole, %d temporary "
             "files left (never outputs), %d other files\n",
             kills, finished_before_kill, totals.snapshots, totals.datasets, totals.tables,
             totals.indexes, totals.temporaries, totals.others);
