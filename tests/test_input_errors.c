@@ -447,6 +447,16 @@ START_TEST(inlet_outside_the_domain)
 }
 END_TEST
 
+START_TEST(scene_too_large_for_the_machine)
+{
+    /* 0.5 m x 0.5 m of fluid at dx = 1 um: 2.5e11 particles, about 75 TB;
+     * refused before anything is allocated */
+    char *text = scene_text(3, "  spacing: 1e-6", NULL);
+    expect_combination(text, 3, 3, "would create about 2.5e+11 particles");
+    free(text);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("input errors");
@@ -480,6 +490,7 @@ int main(void)
     tcase_add_test(combinations, no_integrator);
     tcase_add_test(combinations, spacing_larger_than_geometry);
     tcase_add_test(combinations, inlet_outside_the_domain);
+    tcase_add_test(combinations, scene_too_large_for_the_machine);
     suite_add_tcase(s, combinations);
     return test_run_suite(s);
 }

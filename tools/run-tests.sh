@@ -1,17 +1,20 @@
 #!/bin/sh
 # Builds Sluice and runs the whole test suite twice: in the optimised release
 # build, and in a build with AddressSanitizer and UndefinedBehaviorSanitizer
-# (any report fails the run). Installs the Debian 12 build dependencies first
+# (any report fails the run); then fuzzes the scene loader for 60 s
+# (tools/fuzz.sh; any crash fails the run). Installs the Debian 12 build dependencies first
 # when they are missing (needs root). Used by .ci/run; see README.md.
 set -eu
 cd "$(dirname "$0")/.."
 
 missing=""
-for tool in gcc make meson ninja pkg-config; do
+for tool in gcc clang make meson ninja pkg-config; do
     command -v "$tool" >/dev/null 2>&1 || missing=yes
 done
 if [ -z "$missing" ]; then
     pkg-config --exists yaml-0.1 hdf5 check 2>/dev/null || missing=yes
+    # libFuzzer's runtime (the short fuzz run at the end)
+    [ -f "$(clang -print-file-name=libclang_rt.fuzzer-x86_64.a 2>/dev/null)" ] || missing=yes
 fi
 if [ -n "$missing" ]; then
     if [ "$(id -u)" != 0 ]; then
@@ -21,7 +24,7 @@ if [ -n "$missing" ]; then
     export DEBIAN_FRONTEND=noninteractive
     apt-get update -qq
     apt-get install -y -qq --no-install-recommends build-essential meson ninja-build \
-        pkg-config libyaml-dev libhdf5-dev check >/dev/null
+        pkg-config libyaml-dev libhdf5-dev check clang libclang-rt-14-dev >/dev/null
 fi
 
 jobs=$(nproc 2>/dev/null || echo 2)
@@ -51,4 +54,7 @@ CK_EXCLUDE_TAGS=validation \
 ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:intercept_tls_get_addr=0" \
 UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1" \
     meson test -C build-asan --print-errorlogs --num-processes "$jobs"
+
+echo "== fuzzing the scene loader for 60 s (clang, libFuzzer + ASan/UBSan; build-fuzz/)"
+tools/fuzz.sh 60
 echo "== all tests passed"

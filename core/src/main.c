@@ -107,7 +107,7 @@ static sluice_sim *load(const arguments *a, int check_only)
         fprintf(stderr, "sluice: error: out of memory\n");
         return NULL;
     }
-    sluice_load_options options = {a->sets, a->set_count, a->threads, check_only};
+    sluice_load_options options = {a->sets, a->set_count, a->threads, check_only, 0};
     sluice_sim *sim = sluice_sim_load(a->scene, &options, diag);
     sluice_diag_print(diag, stderr);
     sluice_diag_destroy(diag);

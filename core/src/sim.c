@@ -1695,6 +1695,70 @@ static const char *library_version(const sluice_instance *in)
     return in->library->version ? in->library->version : "?";
 }
 
+/* Before anything is allocated: the particles the scene would create, from
+ * the lattice points of every fluid region's bounding box (what filling it
+ * visits) and wall layers along every wall (a few spacings deep; counted as
+ * SLUICE_SIZE_WALL_LAYERS layers). A scene whose particles would not fit in
+ * this machine's memory at SLUICE_SIZE_BYTES_PER_PARTICLE (docs/performance.md
+ * measures 325-436 bytes per particle in 2D), or that exceeds `limit` (> 0;
+ * the fuzzer's), is refused with the count instead of running out of memory
+ * or time half-way through the set-up. */
+#define SLUICE_SIZE_WALL_LAYERS 4.0
+#define SLUICE_SIZE_BYTES_PER_PARTICLE 300.0
+static int check_scene_size(sluice_sim *sim, double limit)
+{
+    const sluice_scene *scene = &sim->scene;
+    const uint32_t dims = scene->dimensions;
+    const double dx = (double)scene->particles.spacing;
+    double fluid = 0, wall = 0;
+    for (size_t r = 0; r < scene->fluid_count; r++) {
+        sluice_real lo[3], hi[3];
+        sluice_region_bounds(&scene->fluids[r].region, dims, lo, hi);
+        double points = 1;
+        for (uint32_t d = 0; d < dims; d++)
+            points *= floor(((double)hi[d] - (double)lo[d]) / dx) + 1;
+        fluid += points;
+    }
+    for (size_t w = 0; w < scene->wall_count; w++) {
+        const sluice_wall_geometry *g = &scene->walls[w].geometry;
+        for (uint32_t e = 0; e < g->element_count; e++) {
+            const sluice_real *p = g->points + (size_t)e * dims * 3;
+            double measure;
+            if (dims == 2) {
+                measure = hypot((double)(p[3] - p[0]), (double)(p[4] - p[1])) / dx + 1;
+            } else {
+                double a[3], b[3];
+                for (int d = 0; d < 3; d++) {
+                    a[d] = (double)(p[3 + d] - p[d]);
+                    b[d] = (double)(p[6 + d] - p[d]);
+                }
+                double c0 = a[1] * b[2] - a[2] * b[1], c1 = a[2] * b[0] - a[0] * b[2],
+                       c2 = a[0] * b[1] - a[1] * b[0];
+                measure = 0.5 * sqrt(c0 * c0 + c1 * c1 + c2 * c2) / (dx * dx) + 1;
+            }
+            wall += SLUICE_SIZE_WALL_LAYERS * measure;
+        }
+    }
+    const double count = fluid + wall;
+    const long pages = sysconf(_SC_PHYS_PAGES), page_size = sysconf(_SC_PAGESIZE);
+    const double memory = pages > 0 && page_size > 0 ? (double)pages * (double)page_size : 0;
+    const double needed = count * SLUICE_SIZE_BYTES_PER_PARTICLE;
+    const sluice_node *node = sluice_node_get(scene->root, "particles");
+    if (!(count < 4e9) || (memory > 0 && needed > memory) || (limit > 0 && count > limit)) {
+        sluice_diag_add(sim->diag, SLUICE_SEVERITY_ERROR, node ? node->file : scene->path,
+                        node ? node->line : 1, node ? node->column : 1,
+                        "at particles.spacing = %g m the scene would create about %.3g particles "
+                        "(%.3g fluid, %.3g wall), %s: use a larger spacing or smaller regions",
+                        dx, count, fluid, wall,
+                        limit > 0 && count > limit ? "more than this run's limit"
+                        : memory > 0 && needed > memory
+                            ? "more than this machine's memory holds at about 300 bytes each"
+                            : "more than a particle index can count");
+        return 1;
+    }
+    return 0;
+}
+
 static int load(sluice_sim *sim, const char *scene_path, const sluice_load_options *options)
 {
     sluice_scene *scene = &sim->scene;
@@ -1703,6 +1767,8 @@ static int load(sluice_sim *sim, const char *scene_path, const sluice_load_optio
                                    options ? options->override_count : 0, diag);
     if (errors || !scene->root)
         return errors ? errors : 1;
+    if (check_scene_size(sim, options ? options->max_particles : 0) != 0)
+        return 1;
 
     /* plugins */
     char **dirs = NULL;

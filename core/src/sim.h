@@ -17,6 +17,8 @@ typedef struct sluice_load_options {
     size_t override_count;
     int threads;                  /* 0: OpenMP default */
     int check_only;               /* validate and build the initial state, no output */
+    double max_particles;         /* > 0: refuse a scene that would create more (the
+                                     fuzzer's bound); 0: only the machine's memory */
 } sluice_load_options;
 
 typedef struct sluice_run_options {
