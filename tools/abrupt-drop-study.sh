@@ -9,10 +9,15 @@
 #
 #   tools/abrupt-drop-study.sh [BUILD_DIR] [TESTS]
 #     defaults: build, "T1 T2 T3 T4 T5 T6 T7"
-#   END=60 FROM=10 OUT=runs/abrupt-drop-study THREADS=
+#   END=60 FROM=10 OUT=runs/abrupt-drop-study THREADS= CHECKPOINT=2
 #
-# Appends one line per test to OUT/summary.csv (created with its header when
-# missing, so several invocations may share one OUT).
+# Every run writes a checkpoint every CHECKPOINT seconds (the newest kept;
+# 0: none). When OUT/<test> already holds a checkpoint, the run continues
+# from the newest one to END (sluice run --restart, into the same
+# directory, so the gauge tables run on): a study is lengthened by running
+# it again with a later END. Appends one line per test to OUT/summary.csv
+# (created with its header when missing, so several invocations may share
+# one OUT).
 set -eu
 cd "$(dirname "$0")/.."
 build=${1:-build}
@@ -21,6 +26,7 @@ end=${END:-60}
 from=${FROM:-10}
 out=${OUT:-runs/abrupt-drop-study}
 threads=${THREADS:-}
+checkpoint=${CHECKPOINT:-2}
 analyze="$build/tools/sluice-analyze"
 mkdir -p "$out"
 pick() { sed -n "s|^$1 = \([^ ]*\).*|\1|p" "$2" | head -n 1; }
@@ -30,10 +36,12 @@ for t in $tests; do
     run="$out/$t"
     observed=$(awk -F, -v t="$t" '$1 == t { print $12 }' tests/data/depadova2017_table1.csv)
     drop_x=$(sed -n 's|^#   sluice-analyze drop-type [^ ]* --drop-x \([^ ]*\).*|\1|p' "$scene")
-    echo "== $t ($observed), $end s" >&2
+    latest=$(ls "$run"/checkpoint_*.h5 2>/dev/null | tail -n 1)
+    echo "== $t ($observed), $end s${latest:+, continued from $latest}" >&2
     set +e
     "$build/sluice" run "$scene" --out "$run" --quiet --no-progress ${threads:+--threads "$threads"} \
-        --set time.end="$end" 2>"$run.log"
+        ${latest:+--restart "$latest"} --set time.end="$end" \
+        --set checkpoint.interval="$checkpoint" --set checkpoint.keep=1 2>>"$run.log"
     rc=$?
     set -e
     status=complete; [ "$rc" = 0 ] || status="failed($rc)"
