@@ -1502,13 +1502,13 @@ static int fill_fluid(sluice_sim *sim)
     int errors = 0;
     for (size_t r = 0; r < scene->fluid_count && !errors; r++) {
         const sluice_scene_fluid *fluid = &scene->fluids[r];
-        /* a fluid region thinner than one spacing is resolved by at most
-         * one row of particles: almost always a spacing meant for another
-         * scale (mm for m) */
+        /* a fluid region thinner than one spacing (to round-off) is
+         * resolved by at most one row of particles: almost always a spacing
+         * meant for another scale (mm for m) */
         sluice_real lo[3], hi[3];
         sluice_region_bounds(&fluid->region, dims, lo, hi);
         for (uint32_t d = 0; d < dims; d++)
-            if (hi[d] - lo[d] < sim->spacing) {
+            if (hi[d] - lo[d] < sim->spacing * (1 - 1e-9)) {
                 const sluice_node *node = fluid->node;
                 sluice_diag_add(sim->diag, SLUICE_SEVERITY_ERROR, node->file, node->line,
                                 node->column,
