@@ -390,6 +390,16 @@ static int call_hooks(sluice_sim *sim, int after)
     return 0;
 }
 
+/* Moves checkpoint_next to the first multiple of checkpoint.interval after
+ * the current time (to round-off) and asks the core to end a step on it. */
+static void schedule_next_checkpoint(sluice_sim *sim)
+{
+    const double interval = (double)sim->scene.checkpoint.interval;
+    while ((double)sim->checkpoint_next * interval <= sim->time + 1e-9 * interval)
+        sim->checkpoint_next++;
+    sluice_sim_request_time(sim, (double)sim->checkpoint_next * interval);
+}
+
 int sluice_sim_begin(sluice_sim *sim, const char *output_directory)
 {
     if (output_directory) {
@@ -413,13 +423,9 @@ int sluice_sim_begin(sluice_sim *sim, const char *output_directory)
     sluice_sim_refresh_view(sim);
     /* periodic checkpoints: the first scheduled after the current time (a
      * restart requested it already, in its saved requests) */
-    const double interval = (double)sim->scene.checkpoint.interval;
-    if (interval > 0) {
-        const double tolerance = 1e-9 * interval;
+    if (sim->scene.checkpoint.interval > 0) {
         sim->checkpoint_next = 1;
-        while ((double)sim->checkpoint_next * interval <= sim->time + tolerance)
-            sim->checkpoint_next++;
-        sluice_sim_request_time(sim, (double)sim->checkpoint_next * interval);
+        schedule_next_checkpoint(sim);
     }
     /* after a restart the hooks ran already on this state, before the checkpoint */
     if (!sim->restarted && call_hooks(sim, 1) != 0)
@@ -433,15 +439,12 @@ static int periodic_checkpoint(sluice_sim *sim)
     const double interval = (double)sim->scene.checkpoint.interval;
     if (!(interval > 0))
         return SLUICE_OK;
-    const double tolerance = 1e-9 * interval;
-    if (sim->time + tolerance < (double)sim->checkpoint_next * interval)
+    if (sim->time + 1e-9 * interval < (double)sim->checkpoint_next * interval)
         return SLUICE_OK;
     if (sim->output_directory && sim->checkpoint_step != sim->step &&
         sluice_sim_checkpoint(sim, NULL) != SLUICE_OK)
         return SLUICE_ERROR;
-    while ((double)sim->checkpoint_next * interval <= sim->time + tolerance)
-        sim->checkpoint_next++;
-    sluice_sim_request_time(sim, (double)sim->checkpoint_next * interval);
+    schedule_next_checkpoint(sim);
     return SLUICE_OK;
 }
 
