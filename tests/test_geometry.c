@@ -10,6 +10,7 @@
 #include <time.h>
 
 #include "geometry.h"
+#include "wall_watch.h"
 
 #define EPS 1e-12
 
@@ -1336,6 +1337,98 @@ START_TEST(layer_many_triangles)
 }
 END_TEST
 
+/* The watchdog's wall cells (wall_watch.c) give, wherever they compute it, the
+ * same signed distance as asking every element (bit for bit), and skip only
+ * points that are truly farther than the allowed depth on the fluid side. A
+ * 2D scene of several walls (a tank, an open polyline with a step and a
+ * jet-like overhang, a closed obstacle) and a 3D tank with a box obstacle. */
+static void check_watch(const sluice_wall_watch *watch, const sluice_real p[3], double depth)
+{
+    int b1, b2;
+    uint32_t w1, w2, e1, e2;
+    double fast = sluice_wall_watch_distance(watch, p, &b1, &w1, &e1);
+    double full = sluice_wall_watch_distance_full(watch, p, &b2, &w2, &e2);
+    if (fast == HUGE_VAL && !b1) {
+        /* skipped: must be in front, farther than the depth (or past an end) */
+        ck_assert_msg(full == HUGE_VAL || full > depth,
+                      "(%g, %g, %g) skipped but its distance is %g", p[0], p[1], p[2], full);
+        return;
+    }
+    ck_assert_msg(fast == full && b1 == b2 && w1 == w2 && e1 == e2,
+                  "(%g, %g, %g): cells %g (wall %u element %u beyond %d), full %g (wall %u "
+                  "element %u beyond %d)",
+                  p[0], p[1], p[2], fast, w1, e1, b1, full, w2, e2, b2);
+}
+
+START_TEST(wall_watch_matches_full_query)
+{
+    uint64_t rng = 2026;
+    /* 2D */
+    const sluice_real bed[] = {-0.5, 0.3, 0.6, 0.3, 0.6, 0.0, 2.0, 0.0, 2.0, 0.1, 3.0, 0.1};
+    const sluice_real obstacle[] = {1.2, 0.4, 1.2, 0.6, 1.5, 0.6, 1.5, 0.4};
+    sluice_wall_geometry g[3];
+    ck_assert_int_eq(sluice_wall_build_tank(&g[0], 2, (sluice_real[3]){-1, -0.2, 0},
+                                            (sluice_real[3]){3.5, 1.5, 0}, NULL),
+                     0);
+    ck_assert_int_eq(sluice_wall_build_polyline(&g[1], bed, 6, 0, NULL), 0);
+    ck_assert_int_eq(sluice_wall_build_polyline(&g[2], obstacle, 4, 1, NULL), 0);
+    const sluice_wall_geometry *walls[3] = {&g[0], &g[1], &g[2]};
+    const double lo[3] = {-1.2, -0.4, 0}, hi[3] = {3.7, 1.8, 0};
+    for (int depth_case = 0; depth_case < 2; depth_case++) {
+        const double depth = depth_case ? 0.05 : 0.005;
+        sluice_wall_watch watch;
+        ck_assert_int_eq(sluice_wall_watch_init(&watch, 2, walls, 3, lo, hi, 0.04, depth), 0);
+        size_t front = 0, near = 0, behind = 0;
+        for (size_t c = 0; c < watch.cell_count; c++) {
+            front += watch.state[c] == SLUICE_WALL_CELL_FRONT;
+            near += watch.state[c] == SLUICE_WALL_CELL_NEAR;
+            behind += watch.state[c] == SLUICE_WALL_CELL_BEHIND;
+        }
+        /* the cells must save work: most of the box is far from every wall */
+        ck_assert_msg(front > near && behind > 0, "front %zu near %zu behind %zu", front, near,
+                      behind);
+        for (int trial = 0; trial < 200000; trial++) {
+            sluice_real p[3] = {uniform(&rng, -1.3, 3.8), uniform(&rng, -0.5, 1.9), 0};
+            if (trial % 3 == 0) { /* close to a vertex of the bed or the obstacle */
+                const sluice_real *v = trial % 2 ? bed + 2 * (trial / 3 % 6)
+                                                 : obstacle + 2 * (trial / 3 % 4);
+                p[0] = v[0] + uniform(&rng, -0.1, 0.1);
+                p[1] = v[1] + uniform(&rng, -0.1, 0.1);
+            }
+            check_watch(&watch, p, depth);
+        }
+        sluice_wall_watch_free(&watch);
+    }
+    for (int k = 0; k < 3; k++)
+        sluice_wall_geometry_free(&g[k]);
+    /* 3D */
+    sluice_wall_geometry tank, box;
+    ck_assert_int_eq(sluice_wall_build_tank(&tank, 3, (sluice_real[3]){0, 0, 0},
+                                            (sluice_real[3]){2, 1, 1}, NULL),
+                     0);
+    ck_assert_int_eq(sluice_wall_build_box(&box, 3, (sluice_real[3]){1.2, 0.3, 0},
+                                           (sluice_real[3]){1.5, 0.6, 0.3}, NULL),
+                     0);
+    const sluice_wall_geometry *walls3[2] = {&tank, &box};
+    const double lo3[3] = {-0.2, -0.2, -0.2}, hi3[3] = {2.2, 1.2, 1.5};
+    sluice_wall_watch watch;
+    ck_assert_int_eq(sluice_wall_watch_init(&watch, 3, walls3, 2, lo3, hi3, 0.05, 0.01), 0);
+    for (int trial = 0; trial < 200000; trial++) {
+        sluice_real p[3] = {uniform(&rng, -0.3, 2.3), uniform(&rng, -0.3, 1.3),
+                            uniform(&rng, -0.3, 1.6)};
+        if (trial % 2 == 0) { /* near the obstacle's corners and edges */
+            p[0] = (trial % 4 ? 1.2 : 1.5) + uniform(&rng, -0.06, 0.06);
+            p[1] = (trial % 8 < 4 ? 0.3 : 0.6) + uniform(&rng, -0.06, 0.06);
+            p[2] = uniform(&rng, -0.05, 0.35);
+        }
+        check_watch(&watch, p, 0.01);
+    }
+    sluice_wall_watch_free(&watch);
+    sluice_wall_geometry_free(&tank);
+    sluice_wall_geometry_free(&box);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("geometry");
@@ -1365,6 +1458,7 @@ int main(void)
     tcase_add_test(walls, layer_tank_3d);
     tcase_add_test(walls, layer_slanted_2d);
     tcase_add_test(walls, layer_box_obstacles);
+    tcase_add_test(walls, wall_watch_matches_full_query);
     suite_add_tcase(s, walls);
     TCase *scale = tcase_create("scale");
     tcase_set_timeout(scale, 300);

@@ -295,6 +295,46 @@ START_TEST(unstable_run_stops_with_diagnostic)
 }
 END_TEST
 
+/* A speed of sound equal to the largest flow speed lets the collapsing column
+ * push particles through the tank's bottom corner (stability map,
+ * docs/stability.md); with the density band opened wide, the core's wall
+ * check must stop the run, naming the particle, the wall and how deep. */
+START_TEST(particle_through_wall_stops_the_run)
+{
+    char *dir = test_scratch("through_wall");
+    char *scene = test_config("dam_break_2d.yaml");
+    char *args = NULL, *output = NULL;
+    ck_assert_int_ge(asprintf(&args, "run %s --out %s --quiet --no-progress "
+                                     "--set plugins.tait.speed_of_sound=6.26 "
+                                     "--set watchdog.density_band=10 --set time.end=1.0 "
+                                     "--set particles.spacing=0.04",
+                              scene, dir),
+                     0);
+    int status = test_sluice(args, &output);
+    ck_assert_msg(status == 3, "expected status 3 (unstable), got %d:\n%s", status, output);
+    ck_assert_msg(strstr(output, "step ") && strstr(output, "particle id ") &&
+                      strstr(output, "has gone through wall 0 ('tank')") &&
+                      strstr(output, "handled by 'dbc'") &&
+                      strstr(output, "watchdog.wall_penetration = 0.5 spacings"),
+                  "diagnostic must name step, particle, wall and depth:\n%s", output);
+    /* the depth it reports is past the allowed one */
+    const char *depth = strstr(output, " m = ");
+    ck_assert_ptr_nonnull(depth);
+    ck_assert_double_ge(strtod(depth + 5, NULL), 0.5);
+    char *json_path = NULL;
+    ck_assert_int_ge(asprintf(&json_path, "%s/run.json", dir), 0);
+    char *json = test_read_file(json_path);
+    ck_assert_ptr_nonnull(json);
+    ck_assert(strstr(json, "\"status\": \"unstable\""));
+    free(json);
+    free(json_path);
+    free(output);
+    free(args);
+    free(scene);
+    free(dir);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("scenes");
@@ -310,6 +350,7 @@ int main(void)
     tcase_set_timeout(runs, 1800);
     tcase_add_test(runs, dam_break_3d_runs);
     tcase_add_test(runs, unstable_run_stops_with_diagnostic);
+    tcase_add_test(runs, particle_through_wall_stops_the_run);
     suite_add_tcase(s, runs);
     return test_run_suite(s);
 }

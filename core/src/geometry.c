@@ -1119,6 +1119,30 @@ sluice_real sluice_wall_signed_distance(const sluice_wall_geometry *wall, const 
                                    NULL);
 }
 
+sluice_real sluice_wall_signed_distance_among(const sluice_wall_geometry *wall,
+                                              const sluice_real p[3], const uint32_t *subset,
+                                              size_t n, int *beyond_end, uint32_t *element)
+{
+    if (!wall || !p || !subset || (wall->dimensions != 2 && wall->dimensions != 3)) {
+        if (beyond_end)
+            *beyond_end = 0;
+        if (element)
+            *element = UINT32_MAX;
+        return (sluice_real)HUGE_VAL;
+    }
+    return (sluice_real)wall_query(wall, p, subset, n, beyond_end, element, NULL, NULL);
+}
+
+sluice_real sluice_wall_element_distance(const sluice_wall_geometry *wall, uint32_t e,
+                                         const sluice_real p[3])
+{
+    if (!wall || !p || e >= wall->element_count)
+        return (sluice_real)HUGE_VAL;
+    sluice_real c[3];
+    int f;
+    return (sluice_real)element_closest(wall, e, p, c, &f);
+}
+
 void sluice_wall_nearest(const sluice_wall_geometry *wall, const sluice_real p[3],
                          sluice_wall_point *out)
 {

@@ -106,6 +106,17 @@ sluice_real sluice_triangle_closest(const sluice_real p[3], const sluice_real a[
 sluice_real sluice_wall_signed_distance(const sluice_wall_geometry *wall, const sluice_real p[3],
                                         int *beyond_end, uint32_t *element);
 
+/* As sluice_wall_signed_distance, over the elements subset[0..n) only (in
+ * increasing order): the same result as the full query whenever the subset
+ * holds every element that can be nearest to p (see wall_watch.c). */
+sluice_real sluice_wall_signed_distance_among(const sluice_wall_geometry *wall,
+                                              const sluice_real p[3], const uint32_t *subset,
+                                              size_t n, int *beyond_end, uint32_t *element);
+
+/* Unsigned distance from p to element e of the wall. */
+sluice_real sluice_wall_element_distance(const sluice_wall_geometry *wall, uint32_t e,
+                                         const sluice_real p[3]);
+
 /* The nearest point of the wall to p: signed distance (as above), closest
  * point, the normal of the closest feature (pseudo-normal at vertices and
  * edges), element, feature and beyond_end; out->wall is left 0. */

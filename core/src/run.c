@@ -320,6 +320,36 @@ static int watchdog(sluice_sim *sim)
             }
         }
     }
+    /* through a wall: fluid particles deeper than wall_penetration spacings
+     * behind the nearest wall (wall_watch.h) */
+    double wall_depth = 0;
+    uint32_t bad_wall = UINT32_MAX, bad_element = UINT32_MAX;
+    if (!what && sim->wall_watch.wall_count > 0) {
+        const double allowed = (double)scene->watchdog.wall_penetration * (double)sim->spacing;
+        const uint8_t *kind = v->kind;
+        sluice_index found = n;
+#pragma omp parallel for schedule(static) reduction(min : found)
+        for (sluice_index i = 0; i < n; i++) {
+            if (kind[i] != SLUICE_KIND_FLUID || i >= found)
+                continue;
+            sluice_real p[3] = {v->position[0][i], v->position[1][i],
+                                v->dimensions == 3 ? v->position[2][i] : 0};
+            int beyond;
+            uint32_t w, e;
+            double d = sluice_wall_watch_distance(&sim->wall_watch, p, &beyond, &w, &e);
+            if (d < -allowed)
+                found = i;
+        }
+        if (found < n) {
+            first = found;
+            what = 4;
+            sluice_real p[3] = {v->position[0][found], v->position[1][found],
+                                v->dimensions == 3 ? v->position[2][found] : 0};
+            int beyond;
+            wall_depth = -sluice_wall_watch_distance(&sim->wall_watch, p, &beyond, &bad_wall,
+                                                     &bad_element);
+        }
+    }
     if (!what)
         return 0;
     char who[256], writers[512];
@@ -354,6 +384,27 @@ static int watchdog(sluice_sim *sim)
                         "by %s; integrated by '%s')",
                         (long long)sim->step, sim->time, who, (double)density[i],
                         rho0 * (1 - band), rho0 * (1 + band),
+                        e ? sluice_field_writers(sim, e, writers, sizeof writers) : "?",
+                        sim->instances[sim->integrator].name);
+    } else if (what == 4) {
+        const sluice_scene_wall *wall = &scene->walls[bad_wall];
+        const sluice_field_entry *e = NULL;
+        for (uint32_t f = 0; f < sim->field_count; f++)
+            if (strcmp(sim->fields[f].name, "position") == 0)
+                e = &sim->fields[f];
+        char name[160] = "";
+        if (wall->name && wall->name[0])
+            snprintf(name, sizeof name, " ('%s')", wall->name);
+        sluice_sim_fail(sim,
+                        "step %lld, t = %.9g s: %s has gone through wall %u%s (handled by '%s'): "
+                        "it is %.4g m = %.3g spacings behind its %s %u, deeper than "
+                        "watchdog.wall_penetration = %g spacings (field 'position', written by "
+                        "%s; integrated by '%s')",
+                        (long long)sim->step, sim->time, who, bad_wall, name,
+                        sim->walls[bad_wall].scheme ? sim->walls[bad_wall].scheme : "?",
+                        wall_depth, wall_depth / (double)sim->spacing,
+                        v->dimensions == 3 ? "triangle" : "segment", bad_element,
+                        (double)scene->watchdog.wall_penetration,
                         e ? sluice_field_writers(sim, e, writers, sizeof writers) : "?",
                         sim->instances[sim->integrator].name);
     } else {
@@ -420,6 +471,22 @@ int sluice_sim_begin(sluice_sim *sim, const char *output_directory)
         }
     }
     sim->wall_start = sluice_wall_clock();
+    /* the watchdog's wall check: cells about a kernel support wide */
+    if (sim->scene.wall_count > 0 && sim->wall_watch.wall_count == 0) {
+        double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+        for (uint32_t d = 0; d < sim->scene.dimensions; d++) {
+            lo[d] = (double)sim->scene.domain.min[d];
+            hi[d] = (double)sim->scene.domain.max[d];
+        }
+        if (sluice_wall_watch_init(&sim->wall_watch, sim->scene.dimensions,
+                                   sim->wall_geometries, sim->scene.wall_count, lo, hi,
+                                   (double)sim->support,
+                                   (double)sim->scene.watchdog.wall_penetration *
+                                       (double)sim->spacing) != 0) {
+            sluice_sim_fail(sim, "out of memory building the watchdog's wall cells");
+            return SLUICE_RUN_FAILED;
+        }
+    }
     sluice_sim_refresh_view(sim);
     /* periodic checkpoints: the first scheduled after the current time (a
      * restart requested it already, in its saved requests) */

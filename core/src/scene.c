@@ -88,7 +88,7 @@ static const sluice_param_spec neighbour_specs[] = {
 };
 
 typedef struct {
-    sluice_real density_band, min_time_step;
+    sluice_real density_band, min_time_step, wall_penetration;
     int64_t every;
 } watchdog_config;
 
@@ -101,6 +101,11 @@ static const sluice_param_spec watchdog_specs[] = {
      "a time step below this stops the run", NULL, 0},
     {"every", SLUICE_PARAM_INT, OFF(watchdog_config, every), "1", 1, 1000000,
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1", "check the state every this many steps",
+     NULL, 0},
+    {"wall_penetration", SLUICE_PARAM_REAL, OFF(watchdog_config, wall_penetration), "0.5", 0,
+     1000, SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_HAS_MAX, "spacings",
+     "a fluid particle deeper than this behind a wall surface (in particle spacings) has gone "
+     "through the wall and stops the run",
      NULL, 0},
 };
 
@@ -770,6 +775,7 @@ int sluice_scene_load(sluice_scene *scene, const char *path, const char *const *
     scene->watchdog.density_band = wc.density_band;
     scene->watchdog.min_time_step = wc.min_time_step;
     scene->watchdog.every = wc.every;
+    scene->watchdog.wall_penetration = wc.wall_penetration;
 
     checkpoint_config kc;
     memset(&kc, 0, sizeof kc);

@@ -66,6 +66,7 @@ typedef struct sluice_scene {
     struct {
         sluice_real density_band; /* relative to the rest density */
         sluice_real min_time_step;
+        sluice_real wall_penetration; /* in particle spacings */
         int64_t every;
     } watchdog;
     struct {

@@ -1932,8 +1932,11 @@ static int load(sluice_sim *sim, const char *scene_path, const sluice_load_optio
         pub->normals = wall->geometry.normals;
     }
     sim->wall_bounds = calloc(6 * (scene->wall_count + 1), sizeof *sim->wall_bounds);
-    if (!sim->wall_bounds)
+    sim->wall_geometries = calloc(scene->wall_count + 1, sizeof *sim->wall_geometries);
+    if (!sim->wall_bounds || !sim->wall_geometries)
         return errors + 1;
+    for (size_t w = 0; w < scene->wall_count; w++)
+        sim->wall_geometries[w] = &scene->walls[w].geometry;
     for (size_t w = 0; w < scene->wall_count; w++) {
         const sluice_wall_geometry *g = &scene->walls[w].geometry;
         sluice_real *b = sim->wall_bounds + 6 * w;
@@ -2238,6 +2241,8 @@ void sluice_sim_free(sluice_sim *sim)
     free(sim->requests);
     sluice_particles_free(&sim->particles);
     sluice_grid_free(&sim->grid);
+    sluice_wall_watch_free(&sim->wall_watch);
+    free(sim->wall_geometries);
     sluice_pair_engine_free(&sim->engine);
     free(sim->instances);
     free(sim->resolved_scene);

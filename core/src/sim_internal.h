@@ -12,6 +12,7 @@
 #include "registry.h"
 #include "scene.h"
 #include "sim.h"
+#include "wall_watch.h"
 
 #define SLUICE_CORE_INSTANCE UINT32_MAX
 
@@ -103,6 +104,8 @@ struct sluice_sim {
     uint32_t rate_count;
     sluice_wall *walls;
     sluice_real *wall_bounds; /* 6 per wall: min xyz, max xyz (wall_distance) */
+    const sluice_wall_geometry **wall_geometries; /* wall_count: for the watch */
+    sluice_wall_watch wall_watch; /* the watchdog's wall check, built by begin */
 
     sluice_particles particles;
     sluice_view view;
