@@ -14,24 +14,67 @@
 
 #include "sim_util.h"
 
-/* A horizontal frictionless channel (penalty_contact) between a buffer inlet
- * at x = 0 and a free outlet at x = 1 m (particles added and removed every
- * step), predictor-corrector, with HDF5 snapshots and the flux tables. */
-static char *channel_scene(double end, double checkpoint)
+/* A horizontal frictionless channel (penalty_contact) between an inlet at
+ * x = 0 and an outlet at x = 1 m (particles added and removed every step),
+ * with HDF5 snapshots, the flux tables and the case's gauges and models. */
+typedef struct channel_case {
+    const char *name;
+    const char *inlet, *outlet; /* the plugin lines */
+    const char *wall;           /* wall scheme line */
+    const char *integrator;
+    const char *extra;          /* more plugin lines (gauges, models) */
+    const char *tables[8];      /* tables the run writes, NULL-terminated */
+} channel_case;
+
+static const channel_case channel_cases[] = {
+    {"buffer-free",
+     "inlet: {form: buffer, position: 0, depth: 0.1, velocity: 0.5, interval: 0.05}",
+     "outlet: {form: free, position: 1.0, interval: 0.05}", "penalty_contact: {}",
+     "predictor_corrector: {}",
+     "  point_gauge: {points: [[0.5, 0.05]], fields: 'pressure, velocity', interval: 0.02}\n",
+     {"inlet.csv", "outlet.csv", "points.csv", NULL}},
+    /* seed 000's boundaries: the pre-placed block and the frozen outlet; every
+     * gauge that keeps state across steps */
+    {"block-frozen",
+     "inlet: {form: block, position: 0, depth: 0.1, velocity: 0.5, interval: 0.05}",
+     "outlet: {form: frozen, position: 1.0, interval: 0.05}", "penalty_contact: {}",
+     "symplectic: {}",
+     "  section_gauge: {positions: [0.3, 0.7], interval: 0.02}\n"
+     "  free_surface_gauge: {positions: [0.5], interval: 0.02}\n"
+     "  energy_gauge: {interval: 0.02}\n"
+     "  wall_monitor: {interval: 0.02}\n"
+     "  vorticity: {interval: 0.1}\n",
+     {"inlet.csv", "outlet.csv", "sections.csv", "free_surface.csv", "energy.csv", "walls.csv",
+      NULL}},
+    /* seed 004's boundaries: the inlet buffer and the tailwater buffer, with
+     * k-epsilon (the inlet sets k and epsilon) on DBC walls and Verlet */
+    {"buffer-buffer",
+     "inlet: {form: buffer, position: 0, depth: 0.1, velocity: 0.5, interval: 0.05}",
+     "outlet: {form: buffer, position: 1.0, depth: 0.1, velocity: 0.5, interval: 0.05}",
+     "dbc: {}", "verlet: {euler_every: 7}",
+     "  velocity_gradient: {}\n"
+     "  k_epsilon: {length_scale: 0.05}\n"
+     "  turbulent_stress: {form: eddy_viscosity}\n",
+     {"inlet.csv", "outlet.csv", NULL}},
+};
+
+static char *channel_scene(const channel_case *c, double end, double checkpoint)
 {
     char *yaml = NULL;
+    /* the block inlet holds the whole inflow upstream */
+    const double upstream = strcmp(c->name, "block-frozen") == 0 ? 0.5 * end + 0.3 : 0.5;
     ck_assert_int_ge(
         asprintf(&yaml,
                  "dimensions: 2\n"
                  "particles: {spacing: 0.02, smoothing_length_ratio: 1.5}\n"
                  "time: {end: %.17g}\n"
-                 "domain: {min: [-0.7, -0.1], max: [1.5, 0.6]}\n"
+                 "domain: {min: [%.17g, -0.2], max: [1.5, 0.6]}\n"
                  "checkpoint: {interval: %.17g, keep: 0}\n"
                  "geometry:\n"
                  "  fluid:\n"
                  "    - {shape: box, min: [0, 0], max: [1.0, 0.1], velocity: [0.5, 0]}\n"
                  "  walls:\n"
-                 "    - {shape: polyline, points: [[-0.66, 0], [1.4, 0]], name: bed}\n"
+                 "    - {shape: polyline, points: [[%.17g, 0], [1.4, 0]], name: bed}\n"
                  "plugins:\n"
                  "  wendland_c2: {}\n"
                  "  tait: {speed_of_sound: 20}\n"
@@ -40,15 +83,15 @@ static char *channel_scene(double end, double checkpoint)
                  "  pressure_gradient: {}\n"
                  "  artificial_viscosity: {alpha: 0.02}\n"
                  "  gravity: {}\n"
-                 "  penalty_contact: {}\n"
+                 "  %s\n"
                  "  time_step: {courant: 0.25}\n"
-                 "  predictor_corrector: {}\n"
-                 "  inlet: {form: buffer, position: 0, depth: 0.1, velocity: 0.5, interval: 0.05}\n"
-                 "  outlet: {form: free, position: 1.0, interval: 0.05}\n"
-                 "  point_gauge: {points: [[0.5, 0.05]], fields: 'pressure, velocity', "
-                 "interval: 0.02}\n"
+                 "  %s\n"
+                 "  %s\n"
+                 "  %s\n"
+                 "%s"
                  "  hdf5: {interval: 0.1}\n",
-                 end, checkpoint),
+                 end, -upstream - 0.2, checkpoint, -upstream - 0.16, c->wall, c->integrator,
+                 c->inlet, c->outlet, c->extra),
         0);
     return yaml;
 }
@@ -164,23 +207,30 @@ static char *read_or_fail(const char *dir, const char *name)
 /* Inlet and outlet add and remove particles every step; the run to T with a
  * checkpoint at T/2 and the run restarted from it into the same directory
  * end identical, and so do their tables (truncated at the checkpoint and
- * continued). */
+ * continued). One test per pair of open boundaries (_i: the case). */
 START_TEST(open_boundaries_restart_bit_identical)
 {
+    const channel_case *c = &channel_cases[_i];
     const double end = 0.4;
-    char *yaml = channel_scene(end, end / 2);
-    sluice_sim *full = test_load("restart-channel", yaml, NULL, 0);
-    char *dir = test_scratch("restart-channel-out");
+    char *yaml = channel_scene(c, end, end / 2);
+    char tag[96], out[128];
+    snprintf(tag, sizeof tag, "restart-%s", c->name);
+    snprintf(out, sizeof out, "restart-%s-out", c->name);
+    sluice_sim *full = test_load(tag, yaml, NULL, 0);
+    char *dir = test_scratch(out);
     run_to_end(full, dir);
     int checkpoints = 0;
     char *checkpoint = first_checkpoint(dir, &checkpoints);
     ck_assert_int_eq(checkpoints, 2); /* T/2 and T, keep: 0 keeps both */
-    static const char *const tables[] = {"inlet.csv", "outlet.csv", "points.csv"};
-    char *before[3];
-    for (int t = 0; t < 3; t++)
-        before[t] = read_or_fail(dir, tables[t]);
+    int table_count = 0;
+    while (c->tables[table_count])
+        table_count++;
+    char *before[8];
+    for (int t = 0; t < table_count; t++)
+        before[t] = read_or_fail(dir, c->tables[t]);
+    char *xdmf_before = read_or_fail(dir, "particles.xdmf");
 
-    sluice_sim *resumed = test_load("restart-channel", yaml, NULL, 0);
+    sluice_sim *resumed = test_load(tag, yaml, NULL, 0);
     char error[2048];
     double t0 = sluice_wall_clock();
     ck_assert_msg(sluice_sim_restart(resumed, checkpoint, error, sizeof error) == SLUICE_OK, "%s",
@@ -191,26 +241,35 @@ START_TEST(open_boundaries_restart_bit_identical)
     const uint64_t id_at_checkpoint = resumed->next_id, removed_at_checkpoint = resumed->removed;
     const int64_t step_at_checkpoint = sluice_sim_steps(resumed);
     run_to_end(resumed, dir);
-    assert_identical(full, resumed, "channel");
-    /* the continued half added and removed particles */
-    ck_assert_uint_gt(resumed->next_id, id_at_checkpoint);
-    ck_assert_uint_gt(resumed->removed, removed_at_checkpoint);
-    for (int t = 0; t < 3; t++) {
-        char *after = read_or_fail(dir, tables[t]);
+    assert_identical(full, resumed, c->name);
+    /* the continued half added particles (the block inlet placed them all
+     * at the start), and removed some unless the outlet keeps them (frozen) */
+    if (strstr(c->inlet, "block") == NULL)
+        ck_assert_uint_gt(resumed->next_id, id_at_checkpoint);
+    if (strstr(c->outlet, "frozen") == NULL)
+        ck_assert_uint_gt(resumed->removed, removed_at_checkpoint);
+    for (int t = 0; t < table_count; t++) {
+        char *after = read_or_fail(dir, c->tables[t]);
         ck_assert_msg(strcmp(before[t], after) == 0,
-                      "%s of the continued run differs from the uninterrupted run's", tables[t]);
+                      "%s: %s of the continued run differs from the uninterrupted run's", c->name,
+                      c->tables[t]);
         free(after);
         free(before[t]);
     }
+    char *xdmf_after = read_or_fail(dir, "particles.xdmf");
+    ck_assert_msg(strcmp(xdmf_before, xdmf_after) == 0,
+                  "%s: the snapshot index of the continued run differs", c->name);
+    free(xdmf_before);
+    free(xdmf_after);
     struct stat st;
     ck_assert_int_eq(stat(checkpoint, &st), 0);
     fprintf(stderr,
-            "restart, channel: %u particles at T = %g s, ids 0..%llu, %llu removed; checkpoint at "
-            "step %lld (t = %g s): %lld bytes, read in %.3f s; steps %lld; every field identical, "
-            "tables identical\n",
-            sluice_sim_view(full)->count, end, (unsigned long long)full->next_id,
+            "restart, channel %s: %u particles at T = %g s, ids 0..%llu, %llu removed; checkpoint "
+            "at step %lld (t = %g s): %lld bytes, read in %.3f s; steps %lld; every field "
+            "identical, %d tables and the snapshot index identical\n",
+            c->name, sluice_sim_view(full)->count, end, (unsigned long long)full->next_id,
             (unsigned long long)full->removed, (long long)step_at_checkpoint, end / 2,
-            (long long)st.st_size, read_seconds, (long long)sluice_sim_steps(full));
+            (long long)st.st_size, read_seconds, (long long)sluice_sim_steps(full), table_count);
     sluice_sim_free(full);
     sluice_sim_free(resumed);
     free(checkpoint);
@@ -435,7 +494,7 @@ static void refused(const char *scene, const char *checkpoint, const char *needl
 START_TEST(bad_checkpoints_refused)
 {
     /* a good checkpoint of a short channel run */
-    char *yaml = channel_scene(0.02, 0.01);
+    char *yaml = channel_scene(&channel_cases[0], 0.02, 0.01);
     char *dir = test_scratch("restart-bad");
     char *scene = test_write_file(dir, "scene.yaml", yaml);
     char *args = NULL;
@@ -497,7 +556,8 @@ int main(void)
     Suite *s = suite_create("restart");
     TCase *exact = tcase_create("bit_identical");
     tcase_set_timeout(exact, 300);
-    tcase_add_test(exact, open_boundaries_restart_bit_identical);
+    tcase_add_loop_test(exact, open_boundaries_restart_bit_identical, 0,
+                        (int)(sizeof channel_cases / sizeof channel_cases[0]));
     tcase_add_test(exact, dam_break_restart_bit_identical);
     tcase_add_test(exact, sigint_stops_with_a_checkpoint);
     suite_add_tcase(s, exact);
