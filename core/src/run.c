@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -591,7 +592,22 @@ static int write_run_json(sluice_sim *sim, int status)
     fprintf(f, "  \"particle_steps_per_second\": %.6g,\n", rate);
     fprintf(f, "  \"pair_interactions\": %llu,\n",
             (unsigned long long)sluice_pair_engine_pairs(&sim->engine));
+    fprintf(f, "  \"pair_interactions_per_second\": %.6g,\n",
+            sim->wall_seconds > 0
+                ? (double)sluice_pair_engine_pairs(&sim->engine) / sim->wall_seconds
+                : 0.0);
     fprintf(f, "  \"neighbour_list_rebuilds\": %llu,\n", (unsigned long long)sim->grid.rebuilds);
+    /* memory: the particle store, the grid and the Verlet list, and the
+     * pair engine's buffers, per particle at the end; the process's peak
+     * resident set (program and libraries included, about 10 MB) */
+    const size_t state_bytes = sluice_particles_bytes(&sim->particles) +
+                               sluice_grid_bytes(&sim->grid) +
+                               sluice_pair_engine_bytes(&sim->engine);
+    fprintf(f, "  \"state_bytes_per_particle\": %.1f,\n",
+            sim->particles.count ? (double)state_bytes / (double)sim->particles.count : 0.0);
+    struct rusage usage;
+    long long peak = getrusage(RUSAGE_SELF, &usage) == 0 ? (long long)usage.ru_maxrss * 1024 : -1;
+    fprintf(f, "  \"peak_memory_bytes\": %lld,\n", peak);
     fprintf(f, "  \"threads\": %d,\n", sim->threads);
     fprintf(f, "  \"max_density_deviation\": %.6g,\n", sim->max_density_deviation);
     fprintf(f, "  \"smoothing_length\": %.9g,\n", (double)sim->smoothing_length);
