@@ -7,7 +7,7 @@
 #   env: OUT (default runs/benchmark), THREADS (default 2), QUICK=1 (the two
 #        coarsest resolutions, shorter runs: a smoke test), PYSPH=0 (skip the
 #        peer), CORE=0 (skip tools/bench-core.sh), CASES (default
-#        "dam still poiseuille jump")
+#        "dam still poiseuille jump speed pysph")
 #
 # Cases (each a column of the plot):
 #   dam         configs/dam_break_2d.yaml to 0.75 s (the surge reaches the far
@@ -25,6 +25,10 @@
 #   jump        configs/hydraulic_jump_jonsson2016.yaml to 5 s at d1/4, d1/5,
 #               d1/6: mean conjugate depth at x = 1 m over 2.5-5 s against
 #               Belanger's (seed 000's set-up).
+#   speed       particle-steps/s of the dam break at 6.5k, 86k and 1M
+#               particles (dx = 0.02, 0.005, 0.0014 m, short runs), symplectic
+#               and verlet, and on one thread at 86k and 1M (parallel
+#               efficiency).
 #   pysph       PySPH 1.0 (Debian python3-pysph, installed when missing) on
 #               its examples/dam_break_2d (WCSPH, Wendland quintic, h = 1.3 dx,
 #               PEC) at dx = 0.03 m to 0.75 s, serial and 2 threads, with the
@@ -46,7 +50,7 @@ analyze=$build/tools/sluice-analyze
 out=${OUT:-runs/benchmark}
 threads=${THREADS:-2}
 quick=${QUICK:-0}
-cases=${CASES:-dam still poiseuille jump pysph}
+cases=${CASES:-dam still poiseuille jump speed pysph}
 [ "${PYSPH:-1}" = 0 ] && cases=$(echo "$cases" | sed 's/pysph//')
 mkdir -p "$out"
 csv=$out/benchmark.csv
@@ -125,10 +129,12 @@ variant_scene() {
 if [ "$quick" = 1 ]; then
     dam_dx="0.04 0.02"; still_dx="0.05 0.025"; pois_dx="1e-4 5e-5"; jump_n="4"
     dam_variants="base cubic_spline verlet penalty_contact"; jump_end=3
+    speed_specs="0.02:0.1 0.01:0.02"
 else
     dam_dx="0.04 0.02 0.01"; still_dx="0.05 0.025 0.0125"; pois_dx="1e-4 5e-5 2.5e-5"; jump_n="4 5 6"
     dam_variants="base cubic_spline verlet predictor_corrector mdbc ghost_particles penalty_contact repulsive_force"
     jump_end=5
+    speed_specs="0.02:0.2 0.005:0.02 0.0014:0.002"
 fi
 
 # ------------------------------------------------------------- dam break
@@ -180,6 +186,27 @@ if has jump; then
         run jump base "d1/$n" "$dx" configs/hydraulic_jump_jonsson2016.yaml conjugate_depth_error \
             '"$analyze" conjugate "$run" --d1 0.02 --v1 1.5 --x 1.0 --from '"$from"' --to '"$jump_end"' --no-plot >"$run/conjugate.txt" && sed -n "s|^d2_mean/d2_Belanger = \\([^ ]*\\).*|\\1|p" "$run/conjugate.txt" | awk "{ printf \"%.4f\", \$1 - 1 }"' \
             --set time.end="$jump_end" --set plugins.hdf5.interval="$jump_end"
+    done
+fi
+
+# --------------------------------------------------------------- speed
+# particle-steps/s from 6.5k to 1M particles (the dam break, early: the
+# column collapsing), both main integrators, and 1 against 2 threads at 86k
+# and 1M (parallel efficiency); no error (the runs are too short)
+if has speed; then
+    for spec in $speed_specs; do
+        dx=${spec%:*} end=${spec#*:}
+        for v in base verlet; do
+            scene=$(variant_scene configs/dam_break_2d.yaml "$v")
+            run speed "$v" "dx=$dx" "$dx" "$scene" none 'echo nan' \
+                --set time.end="$end" --set plugins.hdf5.interval=1e9 --set plugins.front_gauge.interval=1e9
+            if [ "$dx" != 0.02 ] && [ "$threads" != 1 ]; then
+                saved=$threads threads=1
+                run speed "$v-1thread" "dx=$dx" "$dx" "$scene" none 'echo nan' \
+                    --set time.end="$end" --set plugins.hdf5.interval=1e9 --set plugins.front_gauge.interval=1e9
+                threads=$saved
+            fi
+        done
     done
 fi
 
