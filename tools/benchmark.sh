@@ -255,14 +255,15 @@ if command -v gnuplot >/dev/null 2>&1; then
         [ -n "$series" ] && printf "set title '%s'\nplot %s\n" "$2" "$series"
     }
     {
-        echo "set terminal pngcairo size 1400,1000 font ',10'"
+        echo "set terminal pngcairo noenhanced size 1400,1000 font ',10'"
         echo "set output '$out/benchmark.png'"
         echo "set multiplot layout 2,3"
         echo "set logscale xy"
+        echo "set offsets graph 0.1, graph 0.1, graph 0.1, graph 0.1"
         echo "set xlabel 'wall time (s), $threads threads'"
         echo "set ylabel '|error|'"
         echo "set key left bottom"
-        plot_case dam "dam break: front vs Martin & Moyce (0.75 s)" || echo "set multiplot next"
+        plot_case dam "dam break: front vs Martin and Moyce (0.75 s)" || echo "set multiplot next"
         plot_case still "still water: pressure 0.1 m above the floor vs rho0 g (H - y)" || echo "set multiplot next"
         plot_case poiseuille "Poiseuille: profile L2 error" || echo "set multiplot next"
         plot_case jump "Jonsson jump: conjugate depth vs Belanger" || echo "set multiplot next"
