@@ -257,28 +257,44 @@ START_TEST(dam_break_3d_runs)
 }
 END_TEST
 
-START_TEST(unstable_run_stops_with_diagnostic)
+/* Runs the dam break with the given settings into a scratch directory
+ * `tag`; it must stop as unstable (exit 3) with run.json saying so. Returns
+ * the program's output (the caller checks the message) and the directory. */
+static char *dam_break_must_go_unstable(const char *tag, const char *sets, char **dir_out)
 {
-    char *dir = test_scratch("unstable");
+    char *dir = test_scratch(tag);
     char *scene = test_config("dam_break_2d.yaml");
     char *args = NULL, *output = NULL;
-    /* a far too small speed of sound compresses the column beyond the band */
-    ck_assert_int_ge(asprintf(&args, "run %s --out %s --quiet --no-progress "
-                                     "--set plugins.tait.speed_of_sound=3 "
-                                     "--set watchdog.density_band=0.05 --set time.end=1.0 "
-                                     "--set particles.spacing=0.05",
-                              scene, dir),
+    ck_assert_int_ge(asprintf(&args, "run %s --out %s --quiet --no-progress %s", scene, dir, sets),
                      0);
     int status = test_sluice(args, &output);
     ck_assert_msg(status == 3, "expected status 3 (unstable), got %d:\n%s", status, output);
-    ck_assert_msg(strstr(output, "step ") && strstr(output, "particle id ") &&
-                      strstr(output, "field 'density'") && strstr(output, "written by"),
-                  "diagnostic must name step, particle, field and writers:\n%s", output);
     char *json_path = NULL;
     ck_assert_int_ge(asprintf(&json_path, "%s/run.json", dir), 0);
     char *json = test_read_file(json_path);
     ck_assert_ptr_nonnull(json);
     ck_assert(strstr(json, "\"status\": \"unstable\""));
+    free(json);
+    free(json_path);
+    free(args);
+    free(scene);
+    *dir_out = dir;
+    return output;
+}
+
+START_TEST(unstable_run_stops_with_diagnostic)
+{
+    /* a far too small speed of sound compresses the column beyond the band */
+    char *dir = NULL;
+    char *output = dam_break_must_go_unstable("unstable",
+                                              "--set plugins.tait.speed_of_sound=3 "
+                                              "--set watchdog.density_band=0.05 "
+                                              "--set time.end=1.0 --set particles.spacing=0.05",
+                                              &dir);
+    ck_assert_msg(strstr(output, "step ") && strstr(output, "particle id ") &&
+                      strstr(output, "field 'density'") && strstr(output, "written by"),
+                  "diagnostic must name step, particle, field and writers:\n%s", output);
+    /* what was written before the stop is kept */
     char *front = NULL;
     ck_assert_int_ge(asprintf(&front, "%s/front.csv", dir), 0);
     double *t = NULL, *x = NULL;
@@ -286,11 +302,7 @@ START_TEST(unstable_run_stops_with_diagnostic)
     free(t);
     free(x);
     free(front);
-    free(json);
-    free(json_path);
     free(output);
-    free(args);
-    free(scene);
     free(dir);
 }
 END_TEST
@@ -301,17 +313,12 @@ END_TEST
  * check must stop the run, naming the particle, the wall and how deep. */
 START_TEST(particle_through_wall_stops_the_run)
 {
-    char *dir = test_scratch("through_wall");
-    char *scene = test_config("dam_break_2d.yaml");
-    char *args = NULL, *output = NULL;
-    ck_assert_int_ge(asprintf(&args, "run %s --out %s --quiet --no-progress "
-                                     "--set plugins.tait.speed_of_sound=6.26 "
-                                     "--set watchdog.density_band=10 --set time.end=1.0 "
-                                     "--set particles.spacing=0.04",
-                              scene, dir),
-                     0);
-    int status = test_sluice(args, &output);
-    ck_assert_msg(status == 3, "expected status 3 (unstable), got %d:\n%s", status, output);
+    char *dir = NULL;
+    char *output = dam_break_must_go_unstable("through_wall",
+                                              "--set plugins.tait.speed_of_sound=6.26 "
+                                              "--set watchdog.density_band=10 "
+                                              "--set time.end=1.0 --set particles.spacing=0.04",
+                                              &dir);
     ck_assert_msg(strstr(output, "step ") && strstr(output, "particle id ") &&
                       strstr(output, "has gone through wall 0 ('tank')") &&
                       strstr(output, "handled by 'dbc'") &&
@@ -321,16 +328,7 @@ START_TEST(particle_through_wall_stops_the_run)
     const char *depth = strstr(output, " m = ");
     ck_assert_ptr_nonnull(depth);
     ck_assert_double_ge(strtod(depth + 5, NULL), 0.5);
-    char *json_path = NULL;
-    ck_assert_int_ge(asprintf(&json_path, "%s/run.json", dir), 0);
-    char *json = test_read_file(json_path);
-    ck_assert_ptr_nonnull(json);
-    ck_assert(strstr(json, "\"status\": \"unstable\""));
-    free(json);
-    free(json_path);
     free(output);
-    free(args);
-    free(scene);
     free(dir);
 }
 END_TEST

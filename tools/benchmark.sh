@@ -63,26 +63,7 @@ has() { case " $cases " in *" $1 "*) return 0 ;; *) return 1 ;; esac; }
 # front_error FRONT_CSV (time,x_front): worst relative error against Martin
 # & Moyce over T in [0.5, 2.5] (up to the run's last sample)
 front_error() {
-    awk -F, '
-        function lerp(xs, ys, m, x,   i) {
-            for (i = 2; i <= m; i++)
-                if (x <= xs[i]) return ys[i-1] + (ys[i] - ys[i-1]) * (x - xs[i-1]) / (xs[i] - xs[i-1])
-            return ys[m]
-        }
-        FNR == 1 { file++ }
-        file == 1 && $0 !~ /^#/ && $1 == 2.25 { m++; et[m] = $2; ez[m] = $3 }
-        file == 2 && FNR > 1 && $1 == $1 + 0 { k++; st[k] = $1; sx[k] = $2 }
-        END {
-            for (i = m; i >= 1; i--) { et[i+1] = et[i]; ez[i+1] = ez[i] } et[1] = 0; ez[1] = 1; m++
-            s = sqrt(2 * 9.81); worst = 0; n = 0
-            for (T = 0.5; T <= 2.5 + 1e-9; T += 0.05) {
-                if (T / s > st[k]) break
-                e = (lerp(st, sx, k, T / s) - lerp(et, ez, m, T)) / lerp(et, ez, m, T)
-                if ((e < 0 ? -e : e) > (worst < 0 ? -worst : worst)) worst = e
-                n++
-            }
-            if (n) printf "%.4f", worst; else printf "nan"
-        }' "$martin_moyce" "$1"
+    awk -F, -f tools/martin-moyce-error.awk "$martin_moyce" "$1"
 }
 
 # run CASE VARIANT RESOLUTION DX SCENE ERROR_NAME ERROR_COMMAND [sluice args]:

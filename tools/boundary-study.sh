@@ -129,25 +129,7 @@ for s in $schemes; do
     "$build/sluice" run "$sc" --out "$run" --quiet --no-progress --set time.end=$end_dam \
         --set plugins.hdf5.interval=$end_dam >/dev/null 2>&1 || status=failed
     if [ -f "$run/run.json" ]; then
-        err=$(awk -F, '
-            function lerp(xs, ys, m, x,   i) {
-                for (i = 2; i <= m; i++)
-                    if (x <= xs[i]) return ys[i-1] + (ys[i] - ys[i-1]) * (x - xs[i-1]) / (xs[i] - xs[i-1])
-                return ys[m]
-            }
-            FNR == 1 { file++ }
-            file == 1 && $0 !~ /^#/ && $1 == 2.25 { m++; et[m] = $2; ez[m] = $3 }
-            file == 2 && FNR > 1 { k++; st[k] = $1; sx[k] = $2 }
-            END {
-                for (i = m; i >= 1; i--) { et[i+1] = et[i]; ez[i+1] = ez[i] } et[1] = 0; ez[1] = 1; m++
-                s = sqrt(2 * 9.81); worst = 0
-                for (T = 0.5; T <= 2.5 + 1e-9; T += 0.05) {
-                    if (T / s > st[k]) break
-                    e = (lerp(st, sx, k, T / s) - lerp(et, ez, m, T)) / lerp(et, ez, m, T)
-                    if ((e < 0 ? -e : e) > (worst < 0 ? -worst : worst)) worst = e
-                }
-                printf "%.4f", worst
-            }' "$data" "$run/front.csv")
+        err=$(awk -F, -f tools/martin-moyce-error.awk "$data" "$run/front.csv")
         row "$s" dam "$status" "$run" front_error_worst "$err" 1
     fi
     # ------------------------------------------------------------- Poiseuille

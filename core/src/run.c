@@ -375,10 +375,7 @@ static int watchdog(sluice_sim *sim)
                         sluice_field_writers(sim, bad_field, writers, sizeof writers),
                         sim->instances[sim->integrator].name);
     } else if (what == 2) {
-        const sluice_field_entry *e = NULL;
-        for (uint32_t f = 0; f < sim->field_count; f++)
-            if (strcmp(sim->fields[f].name, "density") == 0)
-                e = &sim->fields[f];
+        const sluice_field_entry *e = sluice_sim_find_field(sim, "density");
         sluice_sim_fail(sim,
                         "step %lld, t = %.9g s: %s: field 'density' = %.6g kg m^-3 is outside the "
                         "band [%.6g, %.6g] = rest density x (1 -/+ watchdog.density_band) (written "
@@ -389,10 +386,7 @@ static int watchdog(sluice_sim *sim)
                         sim->instances[sim->integrator].name);
     } else if (what == 4) {
         const sluice_scene_wall *wall = &scene->walls[bad_wall];
-        const sluice_field_entry *e = NULL;
-        for (uint32_t f = 0; f < sim->field_count; f++)
-            if (strcmp(sim->fields[f].name, "position") == 0)
-                e = &sim->fields[f];
+        const sluice_field_entry *e = sluice_sim_find_field(sim, "position");
         char name[160] = "";
         if (wall->name && wall->name[0])
             snprintf(name, sizeof name, " ('%s')", wall->name);

@@ -116,7 +116,7 @@ static void api_info(sluice_host *host, const char *format, ...)
 
 /* ---------------------------------------------------------------- fields -- */
 
-static sluice_field_entry *find_field(const sluice_sim *sim, const char *name)
+sluice_field_entry *sluice_sim_find_field(const sluice_sim *sim, const char *name)
 {
     for (uint32_t i = 0; i < sim->field_count; i++)
         if (strcmp(sim->fields[i].name, name) == 0)
@@ -190,7 +190,7 @@ static int declare(sluice_sim *sim, uint32_t instance, const sluice_field_spec *
                who, spec->name, components);
         return -1;
     }
-    sluice_field_entry *f = find_field(sim, spec->name);
+    sluice_field_entry *f = sluice_sim_find_field(sim, spec->name);
     if (f) {
         const char *first = f->declarer_count ? instance_name(sim, f->declarers[0].instance) : "?";
         const char *units = spec->units ? spec->units : "";
@@ -264,7 +264,7 @@ static int api_declare_field(sluice_host *host, const sluice_field_spec *spec)
 
 static int handle_of(const sluice_sim *sim, const char *name, sluice_field *out)
 {
-    const sluice_field_entry *f = find_field(sim, name);
+    const sluice_field_entry *f = sluice_sim_find_field(sim, name);
     if (!f) {
         out->column = -1;
         out->components = 0;
@@ -1250,7 +1250,7 @@ static int build_schedule(sluice_sim *sim)
                 }
             }
         }
-        if (field->rate_of && !find_field(sim, field->rate_of)) {
+        if (field->rate_of && !sluice_sim_find_field(sim, field->rate_of)) {
             report(sim, field->declarers[0].instance,
                    "field '%s' is declared the rate of '%s', which no loaded plugin declares",
                    field->name, field->rate_of);
@@ -1441,7 +1441,7 @@ static int build_rates(sluice_sim *sim)
         const sluice_field_entry *rate = &sim->fields[f];
         if (!rate->rate_of)
             continue;
-        const sluice_field_entry *state = find_field(sim, rate->rate_of);
+        const sluice_field_entry *state = sluice_sim_find_field(sim, rate->rate_of);
         if (!state)
             continue; /* reported by build_schedule */
         sluice_rate *r = &sim->rates[sim->rate_count++];

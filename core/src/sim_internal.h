@@ -182,6 +182,8 @@ int sluice_sim_evaluate(sluice_sim *sim);
 const char *sluice_field_writers(const sluice_sim *sim, const sluice_field_entry *field,
                                  char *buffer, size_t size);
 double sluice_wall_clock(void);
+/* The registered field of that name, or NULL. */
+sluice_field_entry *sluice_sim_find_field(const sluice_sim *sim, const char *name);
 void sluice_sim_request_time(sluice_sim *sim, double t);
 int sluice_write_file_atomic(const char *path, const void *data, size_t size, char *error,
                              size_t error_size);
