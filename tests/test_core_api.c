@@ -334,6 +334,123 @@ START_TEST(region_and_wall_lattice_origin)
 }
 END_TEST
 
+/* Pass index of each evaluation instance (-1: in no pass). */
+static void pass_of_instances(sluice_sim *sim, int *pass_of)
+{
+    for (uint32_t v = 0; v < sim->instance_count; v++)
+        pass_of[v] = -1;
+    for (uint32_t p = 0; p < sim->pass_count; p++) {
+        const sluice_pass *pass = &sim->passes[p];
+        if (!pass->is_pair) {
+            pass_of[pass->instance] = (int)p;
+            continue;
+        }
+        for (uint32_t t = 0; t < pass->pair.term_count; t++)
+            for (uint32_t v = 0; v < sim->instance_count; v++)
+                if (sim->instances[v].state == pass->pair.terms[t].state &&
+                    sim->instances[v].component == pass->pair.terms[t].component)
+                    pass_of[v] = (int)p;
+    }
+}
+
+/* Loads a scene file and checks its evaluation schedule against the plugins'
+ * declarations: every reader of a field runs in a later pass than each of the
+ * field's writers and accumulators, and there are as few pair passes as the
+ * longest chain of pair terms that feed each other (computed here from the
+ * declarations, by dynamic programming over the writer -> reader graph). */
+static void check_schedule(const char *scene, uint32_t expected_pair_passes)
+{
+    char path[4096];
+    const char *root = getenv("SLUICE_SOURCE_DIR");
+    snprintf(path, sizeof path, "%s/configs/%s", root ? root : "..", scene);
+    sluice_diag *diag = sluice_diag_create();
+    sluice_load_options options = {NULL, 0, 0, 0, 0};
+    sluice_sim *sim = sluice_sim_load(path, &options, diag);
+    ck_assert_msg(sim != NULL, "%s failed to load", path);
+    sluice_diag_destroy(diag);
+    const uint32_t n = sim->instance_count;
+    int *pass_of = malloc(n * sizeof *pass_of);
+    uint8_t *edge = calloc((size_t)n * n, 1);
+    int *chain = malloc(n * sizeof *chain);
+    ck_assert(pass_of && edge && chain);
+    pass_of_instances(sim, pass_of);
+    uint32_t pair_passes = 0;
+    for (uint32_t p = 0; p < sim->pass_count; p++)
+        pair_passes += sim->passes[p].is_pair != 0;
+    for (uint32_t f = 0; f < sim->field_count; f++) {
+        const sluice_field_entry *field = &sim->fields[f];
+        for (uint32_t a = 0; a < field->declarer_count; a++) {
+            const sluice_declarer *w = &field->declarers[a];
+            if (w->instance == SLUICE_CORE_INSTANCE || pass_of[w->instance] < 0 ||
+                !(w->access & (SLUICE_WRITE | SLUICE_ACCUMULATE)))
+                continue;
+            for (uint32_t b = 0; b < field->declarer_count; b++) {
+                const sluice_declarer *r = &field->declarers[b];
+                if (r->instance == SLUICE_CORE_INSTANCE || r->instance == w->instance ||
+                    pass_of[r->instance] < 0 || !(r->access & (SLUICE_READ | SLUICE_READ_NEIGHBOUR)))
+                    continue;
+                ck_assert_msg(pass_of[w->instance] < pass_of[r->instance],
+                              "%s: '%s' reads '%s' in pass %d, but '%s' writes it in pass %d",
+                              scene, sim->instances[r->instance].name, field->name,
+                              pass_of[r->instance], sim->instances[w->instance].name,
+                              pass_of[w->instance]);
+                edge[(size_t)w->instance * n + r->instance] = 1;
+            }
+        }
+    }
+    /* longest chain of pair terms ending at each instance (the edges are acyclic) */
+    uint32_t longest = 0;
+    for (uint32_t v = 0; v < n; v++)
+        chain[v] = -1;
+    for (uint32_t round = 0; round < n; round++)
+        for (uint32_t v = 0; v < n; v++) {
+            if (pass_of[v] < 0 || chain[v] >= 0)
+                continue;
+            int ready = 1, best = 0;
+            for (uint32_t u = 0; u < n; u++)
+                if (edge[(size_t)u * n + v]) {
+                    if (chain[u] < 0)
+                        ready = 0;
+                    else if (chain[u] > best)
+                        best = chain[u];
+                }
+            if (!ready)
+                continue;
+            chain[v] = best + (sim->instances[v].component->pair != NULL);
+            if ((uint32_t)chain[v] > longest)
+                longest = (uint32_t)chain[v];
+        }
+    fprintf(stderr, "%s: %u passes, %u of them pair passes; longest chain of pair terms %u:", scene,
+            sim->pass_count, pair_passes, longest);
+    for (uint32_t p = 0; p < sim->pass_count; p++) {
+        fprintf(stderr, " [");
+        for (uint32_t v = 0; v < n; v++)
+            if (pass_of[v] == (int)p)
+                fprintf(stderr, " %s", sim->instances[v].name);
+        fprintf(stderr, " ]");
+    }
+    fprintf(stderr, "\n");
+    ck_assert_uint_eq(longest, expected_pair_passes);
+    ck_assert_uint_eq(pair_passes, longest);
+    free(pass_of);
+    free(edge);
+    free(chain);
+    sluice_sim_free(sim);
+}
+
+/* The dam break's density and force terms share one neighbour traversal
+ * (the dbc clamp, a particle term that writes density, once split them);
+ * the abrupt drop's kernel correction -> velocity gradient -> mixing length
+ * (a pair term: its Shepard sum damps the length at the free surface) -> turbulent stress chain needs
+ * four. */
+START_TEST(schedule_has_fewest_pair_passes)
+{
+    check_schedule("dam_break_2d.yaml", 1);
+    check_schedule("abrupt_drop_T1.yaml", 4);
+    check_schedule("hydraulic_jump_jonsson2016.yaml", 1);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("core_api");
@@ -345,6 +462,7 @@ int main(void)
     tcase_add_test(c, plugin_built_for_abi_1_2_loads);
     tcase_add_test(c, plugin_built_for_abi_1_4_checkpoints);
     tcase_add_test(c, region_and_wall_lattice_origin);
+    tcase_add_test(c, schedule_has_fewest_pair_passes);
     suite_add_tcase(s, c);
     return test_run_suite(s);
 }

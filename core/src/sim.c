@@ -1353,6 +1353,29 @@ static int build_schedule(sluice_sim *sim)
             return 1;
         }
 
+    /* Pair terms as late as their readers allow: a pair term whose results
+     * nothing in the evaluation reads (rates, accelerations) joins the last
+     * pair pass, and any other moves up to just before its first reader.
+     * Every reader still comes after its writers, and terms that could share a
+     * traversal do (the dbc clamp, a particle term, would otherwise split the
+     * density terms from the forces into two neighbour traversals). Visited in
+     * decreasing slot order, so that readers are placed before their writers. */
+    int last_pair_slot = max_slot % 2 == 1 ? max_slot : max_slot - 1;
+    for (int s = max_slot; s >= 0; s--)
+        for (uint32_t v = 0; v < n; v++) {
+            if (!is_evaluation(sim->instances[v].component) || slot[v] != s ||
+                sim->instances[v].component->pair == NULL)
+                continue;
+            int latest = last_pair_slot;
+            for (uint32_t u = 0; u < n; u++)
+                if (edge[(size_t)v * n + u] && slot[u] - 1 < latest)
+                    latest = slot[u] - 1;
+            if (latest % 2 == 0)
+                latest--;
+            if (latest > slot[v])
+                slot[v] = latest;
+        }
+
     /* components that prepare every evaluation, in scene order */
     sim->prepare = calloc((size_t)n + 1, sizeof *sim->prepare);
     if (!sim->prepare)

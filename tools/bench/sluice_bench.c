@@ -384,6 +384,7 @@ static void fused_step(fused *f)
     fused_evaluate(f);
     const double dt = fused_time_step(f);
     const sluice_real half = (sluice_real)(0.5 * dt), full = (sluice_real)dt;
+    const sluice_real rho0 = f->rho0;
     sluice_index n = s->particles.count;
     const uint8_t *kind = s->view.kind;
 #pragma omp parallel for schedule(static)
@@ -401,11 +402,12 @@ static void fused_step(fused *f)
             f->vy[i] += half * f->ay[i];
         }
         f->rho[i] += half * f->drho[i];
+        if (!fluid && f->rho[i] < rho0)
+            f->rho[i] = rho0; /* DBC clamp of the mid-step state */
     }
     fused_evaluate(f);
     n = s->particles.count;
     kind = s->view.kind;
-    const sluice_real rho0 = f->rho0;
 #pragma omp parallel for schedule(static)
     for (sluice_index i = 0; i < n; i++) {
         const int fluid = kind[i] == SLUICE_KIND_FLUID;
