@@ -139,8 +139,10 @@ static inline void delta_pairs(const delta_state *s, const sluice_view *v,
                     h += hz * rz[k];
                 difference -= h;
             }
+            /* one division per pair: r^2 / (r^2 + eta^2) and V_j = m_j / rho_j
+             * share it (the divider bounds the pair loop, docs/performance.md) */
             const sluice_real r2 = r[k] * r[k];
-            const sluice_real term = difference * r2 * F[k] / (r2 + eta2) * mj[k] / rhoj[k];
+            const sluice_real term = difference * r2 * F[k] * mj[k] / ((r2 + eta2) * rhoj[k]);
             sum += kj[k] != SLUICE_KIND_WALL ? term : 0;
         }
         rate[i] -= coefficient * sum;

@@ -138,14 +138,20 @@ static inline void av_pairs(const av_state *s, const sluice_view *v, const sluic
             sluice_real dot = (vxi - vxj[k]) * rx[k] + (vyi - vyj[k]) * ry[k];
             if (dims == 3)
                 dot += (vzi - vzj[k]) * rz[k];
-            const sluice_real mu = h * dot / (r[k] * r[k] + eta2);
+            /* one division per pair: 1 / ((r^2 + eta^2) rhobar) gives both
+             * mu = h v.r / (r^2 + eta^2) and the 1 / rhobar of Pi (the divider
+             * bounds the pair loop, docs/performance.md) */
+            const sluice_real cbar = (sluice_real)0.5 * (ci + cj[k]);
+            const sluice_real sum_rho = rhoi + rhoj[k]; /* 2 rhobar */
+            const sluice_real denominator = r[k] * r[k] + eta2;
+            const sluice_real inverse = 1 / (denominator * sum_rho);
+            const sluice_real mu = h * dot * sum_rho * inverse;
             if (limit) {
                 const int64_t amu = sluice_util_bits(mu < 0 ? -mu : mu);
                 worst = amu > worst ? amu : worst;
             }
-            const sluice_real cbar = (sluice_real)0.5 * (ci + cj[k]);
-            const sluice_real rhobar = (sluice_real)0.5 * (rhoi + rhoj[k]);
-            const sluice_real pi = dot < 0 ? (-alpha * cbar * mu + beta * mu * mu) / rhobar : 0;
+            const sluice_real pi =
+                dot < 0 ? 2 * (-alpha * cbar * mu + beta * mu * mu) * denominator * inverse : 0;
             const sluice_real c = mj[k] * pi * F[k];
             sx += c * rx[k];
             sy += c * ry[k];
