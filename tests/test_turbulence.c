@@ -398,6 +398,56 @@ START_TEST(k_epsilon_diffusion)
 }
 END_TEST
 
+/* Uniform k and eps over a DBC bed, at rest, in a pass that also holds wall
+ * neighbours (the pressure gradient reads them): the diffusion of k and eps
+ * is between fluid particles only, so every fluid particle's rates are the
+ * sources alone, -eps and -C2 eps^2 / k (no production at rest), to
+ * round-off. Walls leaking into the diffusion pull k and eps towards the wall
+ * particles' values and break this by orders of magnitude. */
+START_TEST(k_epsilon_diffusion_ignores_walls)
+{
+    const double k0 = 0.01, e0 = 0.001;
+    const char *yaml = "dimensions: 2\n"
+                       "particles: {spacing: 0.02, smoothing_length_ratio: 1.5}\n"
+                       "time: {end: 1.0}\n"
+                       "domain: {min: [0, -0.1], max: [0.4, 0.6], periodic: x}\n"
+                       "geometry:\n"
+                       "  fluid: [{shape: box, min: [0, 0], max: [0.4, 0.2]}]\n"
+                       "  walls: [{shape: polyline, points: [[0, 0], [0.4, 0]]}]\n"
+                       "initial: {density: rest}\n"
+                       "plugins:\n"
+                       "  wendland_c2: {}\n"
+                       "  tait: {speed_of_sound: 20}\n"
+                       "  dbc: {}\n"
+                       "  pressure_gradient: {}\n"
+                       "  velocity_gradient: {}\n"
+                       "  k_epsilon: {initial_k: 0.01, initial_epsilon: 0.001, wall_function: false}\n"
+                       "  time_step: {}\n"
+                       "  symplectic: {}\n";
+    sluice_sim *sim = test_load("k-epsilon-walls", yaml, NULL, 0);
+    ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
+    const sluice_view *v = sluice_sim_view(sim);
+    const sluice_real *kr = test_column(sim, "turbulent_kinetic_energy_rate", 0);
+    const sluice_real *er = test_column(sim, "turbulent_dissipation_rate_rate", 0);
+    double worst_k = 0, worst_e = 0;
+    int fluid = 0;
+    for (sluice_index i = 0; i < v->count; i++) {
+        if (v->kind[i] != SLUICE_KIND_FLUID)
+            continue;
+        fluid++;
+        worst_k = fmax(worst_k, fabs(kr[i] + e0) / e0);
+        worst_e = fmax(worst_e, fabs(er[i] + 1.92 * e0 * e0 / k0) / (1.92 * e0 * e0 / k0));
+    }
+    fprintf(stderr, "k-epsilon over a DBC bed, uniform k and eps at rest: %d fluid particles, "
+                    "largest relative departure of the rates from the sources %.2e (k), %.2e (eps)\n",
+            fluid, worst_k, worst_e);
+    ck_assert_int_gt(fluid, 0);
+    ck_assert_msg(worst_k < 1e-12 && worst_e < 1e-12, "rates off the sources by %g, %g", worst_k,
+                  worst_e);
+    sluice_sim_free(sim);
+}
+END_TEST
+
 /* ------------------------------------------------ k-eps: wall function -- */
 
 /* Fluid at rest over a DBC bed at y = 0, uniform k0, eps0. After the start
@@ -1083,6 +1133,7 @@ int main(void)
     tcase_set_timeout(ke, 120);
     tcase_add_test(ke, k_epsilon_decay);
     tcase_add_test(ke, k_epsilon_diffusion);
+    tcase_add_test(ke, k_epsilon_diffusion_ignores_walls);
     tcase_add_test(ke, k_epsilon_wall_function);
     suite_add_tcase(s, ke);
     TCase *c = tcase_create("conservation");

@@ -209,9 +209,13 @@ static inline sluice_real ke_wall_distance(const ke_state *s, const sluice_view 
     return s->api->wall_distance(s->host, point);
 }
 
+/* walls: the batch holds wall neighbours (another term of the pass reads
+ * them); the diffusion of k and epsilon is between fluid particles only, so
+ * they are masked out. */
 static inline void ke_pairs(const ke_state *s, const sluice_view *v, const sluice_pair_batch *b,
-                            const uint32_t dims, const int wall_function)
+                            const uint32_t dims, const int wall_function, const int walls)
 {
+    const uint8_t *restrict nk = b->neighbour_kind;
     const sluice_real *G[9];
     for (uint32_t c = 0; c < dims * dims; c++)
         G[c] = sluice_real_column(v, s->gradient, c);
@@ -268,7 +272,9 @@ static inline void ke_pairs(const ke_state *s, const sluice_view *v, const sluic
             const sluice_real ejk = ej[k] > e_min ? ej[k] : e_min;
             const sluice_real nuj = c_mu * kjk * kjk / ejk;
             const sluice_real r2 = r[k] * r[k];
-            const sluice_real w = 2 * mj[k] / (rho[i] + rhoj[k]) * r2 * F[k] / (r2 + eta2);
+            sluice_real w = 2 * mj[k] * r2 * F[k] / ((rho[i] + rhoj[k]) * (r2 + eta2));
+            if (walls)
+                w = nk[k] == SLUICE_KIND_WALL ? 0 : w;
             dk += w * (ai + nuj * inv_sk + nu_lam) * (ki - kjk);
             de += w * (bi + nuj * inv_se + nu_lam) * (ei - ejk);
         }
@@ -281,16 +287,18 @@ static inline void ke_pairs(const ke_state *s, const sluice_view *v, const sluic
 static void ke_pair(void *state, const sluice_view *v, const sluice_pair_batch *b)
 {
     const ke_state *s = state;
+    const int walls = (b->neighbour_kinds & SLUICE_KIND_MASK(SLUICE_KIND_WALL)) != 0;
+    const int three = v->dimensions == 3;
     if (s->c.wall_function) {
-        if (v->dimensions == 3)
-            ke_pairs(s, v, b, 3, 1);
+        if (walls)
+            three ? ke_pairs(s, v, b, 3, 1, 1) : ke_pairs(s, v, b, 2, 1, 1);
         else
-            ke_pairs(s, v, b, 2, 1);
+            three ? ke_pairs(s, v, b, 3, 1, 0) : ke_pairs(s, v, b, 2, 1, 0);
     } else {
-        if (v->dimensions == 3)
-            ke_pairs(s, v, b, 3, 0);
+        if (walls)
+            three ? ke_pairs(s, v, b, 3, 0, 1) : ke_pairs(s, v, b, 2, 0, 1);
         else
-            ke_pairs(s, v, b, 2, 0);
+            three ? ke_pairs(s, v, b, 3, 0, 0) : ke_pairs(s, v, b, 2, 0, 0);
     }
 }
 
