@@ -293,7 +293,7 @@ int sluice_registry_open(sluice_registry *registry, char **directories, size_t d
             count++;
         }
         closedir(dir);
-        if (!oom)
+        if (!oom && count)
             qsort(names, count, sizeof *names, compare_strings);
         for (size_t i = 0; i < count && !oom; i++)
             if (sluice_registry_add_file(registry, names[i]) != 0)
