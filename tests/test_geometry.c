@@ -1,15 +1,20 @@
 /* Geometry: point in polygon, lattice fills of boxes/polygons/prisms, closest
  * points on segments and triangles, wall construction (normals, pseudo-normals,
  * open ends, refusals), signed distance around 2D/3D tanks and boxes (checked
- * against closed-form distances at many random points), and wall layer points
- * checked against analytic counts and independent per-point conditions. */
+ * against closed-form distances at many random points), wall layer points
+ * checked against analytic counts and independent per-point conditions, and
+ * profiles (lines, arcs, WES crests, flights of steps: seed 001's
+ * structures) against their nominal dimensions, with the scene errors they
+ * give. */
 #include "test_util.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <time.h>
 
 #include "geometry.h"
+#include "scene.h"
 #include "wall_watch.h"
 
 #define EPS 1e-12
@@ -1429,6 +1434,805 @@ START_TEST(wall_watch_matches_full_query)
 }
 END_TEST
 
+/* ------------------------------------------------------------- profiles -- */
+
+/* Builds a profile (test helper: refusal is a failure). */
+static void build_profile(const sluice_profile_piece *pieces, uint32_t count, double x0, double y0,
+                          int has_heading, double heading, int closed, double max_segment,
+                          sluice_profile_path *path)
+{
+    sluice_profile profile = {{x0, y0}, has_heading, heading, pieces, count, closed, max_segment};
+    sluice_profile_problem problem;
+    int rc = sluice_profile_build(&profile, path, &problem);
+    ck_assert_msg(rc == 0, "profile refused: piece %u: %s", problem.piece, problem.message);
+}
+
+/* The profile is refused for piece `piece` (key `key`, NULL: none) with a
+ * message containing `needle`. */
+static void refuse_profile(const sluice_profile_piece *pieces, uint32_t count, int has_heading,
+                           double heading, int closed, uint32_t piece, const char *key,
+                           const char *needle)
+{
+    sluice_profile profile = {{0, 0}, has_heading, heading, pieces, count, closed, 0.01};
+    sluice_profile_path path;
+    sluice_profile_problem problem;
+    ck_assert_int_eq(sluice_profile_build(&profile, &path, &problem), -1);
+    ck_assert_ptr_null(path.xy);
+    ck_assert_msg(problem.piece == piece, "refused at piece %u, expected %u (%s)", problem.piece,
+                  piece, problem.message);
+    ck_assert_msg((key == NULL && problem.key == NULL) ||
+                      (key && problem.key && strcmp(key, problem.key) == 0),
+                  "refused for key %s, expected %s (%s)", problem.key ? problem.key : "(none)",
+                  key ? key : "(none)", problem.message);
+    ck_assert_msg(strstr(problem.message, needle), "'%s' not in '%s'", needle, problem.message);
+}
+
+static double vertex_x(const sluice_profile_path *p, uint32_t v)
+{
+    return (double)p->xy[2 * v];
+}
+
+static double vertex_y(const sluice_profile_path *p, uint32_t v)
+{
+    return (double)p->xy[2 * v + 1];
+}
+
+static double chord(const sluice_profile_path *p, uint32_t v)
+{
+    return hypot(vertex_x(p, v + 1) - vertex_x(p, v), vertex_y(p, v + 1) - vertex_y(p, v));
+}
+
+/* Signed turning angle (rad, > 0 counter-clockwise) at vertex v. */
+static double turning(const sluice_profile_path *p, uint32_t v)
+{
+    double ux = vertex_x(p, v) - vertex_x(p, v - 1), uy = vertex_y(p, v) - vertex_y(p, v - 1);
+    double wx = vertex_x(p, v + 1) - vertex_x(p, v), wy = vertex_y(p, v + 1) - vertex_y(p, v);
+    return atan2(ux * wy - uy * wx, ux * wx + uy * wy);
+}
+
+/* |a - b| within a few units of round-off of their magnitude. */
+static void assert_exact(double a, double b, const char *what, uint32_t v)
+{
+    double tol = 4 * DBL_EPSILON * fmax(1.0, fmax(fabs(a), fabs(b)));
+    ck_assert_msg(fabs(a - b) <= tol, "%s of vertex %u: %.17g, expected %.17g", what, v, a, b);
+}
+
+static sluice_profile_piece line_to(double x, double y)
+{
+    sluice_profile_piece p = {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_TO};
+    p.to[0] = x;
+    p.to[1] = y;
+    return p;
+}
+
+/* Seed 001's Chanson flight: 9 steps, 0.1 m high, 0.25 m long, from the
+ * crest's downstream edge. Every corner is exactly where the nominal
+ * dimensions put it, and the pseudo-bottom through the step edges slopes at
+ * atan(0.1 / 0.25) = 21.80 deg, the seed's 21.8 deg (printed to 0.1 deg). */
+START_TEST(profile_steps)
+{
+    const double x0 = 1.4, y0 = 0.9, h = 0.1, l = 0.25;
+    for (int tread_first = 0; tread_first < 2; tread_first++) {
+        sluice_profile_piece pieces[2] = {
+            {.kind = SLUICE_PIECE_STEPS, .count = 9, .height = h, .step_length = l,
+             .tread_first = tread_first},
+            {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_LENGTH, .length = 0.5}};
+        sluice_profile_path p;
+        build_profile(pieces, 2, x0, y0, 0, 0, 0, 0.004, &p);
+        ck_assert_uint_eq(p.vertex_count, 1 + 2 * 9 + 1);
+        for (uint32_t i = 0; i < 9; i++) {
+            double k = i, k1 = i + 1.0;
+            double corner_x = tread_first ? x0 + k1 * l : x0 + k * l;
+            double corner_y = tread_first ? y0 - k * h : y0 - k1 * h;
+            assert_exact(vertex_x(&p, 2 * i + 1), corner_x, "x", 2 * i + 1);
+            assert_exact(vertex_y(&p, 2 * i + 1), corner_y, "y", 2 * i + 1);
+            assert_exact(vertex_x(&p, 2 * i + 2), x0 + k1 * l, "x", 2 * i + 2);
+            assert_exact(vertex_y(&p, 2 * i + 2), y0 - k1 * h, "y", 2 * i + 2);
+            ck_assert_uint_eq(p.piece[2 * i + 1], 0);
+            ck_assert_uint_eq(p.piece[2 * i + 2], 0);
+        }
+        ck_assert_uint_eq(p.piece[0], UINT32_MAX);
+        ck_assert_uint_eq(p.piece[19], 1);
+        /* the line after the flight continues the last segment: the tread
+         * (+x), or the riser (-y) when the tread comes first */
+        if (tread_first) {
+            assert_exact(vertex_x(&p, 19), x0 + 9 * l, "x", 19);
+            assert_exact(vertex_y(&p, 19), y0 - 9 * h - 0.5, "y", 19);
+        } else {
+            assert_exact(vertex_x(&p, 19), x0 + 9 * l + 0.5, "x", 19);
+            assert_exact(vertex_y(&p, 19), y0 - 9 * h, "y", 19);
+        }
+        /* the pseudo-bottom: step edge 1 to step edge 9 (riser first: the
+         * ends of the treads, vertices 2, 4, ..., 18) */
+        if (!tread_first) {
+            double angle = atan2(vertex_y(&p, 2) - vertex_y(&p, 18),
+                                 vertex_x(&p, 18) - vertex_x(&p, 2)) * 180 / M_PI;
+            fprintf(stderr, "profile_steps: pseudo-bottom %.6f deg (seed 001: 21.8)\n", angle);
+            ck_assert_double_eq_tol(angle, atan(h / l) * 180 / M_PI, 1e-12);
+            ck_assert(fabs(angle - 21.8) <= 0.05);
+        }
+        sluice_profile_path_free(&p);
+    }
+}
+END_TEST
+
+/* The broad-crested weir's rounded upstream corner (seed 001, Chanson:
+ * r = 0.057 m) between the vertical face and the crest, at max_segment =
+ * dx/2 = 0.004 m: every arc vertex on the circle (to round-off), m =
+ * ceil(r pi/2 / max_segment) equal chords, each vertex turning by pi/(2m),
+ * half of it where the arc meets the straight face and crest (tangent
+ * continuity: the chord from the tangent point is pi/(4m) off the tangent),
+ * and the chords' total r pi/2 - 2 r m sin(pi/(4m)) short of the arc length,
+ * within the chord error bound r theta (theta/m)^2 / 24. */
+START_TEST(profile_arc)
+{
+    const double r = 0.057, max_segment = 0.004;
+    sluice_profile_piece pieces[3] = {
+        line_to(0.8, 0.843),
+        {.kind = SLUICE_PIECE_ARC, .radius = r, .turn = -90},
+        {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_LENGTH, .length = 0.543}};
+    sluice_profile_path p;
+    build_profile(pieces, 3, 0.8, 0, 0, 0, 0, max_segment, &p);
+    const uint32_t m = (uint32_t)ceil(r * M_PI / 2 / max_segment);
+    ck_assert_uint_eq(m, 23);
+    ck_assert_uint_eq(p.vertex_count, 2 + m + 1);
+    const double cx = 0.8 + r, cy = 0.843;
+    double chords = 0;
+    for (uint32_t v = 2; v <= 1 + m; v++) {
+        ck_assert_uint_eq(p.piece[v], 1);
+        double radius = hypot(vertex_x(&p, v) - cx, vertex_y(&p, v) - cy);
+        ck_assert_msg(fabs(radius - r) <= 8 * DBL_EPSILON * (fabs(cx) + fabs(cy) + r),
+                      "arc vertex %u at distance %.17g from the centre", v, radius);
+    }
+    for (uint32_t v = 1; v <= m; v++) {
+        ck_assert(chord(&p, v) <= max_segment);
+        chords += chord(&p, v);
+    }
+    assert_exact(vertex_x(&p, 1 + m), 0.857, "x", 1 + m);
+    assert_exact(vertex_y(&p, 1 + m), 0.9, "y", 1 + m);
+    assert_exact(vertex_x(&p, 2 + m), 1.4, "x", 2 + m);
+    assert_exact(vertex_y(&p, 2 + m), 0.9, "y", 2 + m);
+    const double step = M_PI / 2 / m;
+    ck_assert_double_eq_tol(turning(&p, 1), -step / 2, 1e-9);
+    ck_assert_double_eq_tol(turning(&p, 1 + m), -step / 2, 1e-9);
+    for (uint32_t v = 2; v <= m; v++)
+        ck_assert_double_eq_tol(turning(&p, v), -step, 1e-9);
+    const double arc = r * M_PI / 2, bound = arc * step * step / 24;
+    fprintf(stderr,
+            "profile_arc: %u chords, total %.12f m, arc %.12f m, shortfall %.3g (bound %.3g)\n", m,
+            chords, arc, arc - chords, bound);
+    ck_assert(arc - chords >= -1e-15);
+    ck_assert(arc - chords <= bound);
+    ck_assert(arc - chords >= 0.99 * bound); /* the leading term of the bound */
+    sluice_profile_path_free(&p);
+
+    /* counter-clockwise: a half turn to the left from heading +x, r = 1,
+     * ends 2 r above the start heading -x (a following line goes to -x) */
+    sluice_profile_piece left[2] = {
+        {.kind = SLUICE_PIECE_ARC, .radius = 1, .turn = 180},
+        {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_DX, .dx = -0.5}};
+    build_profile(left, 2, 0, 0, 1, 0, 0, 0.1, &p);
+    const uint32_t n = (uint32_t)ceil(M_PI / 0.1);
+    ck_assert_uint_eq(p.vertex_count, 1 + n + 1);
+    for (uint32_t v = 1; v <= n; v++)
+        ck_assert_double_eq_tol(hypot(vertex_x(&p, v), vertex_y(&p, v) - 1), 1, 1e-15);
+    for (uint32_t v = 1; v < n; v++)
+        ck_assert_double_eq_tol(turning(&p, v), M_PI / n, 1e-12);
+    assert_exact(vertex_x(&p, n), 0, "x", n);
+    assert_exact(vertex_y(&p, n), 2, "y", n);
+    assert_exact(vertex_x(&p, n + 1), -0.5, "x", n + 1);
+    assert_exact(vertex_y(&p, n + 1), 2, "y", n + 1);
+    sluice_profile_path_free(&p);
+}
+END_TEST
+
+/* Arc length of y = a x^n from 0 to X (units), by Simpson's rule on x =
+ * X w^2 (dx = 2 X w dw), which makes the integrand smooth at the apex. */
+static double crest_arc_length(double a, double n, double X)
+{
+    const int N = 20000; /* even */
+    double sum = 0;
+    for (int i = 0; i <= N; i++) {
+        double w = (double)i / N, x = X * w * w;
+        double slope = a * n * pow(x, n - 1);
+        double f = sqrt(1 + slope * slope) * 2 * X * w;
+        sum += f * (i == 0 || i == N ? 1 : i % 2 ? 4 : 2);
+    }
+    return sum / (3.0 * N);
+}
+
+/* Seed 001's Cheng crest: y = 0.0304 x^1.85 with x, y in centimetres below
+ * and downstream of the apex, down to the tangent point of the 1:0.75 slope
+ * (dy/dx = 4/3), at max_segment = dx/2 = 0.002 m. Every vertex lies on the
+ * curve (to round-off); the end is where the slope is 4/3, i.e. the seed's
+ * T = (41.45, 29.87) cm within the rounding of its printed 0.4145 and 0.2987
+ * m (+-0.005 cm); the last chord's slope lies between the curve's slopes at
+ * its ends (mean value theorem), so it is short of 4/3 by at most the
+ * slope's change over the last segment; the line after the crest leaves
+ * exactly along the tangent (3/5, -4/5). The chords, equal in arc length,
+ * fall short of the arc length (Simpson, independent) by at most
+ * sum c_k (1 / cos dtheta_k - 1), dtheta_k the tangent's turn over segment k
+ * (a chord c of an arc l turning by dtheta has c >= l cos dtheta). */
+START_TEST(profile_crest)
+{
+    const double a = 0.0304, n = 1.85, u = 0.01, x0 = 0.3, y0 = 1.62, max_segment = 0.002;
+    sluice_profile_piece pieces[2] = {
+        {.kind = SLUICE_PIECE_CREST, .coefficient = a, .exponent = n, .unit = u,
+         .end_slope = 1 / 0.75},
+        {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_LENGTH, .length = 0.1}};
+    sluice_profile_path p;
+    build_profile(pieces, 2, x0, y0, 1, 90, 0, max_segment, &p);
+    const uint32_t m = p.vertex_count - 2;
+    const double X_T = pow(4.0 / 3.0 / (a * n), 1 / (n - 1));
+    const double S = u * crest_arc_length(a, n, X_T);
+    ck_assert_uint_eq(m, (uint32_t)ceil(S / max_segment));
+    double chords = 0, bound = 0;
+    for (uint32_t v = 1; v <= m; v++) {
+        ck_assert_uint_eq(p.piece[v], 0);
+        double X = (vertex_x(&p, v) - x0) / u, Y = (y0 - vertex_y(&p, v)) / u;
+        ck_assert_msg(fabs(Y - a * pow(X, n)) <= 1e-11, "vertex %u: y = %.15g cm, a x^n = %.15g",
+                      v, Y, a * pow(X, n));
+        double X0 = (vertex_x(&p, v - 1) - x0) / u;
+        double turn = atan(a * n * pow(X, n - 1)) - atan(a * n * pow(X0, n - 1));
+        double c = chord(&p, v - 1);
+        ck_assert(c <= max_segment);
+        ck_assert_msg(c >= S / m * cos(turn) - 1e-12 && c <= S / m + 1e-12,
+                      "chord %u: %.12g m, the equal arc length is %.12g m", v, c, S / m);
+        chords += c;
+        bound += c * (1 / cos(turn) - 1);
+    }
+    double X_end = (vertex_x(&p, m) - x0) / u, Y_end = (y0 - vertex_y(&p, m)) / u;
+    fprintf(stderr, "profile_crest: T = (%.4f, %.4f) cm (seed 001: (41.45, 29.87)), %u chords, "
+            "arc %.9f m, chords %.9f m, shortfall %.3g (bound %.3g)\n",
+            X_end, Y_end, m, S, chords, S - chords, bound);
+    ck_assert_double_eq_tol(X_end, X_T, 1e-11);
+    ck_assert_double_eq_tol(a * n * pow(X_end, n - 1), 4.0 / 3.0, 1e-12);
+    ck_assert(fabs(X_end - 41.45) <= 0.005);
+    ck_assert(fabs(Y_end - 29.87) <= 0.005);
+    double X_before = (vertex_x(&p, m - 1) - x0) / u;
+    double last = (vertex_y(&p, m - 1) - vertex_y(&p, m)) / (vertex_x(&p, m) - vertex_x(&p, m - 1));
+    ck_assert(last <= 4.0 / 3.0 + 1e-12);
+    ck_assert(last >= a * n * pow(X_before, n - 1) - 1e-12);
+    double tx = (vertex_x(&p, m + 1) - vertex_x(&p, m)) / 0.1;
+    double ty = (vertex_y(&p, m + 1) - vertex_y(&p, m)) / 0.1;
+    ck_assert_double_eq_tol(tx, 0.6, 1e-12);
+    ck_assert_double_eq_tol(ty, -0.8, 1e-12);
+    ck_assert(S - chords >= -1e-12);
+    ck_assert(S - chords <= bound + 1e-12);
+    /* the first segment leaves the apex horizontally: the tangent there is +x */
+    ck_assert(fabs(atan2(vertex_y(&p, 1) - y0, vertex_x(&p, 1) - x0)) < 0.01);
+    sluice_profile_path_free(&p);
+
+    /* ending at x instead: end_x = 41.45 cm, where the slope is 4/3 to the
+     * seed's rounding */
+    sluice_profile_piece at_x = {.kind = SLUICE_PIECE_CREST, .coefficient = a, .exponent = n,
+                                 .unit = u, .end_x = 41.45, .end_at_x = 1};
+    build_profile(&at_x, 1, x0, y0, 0, 0, 0, max_segment, &p);
+    uint32_t e = p.vertex_count - 1;
+    assert_exact(vertex_x(&p, e), x0 + u * 41.45, "x", e);
+    ck_assert_double_eq_tol(a * n * pow(41.45, n - 1), 4.0 / 3.0, 1e-4);
+    sluice_profile_path_free(&p);
+}
+END_TEST
+
+/* Every way of ending a line, and every refusal of the builder. */
+START_TEST(profile_lines)
+{
+    sluice_profile_piece pieces[8] = {
+        line_to(1, 0),
+        {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_DX | SLUICE_LINE_DY, .dx = 0.5, .dy = 0.5},
+        {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_LENGTH | SLUICE_LINE_HEADING,
+         .length = 1, .heading = 90},
+        {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_LENGTH | SLUICE_LINE_SLOPE, .length = 5,
+         .slope = -0.75},
+        {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_DX, .dx = 0.8},
+        {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_TO_Y | SLUICE_LINE_HEADING, .to_y = -3,
+         .heading = -90},
+        {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_TO_X | SLUICE_LINE_SLOPE, .to_x = 8.3,
+         .slope = 0.5},
+        {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_DY | SLUICE_LINE_SLOPE, .dy = 1,
+         .slope = -2}};
+    const double expect[9][2] = {{0, 0},   {1, 0},      {1.5, 0.5}, {1.5, 1.5},  {5.5, -1.5},
+                                 {6.3, -2.1}, {6.3, -3}, {8.3, -2},  {7.8, -1}};
+    sluice_profile_path p;
+    build_profile(pieces, 8, 0, 0, 0, 0, 0, 0.01, &p);
+    ck_assert_uint_eq(p.vertex_count, 9);
+    for (uint32_t v = 0; v < 9; v++) {
+        ck_assert_double_eq_tol(vertex_x(&p, v), expect[v][0], 1e-14);
+        ck_assert_double_eq_tol(vertex_y(&p, v), expect[v][1], 1e-14);
+    }
+    /* exact where the given coordinate sets it */
+    ck_assert(vertex_x(&p, 3) == 1.5 && vertex_x(&p, 6) == vertex_x(&p, 5));
+    ck_assert(vertex_y(&p, 6) == -3 && vertex_x(&p, 7) == 8.3);
+    sluice_profile_path_free(&p);
+
+    sluice_profile_piece bad[2] = {line_to(1, 0), {.kind = SLUICE_PIECE_LINE}};
+    refuse_profile(bad, 2, 0, 0, 0, 1, NULL, "a line needs its end");
+    bad[1].keys = SLUICE_LINE_TO | SLUICE_LINE_DX;
+    refuse_profile(bad, 2, 0, 0, 0, 1, "dx", "'to' sets the line's end alone");
+    bad[1] = (sluice_profile_piece){.kind = SLUICE_PIECE_LINE,
+                                    .keys = SLUICE_LINE_DX | SLUICE_LINE_DY | SLUICE_LINE_SLOPE,
+                                    .dx = 1, .dy = 1};
+    refuse_profile(bad, 2, 0, 0, 0, 1, "slope", "'dx' and 'dy' set the line's end alone");
+    bad[1] = (sluice_profile_piece){.kind = SLUICE_PIECE_LINE,
+                                    .keys = SLUICE_LINE_LENGTH | SLUICE_LINE_TO_X, .length = 1};
+    refuse_profile(bad, 2, 0, 0, 0, 1, "to_x", "give the line's extent once");
+    bad[1] = (sluice_profile_piece){.kind = SLUICE_PIECE_LINE,
+                                    .keys = SLUICE_LINE_LENGTH | SLUICE_LINE_HEADING |
+                                            SLUICE_LINE_SLOPE,
+                                    .length = 1};
+    refuse_profile(bad, 2, 0, 0, 0, 1, "slope", "direction once");
+    bad[1] = (sluice_profile_piece){.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_DX, .dx = -1};
+    refuse_profile(bad, 2, 0, 0, 0, 1, "dx", "is not ahead");
+    bad[1] = (sluice_profile_piece){.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_DY, .dy = 1};
+    refuse_profile(bad, 2, 0, 0, 0, 1, "dy", "is horizontal");
+    bad[1] = line_to(1, 0);
+    refuse_profile(bad, 2, 0, 0, 0, 1, NULL, "zero length");
+    sluice_profile_piece first[1] = {{.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_LENGTH,
+                                      .length = 1}};
+    refuse_profile(first, 1, 0, 0, 0, 0, NULL, "it is the first piece");
+    sluice_profile_piece arc[1] = {{.kind = SLUICE_PIECE_ARC, .radius = 1, .turn = 90}};
+    refuse_profile(arc, 1, 0, 0, 0, 0, NULL, "give the profile a 'heading'");
+    arc[0].turn = 0;
+    refuse_profile(arc, 1, 1, 0, 0, 0, "turn", "nonzero");
+    arc[0] = (sluice_profile_piece){.kind = SLUICE_PIECE_ARC, .radius = -0.057, .turn = 90};
+    refuse_profile(arc, 1, 1, 0, 0, 0, "radius", "must be > 0");
+    sluice_profile_piece steps[1] = {{.kind = SLUICE_PIECE_STEPS, .count = 0, .height = 0.1,
+                                      .step_length = 0.25}};
+    refuse_profile(steps, 1, 0, 0, 0, 0, "count", "at least one step");
+    sluice_profile_piece crest[1] = {{.kind = SLUICE_PIECE_CREST, .coefficient = 0.0304,
+                                      .exponent = 1, .unit = 0.01, .end_slope = 1}};
+    refuse_profile(crest, 1, 0, 0, 0, 0, "exponent", "must be > 1");
+    crest[0].exponent = 1.0001; /* slope 10 only at x = (10 / 0.0304)^10000 */
+    crest[0].end_slope = 10;
+    refuse_profile(crest, 1, 0, 0, 0, 0, "end_slope", "never at a size");
+    /* too many vertices for the segment length */
+    sluice_profile_piece big[1] = {{.kind = SLUICE_PIECE_ARC, .radius = 1e6, .turn = 90}};
+    refuse_profile(big, 1, 1, 0, 0, 0, NULL, "vertices, more than");
+}
+END_TEST
+
+/* Crossings: a profile meeting itself is refused at the later piece. */
+START_TEST(profile_crossings)
+{
+    uint32_t s0, s1;
+    double at[2];
+    const sluice_real simple[] = {0, 0, 1, 0, 1, 1, 0, 1};
+    ck_assert_int_eq(sluice_polyline_crossing(simple, 4, 0, &s0, &s1, at), 0);
+    ck_assert_int_eq(sluice_polyline_crossing(simple, 4, 1, &s0, &s1, at), 0);
+    const sluice_real bowtie[] = {0, 0, 1, 1, 1, 0, 0, 1};
+    ck_assert_int_eq(sluice_polyline_crossing(bowtie, 4, 0, &s0, &s1, at), 1);
+    ck_assert_uint_eq(s0, 0);
+    ck_assert_uint_eq(s1, 2);
+    ck_assert_double_eq_tol(at[0], 0.5, 1e-15);
+    ck_assert_double_eq_tol(at[1], 0.5, 1e-15);
+    const sluice_real touch[] = {0, 0, 2, 0, 2, 1, 1, 1, 1, 0}; /* back onto the first segment */
+    ck_assert_int_eq(sluice_polyline_crossing(touch, 5, 0, &s0, &s1, at), 1);
+    ck_assert_uint_eq(s0, 0);
+    ck_assert_uint_eq(s1, 3);
+    ck_assert(at[0] == 1 && at[1] == 0);
+    const sluice_real fold[] = {0, 0, 1, 0, 0.5, 0};
+    ck_assert_int_eq(sluice_polyline_crossing(fold, 3, 0, &s0, &s1, at), 1);
+    ck_assert_uint_eq(s0, 0);
+    ck_assert_uint_eq(s1, 1);
+    /* closed: the closing segment 3 -> 0 crosses segment 1 */
+    const sluice_real closing[] = {0, 0, 2, 0, 2, 2, 3, 1};
+    ck_assert_int_eq(sluice_polyline_crossing(closing, 4, 1, &s0, &s1, at), 1);
+    ck_assert_uint_eq(s0, 1);
+    ck_assert_uint_eq(s1, 3);
+    ck_assert_int_eq(sluice_polyline_crossing(closing, 4, 0, &s0, &s1, at), 0);
+
+    /* a weir whose downstream line runs back through its face */
+    sluice_profile_piece pieces[4] = {line_to(1, 0), line_to(1, 1), line_to(2, 1),
+                                      line_to(0.5, 0.5)};
+    sluice_profile profile = {{0, 0}, 0, 0, pieces, 4, 0, 0.01};
+    sluice_profile_path path;
+    sluice_profile_problem problem;
+    ck_assert_int_eq(sluice_profile_build(&profile, &path, &problem), -1);
+    ck_assert_uint_eq(problem.piece, 3);
+    ck_assert_uint_eq(problem.other, 1);
+    ck_assert_int_eq(problem.closing, 0);
+    ck_assert_ptr_nonnull(strstr(problem.message, "crosses or touches itself at (1, 0.666667) m"));
+    /* closed: the closing segment back to the start crosses piece 1 */
+    sluice_profile_piece loop[3] = {line_to(2, 0), line_to(2, 2), line_to(3, 1)};
+    profile = (sluice_profile){{0, 0}, 0, 0, loop, 3, 1, 0.01};
+    ck_assert_int_eq(sluice_profile_build(&profile, &path, &problem), -1);
+    ck_assert_uint_eq(problem.piece, 1);
+    ck_assert_int_eq(problem.closing, 1);
+    /* a full circle closed on itself is simple; left open it touches its start */
+    sluice_profile_piece circle[1] = {{.kind = SLUICE_PIECE_ARC, .radius = 1, .turn = 360}};
+    profile = (sluice_profile){{0, 0}, 1, 0, circle, 1, 1, 0.1};
+    ck_assert_int_eq(sluice_profile_build(&profile, &path, &problem), 0);
+    ck_assert_uint_eq(path.vertex_count, (uint32_t)ceil(2 * M_PI / 0.1));
+    ck_assert_uint_eq(path.piece[0], 0);
+    sluice_profile_path_free(&path);
+    profile.closed = 0;
+    ck_assert_int_eq(sluice_profile_build(&profile, &path, &problem), -1);
+    ck_assert_ptr_nonnull(strstr(problem.message, "touches itself"));
+}
+END_TEST
+
+/* Lattice keys (x, y) of the points, sorted, for set comparisons. */
+static key3 *sorted_keys(const sluice_points *pts, double dx, const double origin[3])
+{
+    key3 *keys = NULL;
+    ck_assert_uint_eq(lattice_keys(pts, 2, dx, origin, &keys), 0);
+    return keys;
+}
+
+static int has_key(const key3 *keys, size_t n, int64_t i, int64_t j)
+{
+    key3 k = {{i, j, 0}};
+    return bsearch(&k, keys, n, sizeof k, key3_compare) != NULL;
+}
+
+/* A fluid region bounded by a profile fills exactly the lattice points on
+ * the fluid side: (1) the air over a flight of steps, closed up to a lid,
+ * against the exact staircase test and against a brute-force
+ * sluice_point_in_polygon over every lattice point; (2) a circle (one
+ * closed arc of 360 deg) against the disc: every point deeper than the
+ * sagitta R (1 - cos(pi/m)) inside is filled, none outside; filled points are
+ * on the wall's fluid side (signed distance > 0 to the same closed profile
+ * as a wall, counter-clockwise: fluid inside), and the wall's particle layer
+ * (thickness T) is the lattice annulus R < r <= R + T up to the same
+ * sagitta: the curve gives the evenly spaced lattice layer a true circle
+ * would. */
+START_TEST(profile_fill)
+{
+    const double dx = 0.01, origin[3] = {0.003, 0.002, 0};
+    /* (1) start (0, 1), down to the top step, 4 steps 0.1 x 0.25, up to the lid */
+    sluice_profile_piece pieces[3] = {
+        line_to(0, 0.6),
+        {.kind = SLUICE_PIECE_STEPS, .count = 4, .height = 0.1, .step_length = 0.25},
+        {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_TO_Y | SLUICE_LINE_HEADING, .to_y = 1,
+         .heading = 90}};
+    sluice_profile_path p;
+    build_profile(pieces, 3, 0, 1, 0, 0, 1, 0.005, &p);
+    ck_assert_uint_eq(p.vertex_count, 11);
+    sluice_region region = {.shape = SLUICE_REGION_POLYGON, .polygon = p.xy,
+                            .vertex_count = p.vertex_count};
+    sluice_points pts = {0};
+    ck_assert_int_eq(sluice_region_fill(&region, 2, dx, (sluice_real[3]){0.003, 0.002, 0}, &pts),
+                     0);
+    key3 *keys = sorted_keys(&pts, dx, origin);
+    size_t expected = 0;
+    for (int64_t j = -10; j < 110; j++)
+        for (int64_t i = -10; i < 110; i++) {
+            double x = origin[0] + (i + 0.5) * dx, y = origin[1] + (j + 0.5) * dx;
+            double tread = 0.6 - 0.1 * (floor(x / 0.25) + 1); /* the step under x */
+            int inside = x > 0 && x < 1 && y < 1 && y > tread;
+            int pnpoly = sluice_point_in_polygon(p.xy, p.vertex_count, x, y);
+            ck_assert_msg(inside == pnpoly, "(%g, %g): staircase %d, polygon %d", x, y, inside,
+                          pnpoly);
+            ck_assert_msg(has_key(keys, pts.count, i, j) == inside, "(%g, %g) filled %d", x, y,
+                          !inside);
+            expected += inside;
+        }
+    ck_assert_uint_eq(pts.count, expected);
+    fprintf(stderr, "profile_fill: %zu lattice points over the steps\n", expected);
+    free(keys);
+    sluice_points_free(&pts);
+    sluice_profile_path_free(&p);
+
+    /* (2) a circle of radius R about (0.5, 0.5), counter-clockwise */
+    const double R = 0.4, T = 3 * dx, max_segment = dx / 2;
+    sluice_profile_piece circle[1] = {{.kind = SLUICE_PIECE_ARC, .radius = R, .turn = 360}};
+    build_profile(circle, 1, 0.5, 0.1, 1, 0, 1, max_segment, &p);
+    const uint32_t m = p.vertex_count;
+    ck_assert_uint_eq(m, (uint32_t)ceil(2 * M_PI * R / max_segment));
+    const double sagitta = R * (1 - cos(M_PI / m));
+    region = (sluice_region){.shape = SLUICE_REGION_POLYGON, .polygon = p.xy, .vertex_count = m};
+    ck_assert_int_eq(sluice_region_fill(&region, 2, dx, (sluice_real[3]){0.003, 0.002, 0}, &pts),
+                     0);
+    keys = sorted_keys(&pts, dx, origin);
+    sluice_wall_geometry wall;
+    ck_assert_int_eq(sluice_wall_build_polyline(&wall, p.xy, m, 1, NULL), 0);
+    sluice_points layer_pts = {0};
+    ck_assert_int_eq(sluice_wall_layer_points(&wall, dx, (sluice_real[3]){0.003, 0.002, 0}, T,
+                                              &layer_pts),
+                     0);
+    key3 *layer_keys = sorted_keys(&layer_pts, dx, origin);
+    size_t band = 0, layer_band = 0;
+    for (int64_t j = -10; j < 110; j++)
+        for (int64_t i = -10; i < 110; i++) {
+            double x = origin[0] + (i + 0.5) * dx, y = origin[1] + (j + 0.5) * dx;
+            double r = hypot(x - 0.5, y - 0.5);
+            int filled = has_key(keys, pts.count, i, j);
+            ck_assert_int_eq(filled, sluice_point_in_polygon(p.xy, m, x, y));
+            if (r < R - sagitta)
+                ck_assert_msg(filled, "(%g, %g) at r = %g not filled", x, y, r);
+            else if (r > R)
+                ck_assert_msg(!filled, "(%g, %g) at r = %g filled", x, y, r);
+            else
+                band++;
+            double sd = signed_distance(&wall, x, y, 0, NULL, NULL);
+            if (fabs(sd) > 1e-12)
+                ck_assert_int_eq(filled, sd > 0);
+            int layered = has_key(layer_keys, layer_pts.count, i, j);
+            if (r > R && r <= R + T - sagitta)
+                ck_assert_msg(layered, "(%g, %g) at r = %g not in the layer", x, y, r);
+            else if (r < R - sagitta || r > R + T)
+                ck_assert_msg(!layered, "(%g, %g) at r = %g in the layer", x, y, r);
+            else
+                layer_band++;
+        }
+    fprintf(stderr, "profile_fill: circle of %u segments (sagitta %.2g m): %zu filled, %zu layer "
+            "points; %zu and %zu lattice points in the sagitta bands\n",
+            m, sagitta, pts.count, layer_pts.count, band, layer_band);
+    free(keys);
+    free(layer_keys);
+    sluice_points_free(&pts);
+    sluice_points_free(&layer_pts);
+    sluice_wall_geometry_free(&wall);
+    sluice_profile_path_free(&p);
+}
+END_TEST
+
+/* ------------------------------------------------------ profile scenes -- */
+
+/* Loads scene text (written to a scratch file); returns the error count and
+ * the diagnostics (caller destroys), *path the file. */
+static size_t load_scene_text(const char *text, sluice_scene *scene, sluice_diag **diag,
+                              char **path)
+{
+    char *dir = test_scratch("geometry");
+    ck_assert_ptr_nonnull(dir);
+    *path = test_write_file(dir, "scene.yaml", text);
+    ck_assert_ptr_nonnull(*path);
+    free(dir);
+    *diag = sluice_diag_create();
+    ck_assert_ptr_nonnull(*diag);
+    sluice_scene_load(scene, *path, NULL, 0, *diag);
+    return sluice_diag_error_count(*diag);
+}
+
+/* Removes the scratch scene file and its directory; frees path. */
+static void remove_scene_file(char *path)
+{
+    ck_assert_int_eq(unlink(path), 0);
+    char *slash = strrchr(path, '/');
+    ck_assert_ptr_nonnull(slash);
+    *slash = '\0';
+    ck_assert_int_eq(rmdir(path), 0);
+    free(path);
+}
+
+static const char *scene_head = "dimensions: 2\n"
+                                "particles: {spacing: 0.008}\n"
+                                "time: {end: 0.1}\n"
+                                "domain: {min: [-0.1, -0.1], max: [4.3, 1.2]}\n"
+                                "plugins: {wendland_c2: {}}\n"
+                                "geometry:\n";
+
+/* The Chanson chute as docs/scene-format.md writes it (anchors, nested
+ * lists of pieces): the wall and the regions are the profiles the builder
+ * makes of the same pieces; max_segment defaults to spacing / 2. */
+START_TEST(profile_scene)
+{
+    char *text = NULL;
+    ck_assert_int_ge(
+        asprintf(&text,
+                 "%s"
+                 "  walls:\n"
+                 "    - shape: profile\n"
+                 "      start: [0, 1.1]\n"
+                 "      pieces:\n"
+                 "        - {piece: line, to: [0, 0]}\n"
+                 "        - &weir\n"
+                 "          - {piece: line, to: [0.8, 0]}\n"
+                 "          - {piece: line, to: [0.8, 0.843]}\n"
+                 "          - {piece: arc, radius: 0.057, turn: -90}\n"
+                 "          - {piece: line, to_x: 1.4}\n"
+                 "        - &chute\n"
+                 "          - {piece: steps, count: 9, height: 0.1, length: 0.25}\n"
+                 "          - {piece: line, length: 0.5}\n"
+                 "  fluid:\n"
+                 "    - shape: profile\n"
+                 "      start: [0, 1.0]\n"
+                 "      pieces: [{piece: line, to: [0, 0]}, *weir, {piece: line, to: [1.4, 1.0]}]\n"
+                 "    - shape: profile\n"
+                 "      start: [0, 1.1]\n"
+                 "      max_segment: 0.001\n"
+                 "      pieces:\n"
+                 "        - {piece: line, to: [0, 1.0]}\n"
+                 "        - {piece: line, to: [1.4, 1.0]}\n"
+                 "        - {piece: line, to: [1.4, 0.9]}\n"
+                 "        - *chute\n"
+                 "        - {piece: line, heading: 90, to_y: 1.1}\n",
+                 scene_head),
+        0);
+    sluice_scene scene;
+    sluice_diag *diag;
+    char *path;
+    size_t errors = load_scene_text(text, &scene, &diag, &path);
+    for (size_t i = 0; i < sluice_diag_count(diag); i++)
+        fprintf(stderr, "%s\n", sluice_diag_message(diag, i));
+    ck_assert_uint_eq(errors, 0);
+    ck_assert_uint_eq(scene.wall_count, 1);
+    ck_assert_uint_eq(scene.fluid_count, 2);
+
+    sluice_profile_piece weir[4] = {line_to(0.8, 0), line_to(0.8, 0.843),
+                                    {.kind = SLUICE_PIECE_ARC, .radius = 0.057, .turn = -90},
+                                    {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_TO_X,
+                                     .to_x = 1.4}};
+    sluice_profile_piece chute[2] = {
+        {.kind = SLUICE_PIECE_STEPS, .count = 9, .height = 0.1, .step_length = 0.25},
+        {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_LENGTH, .length = 0.5}};
+    sluice_profile_piece wall[7] = {line_to(0, 0), weir[0], weir[1], weir[2], weir[3], chute[0],
+                                    chute[1]};
+    sluice_profile_path p;
+    build_profile(wall, 7, 0, 1.1, 0, 0, 0, 0.004, &p);
+    const sluice_wall_geometry *g = &scene.walls[0].geometry;
+    ck_assert_uint_eq(g->element_count, p.vertex_count - 1);
+    for (uint32_t e = 0; e < g->element_count; e++) {
+        ck_assert(g->points[6 * e] == p.xy[2 * e] && g->points[6 * e + 1] == p.xy[2 * e + 1]);
+        ck_assert(g->points[6 * e + 3] == p.xy[2 * e + 2] &&
+                  g->points[6 * e + 4] == p.xy[2 * e + 3]);
+    }
+    /* 23 arc segments at 0.004 m: the default max_segment */
+    uint32_t arc_segments = 0;
+    for (uint32_t v = 0; v < p.vertex_count; v++)
+        arc_segments += p.piece[v] == 3;
+    ck_assert_uint_eq(arc_segments, 23);
+    sluice_profile_path_free(&p);
+
+    sluice_profile_piece water[6] = {line_to(0, 0), weir[0], weir[1], weir[2], weir[3],
+                                     line_to(1.4, 1.0)};
+    build_profile(water, 6, 0, 1.0, 0, 0, 1, 0.004, &p);
+    const sluice_region *r = &scene.fluids[0].region;
+    ck_assert_int_eq(r->shape, SLUICE_REGION_POLYGON);
+    ck_assert_uint_eq(r->vertex_count, p.vertex_count);
+    ck_assert_int_eq(memcmp(r->polygon, p.xy, 2 * p.vertex_count * sizeof *p.xy), 0);
+    sluice_profile_path_free(&p);
+    sluice_profile_piece air[6] = {
+        line_to(0, 1.0), line_to(1.4, 1.0), line_to(1.4, 0.9), chute[0], chute[1],
+        {.kind = SLUICE_PIECE_LINE, .keys = SLUICE_LINE_TO_Y | SLUICE_LINE_HEADING, .to_y = 1.1,
+         .heading = 90}};
+    build_profile(air, 6, 0, 1.1, 0, 0, 1, 0.001, &p);
+    r = &scene.fluids[1].region;
+    ck_assert_uint_eq(r->vertex_count, p.vertex_count);
+    ck_assert_int_eq(memcmp(r->polygon, p.xy, 2 * p.vertex_count * sizeof *p.xy), 0);
+    sluice_profile_path_free(&p);
+
+    sluice_scene_free(&scene);
+    sluice_diag_destroy(diag);
+    remove_scene_file(path);
+    free(text);
+}
+END_TEST
+
+/* One bad parameter in a profile: exactly one error, at the line and column
+ * of the offending text (the `at` token on the first line containing
+ * `line_marker`), naming it. */
+static void expect_profile_error(const char *geometry, int dimensions, const char *line_marker,
+                                 const char *at, const char *needle)
+{
+    char *text = NULL;
+    ck_assert_int_ge(asprintf(&text,
+                              "dimensions: %d\n"
+                              "particles: {spacing: 0.01}\n"
+                              "time: {end: 0.1}\n"
+                              "domain: {min: %s, max: %s}\n"
+                              "plugins: {wendland_c2: {}}\n"
+                              "geometry:\n%s",
+                              dimensions, dimensions == 2 ? "[-1, -1]" : "[-1, -1, -1]",
+                              dimensions == 2 ? "[3, 3]" : "[3, 3, 3]", geometry),
+                     0);
+    int line = 0, column = 0, n = 1;
+    for (const char *c = text; *c; n++) {
+        const char *end = strchr(c, '\n');
+        size_t len = end ? (size_t)(end - c) : strlen(c);
+        char *copy = strndup(c, len);
+        if (!line && strstr(copy, line_marker)) {
+            const char *hit = strstr(copy, at);
+            ck_assert_ptr_nonnull(hit);
+            line = n;
+            column = (int)(hit - copy) + 1;
+        }
+        free(copy);
+        c = end ? end + 1 : c + len;
+    }
+    ck_assert_int_gt(line, 0);
+    sluice_scene scene;
+    sluice_diag *diag;
+    char *path;
+    size_t errors = load_scene_text(text, &scene, &diag, &path);
+    char *where = NULL;
+    ck_assert_int_ge(asprintf(&where, "%s:%d:%d: error: ", path, line, column), 0);
+    const char *message = sluice_diag_count(diag) ? sluice_diag_message(diag, 0) : "(none)";
+    fprintf(stderr, "%s\n", message);
+    ck_assert_msg(errors == 1, "expected one error, got %zu (first: %s)", errors, message);
+    ck_assert_msg(strstr(message, where), "expected '%s' in '%s'", where, message);
+    ck_assert_msg(strstr(message, needle), "expected '%s' in '%s'", needle, message);
+    free(where);
+    sluice_scene_free(&scene);
+    sluice_diag_destroy(diag);
+    remove_scene_file(path);
+    free(text);
+}
+
+#define WALL_PROFILE(pieces)                                                                   \
+    "  walls:\n"                                                                               \
+    "    - shape: profile\n"                                                                   \
+    "      start: [0, 1]\n"                                                                    \
+    "      pieces:\n"                                                                          \
+    "        - {piece: line, to: [0, 0.5]}\n" pieces
+
+START_TEST(profile_errors)
+{
+    expect_profile_error(WALL_PROFILE("        - {piece: arc, radius: -0.057, turn: -90}\n"), 2,
+                         "radius", "-0.057",
+                         "geometry.walls.0.pieces.1.radius = -0.057 m is out of range: it must "
+                         "be > 0 m");
+    expect_profile_error(WALL_PROFILE("        - {piece: arc, radius: 0.057, turn: 0}\n"), 2,
+                         "turn: 0", "0}",
+                         "geometry.walls.0.pieces.1 (arc): the turn must be nonzero");
+    expect_profile_error(
+        WALL_PROFILE("        - {piece: steps, count: 0, height: 0.1, length: 0.25}\n"), 2,
+        "count", "0, height", "geometry.walls.0.pieces.1.count = 0 is out of range");
+    expect_profile_error(
+        WALL_PROFILE("        - {piece: steps, count: 9, height: -0.1, length: 0.25}\n"), 2,
+        "count", "-0.1", "geometry.walls.0.pieces.1.height = -0.1 m is out of range");
+    expect_profile_error(WALL_PROFILE("        - {piece: crest, coefficient: 0.0304, exponent: "
+                                      "1, unit: 0.01, end_slope: 1.333}\n"),
+                         2, "crest", "1, unit",
+                         "geometry.walls.0.pieces.1.exponent = 1 is out of range: it must be > 1");
+    expect_profile_error(WALL_PROFILE("        - {piece: crest, coefficient: 0.0304, exponent: "
+                                      "1.0001, end_slope: 10}\n"),
+                         2, "crest", "10}",
+                         "geometry.walls.0.pieces.1 (crest): the crest y = 0.0304 x^1.0001 "
+                         "reaches the slope 10 only at x = inf");
+    expect_profile_error(WALL_PROFILE("        - {piece: crest, coefficient: 0.0304, exponent: "
+                                      "1.85, end_slope: 1.3, end_x: 41}\n"),
+                         2, "crest", "41}", "give the crest's end once");
+    expect_profile_error(
+        WALL_PROFILE("        - {piece: crest, coefficient: 0.0304, exponent: 1.85}\n"), 2,
+        "crest", "{piece", "a crest needs its end");
+    expect_profile_error(WALL_PROFILE("        - {piece: arcc, radius: 0.057, turn: -90}\n"), 2,
+                         "arcc", "arcc", "unknown piece 'arcc' in geometry.walls.0.pieces.1; "
+                                         "did you mean 'arc'?");
+    expect_profile_error(WALL_PROFILE("        - {piece: arc, radiuss: 0.057, turn: -90}\n"), 2,
+                         "radiuss", "radiuss", "did you mean 'radius'?");
+    expect_profile_error(WALL_PROFILE("        - {piece: line, to: [1, 0.5], dx: 1}\n"), 2,
+                         "dx: 1", "1}", "'to' sets the line's end alone: remove 'dx'");
+    expect_profile_error(WALL_PROFILE("        - {piece: line, to: [1, 0.5]}\n"
+                                      "        - {piece: line, to: [1, 1]}\n"
+                                      "        - {piece: line, to: [-1, 0.75]}\n"),
+                         2, "[-1, 0.75]", "{piece",
+                         "geometry.walls.0.pieces.3 (line): the profile crosses or touches itself "
+                         "at (0, 0.875) m (with geometry.walls.0.pieces.0, line)");
+    expect_profile_error("  walls:\n"
+                         "    - shape: profile\n"
+                         "      start: [0, 1]\n"
+                         "      pieces: [{piece: arc, radius: 0.057, turn: -90}]\n",
+                         2, "pieces", "{piece", "give the profile a 'heading'");
+    expect_profile_error("  walls:\n"
+                         "    - {shape: profile, start: [0, 1], peices: [{piece: line, to: [1, "
+                         "1]}]}\n",
+                         2, "peices", "peices", "unknown key 'peices' in geometry.walls.0; did "
+                                                "you mean 'pieces'?");
+    expect_profile_error("  walls:\n"
+                         "    - {shape: profile, start: [0, 1]}\n",
+                         2, "shape", "{shape", "geometry.walls.0 needs 'pieces'");
+    expect_profile_error("  walls:\n"
+                         "    - {shape: profile, start: [0, 1], pieces: [{piece: line, to: [0, "
+                         "0]}]}\n",
+                         3, "shape", "profile", "shape 'profile' in geometry.walls.0 is only "
+                                                "available in 2D");
+    /* a fluid region whose closing segment crosses its outline */
+    expect_profile_error("  fluid:\n"
+                         "    - shape: profile\n"
+                         "      start: [0, 0]\n"
+                         "      pieces:\n"
+                         "        - {piece: line, to: [2, 0]}\n"
+                         "        - {piece: line, to: [2, 2]}\n"
+                         "        - {piece: line, to: [3, 1]}\n",
+                         2, "[2, 2]", "{piece",
+                         "geometry.fluid.0.pieces.1 (line): the profile crosses or touches itself "
+                         "at (2, 0.666667) m (with the closing segment back to the start)");
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("geometry");
@@ -1460,6 +2264,17 @@ int main(void)
     tcase_add_test(walls, layer_box_obstacles);
     tcase_add_test(walls, wall_watch_matches_full_query);
     suite_add_tcase(s, walls);
+    TCase *profiles = tcase_create("profiles");
+    tcase_set_timeout(profiles, 120);
+    tcase_add_test(profiles, profile_steps);
+    tcase_add_test(profiles, profile_arc);
+    tcase_add_test(profiles, profile_crest);
+    tcase_add_test(profiles, profile_lines);
+    tcase_add_test(profiles, profile_crossings);
+    tcase_add_test(profiles, profile_fill);
+    tcase_add_test(profiles, profile_scene);
+    tcase_add_test(profiles, profile_errors);
+    suite_add_tcase(s, profiles);
     TCase *scale = tcase_create("scale");
     tcase_set_timeout(scale, 300);
     tcase_add_test(scale, fill_million);

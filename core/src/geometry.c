@@ -27,6 +27,8 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -1410,4 +1412,704 @@ int sluice_wall_layer_points(const sluice_wall_geometry *wall, sluice_real spaci
     free(near);
     free(records.items);
     return rc;
+}
+
+/* ------------------------------------------------------------- profiles -- */
+
+/* A profile is built piece by piece from the current point P and the
+ * current heading h (a unit vector; unknown before the first piece unless
+ * the profile has a `heading`). Each piece appends its vertices after P:
+ *  - line: the end point E from the keys given (geometry.h), h = (E - P)/|E - P|;
+ *  - arc: centre C = P + r s, s the unit normal on the side of the turn (left
+ *    for turn > 0); vertex k of m is C + r R(turn k / m) (P - C)/r, R a
+ *    rotation; h = R(turn) h. m = ceil(r |turn| / max_segment): every chord
+ *    is shorter than its arc, r |turn| / m <= max_segment;
+ *  - crest: from the apex P, x = P_x + u X, y = P_y - u a X^n (X in units of
+ *    u metres, so that a is the coefficient of the crest's equation as
+ *    published); the end X_e = (s_e / (a n))^(1 / (n - 1)) where the slope
+ *    a n X^(n-1) reaches s_e, or X_e = end_x. The vertices are equally spaced
+ *    in arc length, S(X) = u int_0^X sqrt(1 + (a n t^(n-1))^2) dt, m =
+ *    ceil(S(X_e) / max_segment) segments (5-point Gauss-Legendre quadrature
+ *    and Newton's method for S(X_k) = k S(X_e) / m); the last vertex is X_e
+ *    itself; h = (1, -s_e) / |(1, -s_e)|, the tangent at the end;
+ *  - steps: the corners P + (k l, -k h) computed from k directly (no
+ *    accumulated round-off): riser then tread for each step, or tread then
+ *    riser; h = +x (or -y when the flight ends with a riser).
+ * Angles in degrees go through degrees_cos_sin, exact at multiples of 90
+ * degrees, so that a vertical face or a quarter turn gives exact axes. */
+
+#define PROFILE_PI 3.14159265358979323846
+
+const char *sluice_piece_name(sluice_piece_kind kind)
+{
+    switch (kind) {
+    case SLUICE_PIECE_LINE: return "line";
+    case SLUICE_PIECE_ARC: return "arc";
+    case SLUICE_PIECE_CREST: return "crest";
+    case SLUICE_PIECE_STEPS: return "steps";
+    }
+    return "piece";
+}
+
+/* cos and sin of an angle in degrees, exact at multiples of 90 degrees. */
+static void degrees_cos_sin(double degrees, double *c, double *s)
+{
+    double r = fmod(degrees, 360.0);
+    if (r < 0)
+        r += 360.0;
+    double q = nearbyint(r / 90.0);
+    double rad = (r - 90.0 * q) * (PROFILE_PI / 180.0);
+    double cr = cos(rad), sr = sin(rad);
+    switch ((int)q & 3) {
+    case 0: *c = cr; *s = sr; break;
+    case 1: *c = -sr; *s = cr; break;
+    case 2: *c = -cr; *s = -sr; break;
+    default: *c = sr; *s = -cr; break;
+    }
+}
+
+static int profile_fail(sluice_profile_problem *problem, uint32_t piece, const char *key,
+                        const char *format, ...) SLUICE_PRINTF(4, 5);
+static int profile_fail(sluice_profile_problem *problem, uint32_t piece, const char *key,
+                        const char *format, ...)
+{
+    problem->piece = piece;
+    problem->other = UINT32_MAX;
+    problem->closing = 0;
+    problem->key = key;
+    va_list ap;
+    va_start(ap, format);
+    vsnprintf(problem->message, sizeof problem->message, format, ap);
+    va_end(ap);
+    return -1;
+}
+
+typedef struct profile_builder {
+    double *xy;
+    uint32_t *piece;
+    uint32_t count, capacity;
+    double max_segment;
+    sluice_profile_problem *problem;
+} profile_builder;
+
+/* Room for `extra` more vertices, within SLUICE_PROFILE_MAX_VERTICES. */
+static int builder_reserve(profile_builder *b, double extra, uint32_t piece)
+{
+    if (!(extra + (double)b->count <= (double)SLUICE_PROFILE_MAX_VERTICES))
+        return profile_fail(b->problem, piece, NULL,
+                            "the profile would need %.3g vertices, more than %u (segments of "
+                            "curves are at most max_segment = %g m long)",
+                            extra + (double)b->count, SLUICE_PROFILE_MAX_VERTICES, b->max_segment);
+    uint32_t need = b->count + (uint32_t)extra;
+    if (need <= b->capacity)
+        return 0;
+    uint32_t capacity = b->capacity ? b->capacity : 64;
+    while (capacity < need)
+        capacity *= 2;
+    double *xy = realloc(b->xy, (size_t)capacity * 2 * sizeof *xy);
+    if (xy)
+        b->xy = xy;
+    uint32_t *pieces = xy ? realloc(b->piece, (size_t)capacity * sizeof *pieces) : NULL;
+    if (!pieces)
+        return profile_fail(b->problem, piece, NULL, "out of memory");
+    b->piece = pieces;
+    b->capacity = capacity;
+    return 0;
+}
+
+/* Appends a vertex (room reserved); refuses a zero-length segment and
+ * coordinates that are not finite. */
+static int builder_push(profile_builder *b, double x, double y, uint32_t piece)
+{
+    if (!isfinite(x) || !isfinite(y))
+        return profile_fail(b->problem, piece, NULL,
+                            "the piece reaches a point with a coordinate too large to represent");
+    const double *last = b->xy + 2 * (size_t)(b->count - 1);
+    if (x == last[0] && y == last[1])
+        return profile_fail(b->problem, piece, NULL,
+                            "the piece makes a segment of zero length at (%g, %g) m", x, y);
+    b->xy[2 * (size_t)b->count] = x;
+    b->xy[2 * (size_t)b->count + 1] = y;
+    b->piece[b->count] = piece;
+    b->count++;
+    return 0;
+}
+
+/* Name of the first key of `keys` (in the order of enum sluice_line_keys). */
+static const char *line_key_name(unsigned keys)
+{
+    static const char *const names[] = {"to", "dx", "dy", "length", "heading", "slope", "to_x",
+                                        "to_y"};
+    for (unsigned i = 0; i < 8; i++)
+        if (keys & (1u << i))
+            return names[i];
+    return NULL;
+}
+
+static int profile_line(profile_builder *b, const sluice_profile_piece *pc, uint32_t index,
+                        double P[2], int *has_heading, double h[2])
+{
+    sluice_profile_problem *pr = b->problem;
+    const unsigned k = pc->keys;
+    const unsigned extents = SLUICE_LINE_LENGTH | SLUICE_LINE_DX | SLUICE_LINE_DY |
+                             SLUICE_LINE_TO_X | SLUICE_LINE_TO_Y;
+    const unsigned directions = SLUICE_LINE_HEADING | SLUICE_LINE_SLOPE;
+    double E[2];
+    if (!(k & (extents | SLUICE_LINE_TO)))
+        return profile_fail(pr, index, NULL,
+                            "a line needs its end: 'to', or 'dx' and 'dy', or one of 'length', "
+                            "'dx', 'dy', 'to_x', 'to_y' along 'heading', 'slope' or the "
+                            "direction of the previous piece");
+    if (k & SLUICE_LINE_TO) {
+        if (k & ~SLUICE_LINE_TO)
+            return profile_fail(pr, index, line_key_name(k & ~SLUICE_LINE_TO),
+                                "'to' sets the line's end alone: remove '%s'",
+                                line_key_name(k & ~SLUICE_LINE_TO));
+        E[0] = pc->to[0];
+        E[1] = pc->to[1];
+    } else if ((k & SLUICE_LINE_DX) && (k & SLUICE_LINE_DY)) {
+        unsigned extra = k & ~(SLUICE_LINE_DX | SLUICE_LINE_DY);
+        if (extra)
+            return profile_fail(pr, index, line_key_name(extra),
+                                "'dx' and 'dy' set the line's end alone: remove '%s'",
+                                line_key_name(extra));
+        E[0] = P[0] + pc->dx;
+        E[1] = P[1] + pc->dy;
+    } else {
+        unsigned extent = k & extents;
+        if (extent & (extent - 1)) /* more than one */
+            return profile_fail(pr, index, line_key_name(extent & (extent - 1)),
+                                "give the line's extent once: one of 'length', 'dx', 'dy', "
+                                "'to_x', 'to_y' (or 'dx' and 'dy' together)");
+        if ((k & directions) == directions)
+            return profile_fail(pr, index, "slope",
+                                "give the line's direction once: 'heading' or 'slope'");
+        if ((k & SLUICE_LINE_LENGTH) && !(pc->length > 0))
+            return profile_fail(pr, index, "length", "the length must be > 0 (got %g m)",
+                                pc->length);
+        double d[2];
+        char along[80];
+        if (k & SLUICE_LINE_HEADING) {
+            if (!isfinite(pc->heading))
+                return profile_fail(pr, index, "heading", "the heading must be finite");
+            degrees_cos_sin(pc->heading, &d[0], &d[1]);
+            snprintf(along, sizeof along, "heading %g deg", pc->heading);
+        } else if (k & SLUICE_LINE_SLOPE) {
+            double norm = hypot(1.0, pc->slope);
+            if (!isfinite(norm))
+                return profile_fail(pr, index, "slope", "the slope must be finite");
+            d[0] = 1.0 / norm;
+            d[1] = pc->slope / norm;
+            snprintf(along, sizeof along, "slope %g", pc->slope);
+        } else if (*has_heading) {
+            d[0] = h[0];
+            d[1] = h[1];
+            snprintf(along, sizeof along, "the previous piece's direction, heading %.6g deg",
+                     atan2(h[1], h[0]) * (180.0 / PROFILE_PI));
+        } else {
+            return profile_fail(pr, index, NULL,
+                                "this line runs along the direction of the previous piece, but "
+                                "it is the first piece: give it a 'heading' or a 'slope', or "
+                                "give the profile a 'heading'");
+        }
+        if (k & SLUICE_LINE_LENGTH) {
+            E[0] = P[0] + pc->length * d[0];
+            E[1] = P[1] + pc->length * d[1];
+        } else {
+            int by_x = (k & (SLUICE_LINE_DX | SLUICE_LINE_TO_X)) != 0;
+            const char *key = line_key_name(extent);
+            double delta = (k & SLUICE_LINE_DX)     ? pc->dx
+                           : (k & SLUICE_LINE_DY)   ? pc->dy
+                           : (k & SLUICE_LINE_TO_X) ? pc->to_x - P[0]
+                                                    : pc->to_y - P[1];
+            if (k & SLUICE_LINE_SLOPE) {
+                /* the direction is (1, slope) up to its sign: either delta goes */
+                if (by_x) {
+                    E[0] = P[0] + delta;
+                    E[1] = P[1] + pc->slope * delta;
+                } else {
+                    if (pc->slope == 0)
+                        return profile_fail(pr, index, key,
+                                            "a line of slope 0 is horizontal: '%s' cannot set "
+                                            "its end (give 'dx', 'to_x' or 'length')",
+                                            key);
+                    E[0] = P[0] + delta / pc->slope;
+                    E[1] = P[1] + delta;
+                }
+                if (by_x && (k & SLUICE_LINE_TO_X))
+                    E[0] = pc->to_x;
+                if (!by_x && (k & SLUICE_LINE_TO_Y))
+                    E[1] = pc->to_y;
+            } else {
+                double component = by_x ? d[0] : d[1];
+                if (fabs(component) < 1e-12)
+                    return profile_fail(pr, index, key,
+                                        "a line along %s is %s: '%s' cannot set its end (give "
+                                        "'%s' or 'length')",
+                                        along, by_x ? "vertical" : "horizontal", key,
+                                        by_x ? "dy' or 'to_y" : "dx' or 'to_x");
+                double t = delta / component;
+                if (!(t > 0))
+                    return profile_fail(pr, index, key,
+                                        "%s = %g m is not ahead along %s (from (%g, %g) m)", key,
+                                        (k & SLUICE_LINE_TO_X)   ? pc->to_x
+                                        : (k & SLUICE_LINE_TO_Y) ? pc->to_y
+                                                                 : delta,
+                                        along, P[0], P[1]);
+                /* the given coordinate exactly, the other one along d */
+                E[0] = by_x ? ((k & SLUICE_LINE_TO_X) ? pc->to_x : P[0] + delta) : P[0] + t * d[0];
+                E[1] = by_x ? P[1] + t * d[1] : ((k & SLUICE_LINE_TO_Y) ? pc->to_y : P[1] + delta);
+            }
+        }
+    }
+    double length = hypot(E[0] - P[0], E[1] - P[1]);
+    if (!isfinite(length))
+        return profile_fail(pr, index, NULL, "the line is too long to represent");
+    if (!(length > 0))
+        return profile_fail(pr, index, NULL, "the line has zero length: it ends where it starts");
+    if (builder_reserve(b, 1, index) != 0 || builder_push(b, E[0], E[1], index) != 0)
+        return -1;
+    h[0] = (E[0] - P[0]) / length;
+    h[1] = (E[1] - P[1]) / length;
+    *has_heading = 1;
+    P[0] = E[0];
+    P[1] = E[1];
+    return 0;
+}
+
+static int profile_arc(profile_builder *b, const sluice_profile_piece *pc, uint32_t index,
+                       double max_segment, double P[2], int *has_heading, double h[2])
+{
+    sluice_profile_problem *pr = b->problem;
+    const double r = pc->radius, turn = pc->turn;
+    if (!(r > 0) || !isfinite(r))
+        return profile_fail(pr, index, "radius", "the radius must be > 0 (got %g m)", r);
+    if (!(turn != 0) || !(fabs(turn) <= 360))
+        return profile_fail(pr, index, "turn",
+                            "the turn must be nonzero and at most 360 degrees either way (got %g)",
+                            turn);
+    if (!*has_heading)
+        return profile_fail(pr, index, NULL,
+                            "an arc starts tangent to the previous piece, but it is the first "
+                            "piece: give the profile a 'heading'");
+    double length = r * fabs(turn) * (PROFILE_PI / 180.0);
+    double m = ceil(length / max_segment);
+    if (m < 1)
+        m = 1;
+    if (builder_reserve(b, m, index) != 0)
+        return -1;
+    double side[2] = {turn > 0 ? -h[1] : h[1], turn > 0 ? h[0] : -h[0]};
+    double C[2] = {P[0] + r * side[0], P[1] + r * side[1]};
+    double e0[2] = {-side[0], -side[1]};
+    uint32_t segments = (uint32_t)m;
+    for (uint32_t k = 1; k <= segments; k++) {
+        double angle = k == segments ? turn : turn * (double)k / (double)segments;
+        double c, s;
+        degrees_cos_sin(angle, &c, &s);
+        double x = C[0] + r * (c * e0[0] - s * e0[1]);
+        double y = C[1] + r * (s * e0[0] + c * e0[1]);
+        if (builder_push(b, x, y, index) != 0)
+            return -1;
+    }
+    double c, s;
+    degrees_cos_sin(turn, &c, &s);
+    double hx = c * h[0] - s * h[1], hy = s * h[0] + c * h[1];
+    double norm = hypot(hx, hy);
+    h[0] = hx / norm;
+    h[1] = hy / norm;
+    P[0] = b->xy[2 * (size_t)(b->count - 1)];
+    P[1] = b->xy[2 * (size_t)(b->count - 1) + 1];
+    return 0;
+}
+
+/* d(arc length)/dX of the crest Y = a X^n (both in units). */
+static double crest_speed(double a, double n, double X)
+{
+    double slope = a * n * pow(X, n - 1);
+    return sqrt(1 + slope * slope);
+}
+
+/* int_lo^hi crest_speed by 5-point Gauss-Legendre. */
+static double crest_gauss(double a, double n, double lo, double hi)
+{
+    static const double node[5] = {-0.9061798459386640, -0.5384693101056831, 0.0,
+                                   0.5384693101056831, 0.9061798459386640};
+    static const double weight[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889,
+                                     0.4786286704993665, 0.2369268850561891};
+    double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo), sum = 0;
+    for (int i = 0; i < 5; i++)
+        sum += weight[i] * crest_speed(a, n, mid + half * node[i]);
+    return half * sum;
+}
+
+static int profile_crest(profile_builder *b, const sluice_profile_piece *pc, uint32_t index,
+                         double max_segment, double P[2], int *has_heading, double h[2])
+{
+    sluice_profile_problem *pr = b->problem;
+    const double a = pc->coefficient, n = pc->exponent, u = pc->unit;
+    if (!(a > 0) || !isfinite(a))
+        return profile_fail(pr, index, "coefficient", "the coefficient must be > 0 (got %g)", a);
+    if (!(n > 1) || !isfinite(n))
+        return profile_fail(pr, index, "exponent",
+                            "the exponent must be > 1 (got %g): the crest's slope a n x^(n-1) "
+                            "must start at 0 at the apex and grow downstream",
+                            n);
+    if (!(u > 0) || !isfinite(u))
+        return profile_fail(pr, index, "unit", "the unit must be > 0 (got %g m)", u);
+    double X_end, s_end;
+    if (pc->end_at_x) {
+        X_end = pc->end_x;
+        if (!(X_end > 0) || !isfinite(X_end))
+            return profile_fail(pr, index, "end_x", "end_x must be > 0 (got %g units)", X_end);
+        s_end = a * n * pow(X_end, n - 1);
+    } else {
+        s_end = pc->end_slope;
+        if (!(s_end > 0) || !isfinite(s_end))
+            return profile_fail(pr, index, "end_slope",
+                                "end_slope must be > 0 (got %g): the crest's slope is 0 at the "
+                                "apex and only grows",
+                                s_end);
+        X_end = pow(s_end / (a * n), 1 / (n - 1));
+    }
+    double x_extent = u * X_end, y_extent = u * a * pow(X_end, n);
+    if (!isfinite(s_end) || !isfinite(x_extent) || !isfinite(y_extent) || !(x_extent > 0))
+        return profile_fail(pr, index, pc->end_at_x ? "end_x" : "end_slope",
+                            "the crest y = %g x^%g reaches the slope %g only at x = %g units of "
+                            "%g m: never at a size that can be represented",
+                            a, n, s_end, X_end, u);
+    /* arc length in units: graded panels X_end (j / J)^2 resolve the
+     * non-smooth speed at the apex (X^(n-1), n < 2) */
+    const int J = 256;
+    double total = 0;
+    for (int j = 0; j < J; j++) {
+        double lo = X_end * ((double)j / J) * ((double)j / J);
+        double hi = X_end * ((double)(j + 1) / J) * ((double)(j + 1) / J);
+        total += crest_gauss(a, n, lo, hi);
+    }
+    double m = ceil(u * total / max_segment);
+    if (m < 1)
+        m = 1;
+    if (builder_reserve(b, m, index) != 0)
+        return -1;
+    uint32_t segments = (uint32_t)m;
+    double X = 0, S = 0;
+    for (uint32_t k = 1; k <= segments; k++) {
+        double next = X_end;
+        if (k < segments) {
+            double target = total * (double)k / (double)segments;
+            double lo = X, hi = X_end;
+            next = fmin(X + (target - S) / crest_speed(a, n, X), X_end);
+            for (int it = 0; it < 100; it++) {
+                double g = S + crest_gauss(a, n, X, next) - target;
+                if (g > 0)
+                    hi = next;
+                else
+                    lo = next;
+                double step = g / crest_speed(a, n, next);
+                double moved = next - step;
+                if (!(moved > lo && moved < hi))
+                    moved = 0.5 * (lo + hi);
+                double change = fabs(moved - next);
+                next = moved;
+                if (change <= 1e-15 * X_end)
+                    break;
+            }
+            S += crest_gauss(a, n, X, next);
+        }
+        X = next;
+        if (builder_push(b, P[0] + u * X, P[1] - u * a * pow(X, n), index) != 0)
+            return -1;
+    }
+    double norm = hypot(1.0, s_end);
+    h[0] = 1.0 / norm;
+    h[1] = -s_end / norm;
+    *has_heading = 1;
+    P[0] = b->xy[2 * (size_t)(b->count - 1)];
+    P[1] = b->xy[2 * (size_t)(b->count - 1) + 1];
+    return 0;
+}
+
+static int profile_steps(profile_builder *b, const sluice_profile_piece *pc, uint32_t index,
+                         double P[2], int *has_heading, double h[2])
+{
+    sluice_profile_problem *pr = b->problem;
+    const double rise = pc->height, tread = pc->step_length;
+    if (pc->count < 1)
+        return profile_fail(pr, index, "count", "a flight needs at least one step (got %u)",
+                            pc->count);
+    if (!(rise > 0) || !isfinite(rise))
+        return profile_fail(pr, index, "height", "the step height must be > 0 (got %g m)", rise);
+    if (!(tread > 0) || !isfinite(tread))
+        return profile_fail(pr, index, "length", "the step length must be > 0 (got %g m)",
+                            tread);
+    if (builder_reserve(b, 2.0 * pc->count, index) != 0)
+        return -1;
+    const double x0 = P[0], y0 = P[1];
+    for (uint32_t i = 0; i < pc->count; i++) {
+        double k = (double)i, k1 = (double)i + 1;
+        int rc = pc->tread_first
+                     ? builder_push(b, x0 + k1 * tread, y0 - k * rise, index) ||
+                           builder_push(b, x0 + k1 * tread, y0 - k1 * rise, index)
+                     : builder_push(b, x0 + k * tread, y0 - k1 * rise, index) ||
+                           builder_push(b, x0 + k1 * tread, y0 - k1 * rise, index);
+        if (rc)
+            return -1;
+    }
+    h[0] = pc->tread_first ? 0 : 1;
+    h[1] = pc->tread_first ? -1 : 0;
+    *has_heading = 1;
+    P[0] = b->xy[2 * (size_t)(b->count - 1)];
+    P[1] = b->xy[2 * (size_t)(b->count - 1) + 1];
+    return 0;
+}
+
+void sluice_profile_path_free(sluice_profile_path *path)
+{
+    if (!path)
+        return;
+    free(path->xy);
+    free(path->piece);
+    path->xy = NULL;
+    path->piece = NULL;
+    path->vertex_count = 0;
+}
+
+int sluice_profile_build(const sluice_profile *profile, sluice_profile_path *out,
+                         sluice_profile_problem *problem)
+{
+    sluice_profile_problem ignored;
+    if (!problem)
+        problem = &ignored;
+    memset(problem, 0, sizeof *problem);
+    if (out)
+        *out = (sluice_profile_path){0};
+    if (!profile || !out)
+        return profile_fail(problem, UINT32_MAX, NULL, "no profile to build");
+    if (profile->piece_count == 0 || !profile->pieces)
+        return profile_fail(problem, UINT32_MAX, NULL, "a profile needs at least one piece");
+    const double max_segment = profile->max_segment;
+    if (!(max_segment > 0) || !isfinite(max_segment))
+        return profile_fail(problem, UINT32_MAX, "max_segment",
+                            "max_segment must be > 0 (got %g m)", max_segment);
+    if (!isfinite(profile->start[0]) || !isfinite(profile->start[1]))
+        return profile_fail(problem, UINT32_MAX, "start", "the start must be finite");
+    profile_builder b = {0};
+    b.problem = problem;
+    b.max_segment = max_segment;
+    double P[2] = {profile->start[0], profile->start[1]}, h[2] = {1, 0};
+    int has_heading = profile->has_heading;
+    if (has_heading) {
+        if (!isfinite(profile->heading))
+            return profile_fail(problem, UINT32_MAX, "heading", "the heading must be finite");
+        degrees_cos_sin(profile->heading, &h[0], &h[1]);
+    }
+    int rc = builder_reserve(&b, 1, UINT32_MAX);
+    if (rc == 0) {
+        b.xy[0] = P[0];
+        b.xy[1] = P[1];
+        b.piece[0] = UINT32_MAX;
+        b.count = 1;
+    }
+    for (uint32_t i = 0; i < profile->piece_count && rc == 0; i++) {
+        const sluice_profile_piece *pc = &profile->pieces[i];
+        switch (pc->kind) {
+        case SLUICE_PIECE_LINE: rc = profile_line(&b, pc, i, P, &has_heading, h); break;
+        case SLUICE_PIECE_ARC:
+            rc = profile_arc(&b, pc, i, max_segment, P, &has_heading, h);
+            break;
+        case SLUICE_PIECE_CREST:
+            rc = profile_crest(&b, pc, i, max_segment, P, &has_heading, h);
+            break;
+        case SLUICE_PIECE_STEPS: rc = profile_steps(&b, pc, i, P, &has_heading, h); break;
+        default: rc = profile_fail(problem, i, NULL, "unknown kind of piece %d", (int)pc->kind);
+        }
+    }
+    if (rc == 0 && profile->closed) {
+        /* a last vertex on the start (a full circle) is the start itself */
+        double lo[2] = {b.xy[0], b.xy[1]}, hi[2] = {b.xy[0], b.xy[1]};
+        for (uint32_t v = 1; v < b.count; v++)
+            for (int d = 0; d < 2; d++) {
+                lo[d] = fmin(lo[d], b.xy[2 * v + (uint32_t)d]);
+                hi[d] = fmax(hi[d], b.xy[2 * v + (uint32_t)d]);
+            }
+        double size = hypot(hi[0] - lo[0], hi[1] - lo[1]);
+        const double *last = b.xy + 2 * (size_t)(b.count - 1);
+        if (b.count > 1 && hypot(last[0] - b.xy[0], last[1] - b.xy[1]) <= 1e-12 * size) {
+            b.count--;
+            if (b.count > 1)
+                b.piece[0] = b.piece[b.count];
+        }
+        if (b.count < 3)
+            rc = profile_fail(problem, UINT32_MAX, NULL,
+                              "a closed profile needs at least 3 distinct vertices (it has %u)",
+                              b.count);
+    }
+    if (rc == 0) {
+        uint32_t first = 0, second = 0;
+        double where[2];
+        int crossing =
+            sluice_polyline_crossing(b.xy, b.count, profile->closed, &first, &second, where);
+        if (crossing < 0) {
+            rc = profile_fail(problem, UINT32_MAX, NULL, "out of memory");
+        } else if (crossing > 0) {
+            /* segment s runs from vertex s to vertex s + 1 (to vertex 0 for
+             * the last segment of a closed profile) and belongs to the piece
+             * of its end; UINT32_MAX: the closing segment */
+            uint32_t piece_first = b.piece[(first + 1) % b.count];
+            uint32_t piece_second = b.piece[(second + 1) % b.count];
+            int fold = second == first + 1 || (profile->closed && first == 0 &&
+                                               second == b.count - 1);
+            int closing = piece_second == UINT32_MAX;
+            rc = profile_fail(problem, closing ? piece_first : piece_second, NULL,
+                              "the profile %s itself at (%.6g, %.6g) m",
+                              fold ? "folds back onto" : "crosses or touches", where[0],
+                              where[1]);
+            problem->other = closing ? UINT32_MAX : piece_first;
+            problem->closing = closing;
+        }
+    }
+    if (rc != 0) {
+        free(b.xy);
+        free(b.piece);
+        return -1;
+    }
+    /* hand out sluice_real vertices */
+    sluice_real *xy = malloc((size_t)b.count * 2 * sizeof *xy);
+    if (!xy) {
+        free(b.xy);
+        free(b.piece);
+        return profile_fail(problem, UINT32_MAX, NULL, "out of memory");
+    }
+    for (size_t v = 0; v < 2 * (size_t)b.count; v++)
+        xy[v] = (sluice_real)b.xy[v];
+    free(b.xy);
+    out->xy = xy;
+    out->piece = b.piece;
+    out->vertex_count = b.count;
+    return 0;
+}
+
+/* -------------------------------------------------- polyline crossings -- */
+
+typedef struct segment_span {
+    double lo, hi; /* x extent */
+    uint32_t segment;
+} segment_span;
+
+static int segment_span_compare(const void *pa, const void *pb)
+{
+    const segment_span *a = pa, *b = pb;
+    if (a->lo != b->lo)
+        return a->lo < b->lo ? -1 : 1;
+    return (a->segment > b->segment) - (a->segment < b->segment);
+}
+
+static double orient2(const double a[2], const double b[2], const double c[2])
+{
+    return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+}
+
+/* p, collinear with ab, lies within the segment ab. */
+static int within_segment(const double a[2], const double b[2], const double p[2])
+{
+    return fmin(a[0], b[0]) <= p[0] && p[0] <= fmax(a[0], b[0]) && fmin(a[1], b[1]) <= p[1] &&
+           p[1] <= fmax(a[1], b[1]);
+}
+
+/* Closed segments ab and cd share a point: 1 and one such point. */
+static int segments_meet(const double a[2], const double b[2], const double c[2],
+                         const double d[2], double where[2])
+{
+    double o1 = orient2(a, b, c), o2 = orient2(a, b, d);
+    double o3 = orient2(c, d, a), o4 = orient2(c, d, b);
+    if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) {
+        double t = o3 / (o3 - o4);
+        where[0] = a[0] + t * (b[0] - a[0]);
+        where[1] = a[1] + t * (b[1] - a[1]);
+        return 1;
+    }
+    const double *candidates[4] = {c, d, a, b};
+    const double orientation[4] = {o1, o2, o3, o4};
+    for (int i = 0; i < 4; i++) {
+        const double *s0 = i < 2 ? a : c, *s1 = i < 2 ? b : d;
+        if (orientation[i] == 0 && within_segment(s0, s1, candidates[i])) {
+            where[0] = candidates[i][0];
+            where[1] = candidates[i][1];
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Neighbouring segments ab and bc fold back: antiparallel and collinear. */
+static int segments_fold(const double a[2], const double b[2], const double c[2])
+{
+    double u[2] = {b[0] - a[0], b[1] - a[1]}, v[2] = {c[0] - b[0], c[1] - b[1]};
+    double cross = u[0] * v[1] - u[1] * v[0], dot = u[0] * v[0] + u[1] * v[1];
+    return dot < 0 && fabs(cross) <= 1e-12 * hypot(u[0], u[1]) * hypot(v[0], v[1]);
+}
+
+/* Spans sorted by their lower x; each segment is tested against the ones
+ * whose x extent starts before its own ends (and overlaps it in y). Of all
+ * the crossings the one with the smallest (second, first) is reported: the
+ * first place along the polyline where it meets an earlier part of itself. */
+int sluice_polyline_crossing(const sluice_real *xy, uint32_t n, int closed, uint32_t *first,
+                             uint32_t *second, double where[2])
+{
+    if (!xy || n < 2)
+        return 0;
+    uint32_t segments = closed && n >= 3 ? n : n - 1;
+    segment_span *spans = malloc((size_t)segments * sizeof *spans);
+    if (!spans)
+        return -1;
+    for (uint32_t s = 0; s < segments; s++) {
+        double x0 = (double)xy[2 * s], x1 = (double)xy[2 * ((s + 1) % n)];
+        spans[s].lo = fmin(x0, x1);
+        spans[s].hi = fmax(x0, x1);
+        spans[s].segment = s;
+    }
+    qsort(spans, segments, sizeof *spans, segment_span_compare);
+    uint32_t best_first = 0, best_second = UINT32_MAX;
+    double best_where[2] = {0, 0};
+    for (uint32_t i = 0; i < segments; i++) {
+        for (uint32_t j = i + 1; j < segments && spans[j].lo <= spans[i].hi; j++) {
+            uint32_t s = spans[i].segment, t = spans[j].segment;
+            uint32_t lo = s < t ? s : t, hi = s < t ? t : s;
+            if (hi > best_second || (hi == best_second && lo >= best_first))
+                continue; /* cannot improve on the crossing found */
+            double a[2] = {(double)xy[2 * lo], (double)xy[2 * lo + 1]};
+            double b[2] = {(double)xy[2 * ((lo + 1) % n)], (double)xy[2 * ((lo + 1) % n) + 1]};
+            double c[2] = {(double)xy[2 * hi], (double)xy[2 * hi + 1]};
+            double d[2] = {(double)xy[2 * ((hi + 1) % n)], (double)xy[2 * ((hi + 1) % n) + 1]};
+            int next = hi == lo + 1, wrap = closed && lo == 0 && hi == segments - 1;
+            double at[2];
+            int found = 0;
+            if (next) {
+                found = segments_fold(a, b, d);
+                at[0] = b[0];
+                at[1] = b[1];
+            } else if (wrap) {
+                found = segments_fold(c, a, b); /* c -> d = a -> b */
+                at[0] = a[0];
+                at[1] = a[1];
+            } else if (fmax(a[1], b[1]) >= fmin(c[1], d[1]) &&
+                       fmax(c[1], d[1]) >= fmin(a[1], b[1])) {
+                found = segments_meet(a, b, c, d, at);
+            }
+            if (found) {
+                best_first = lo;
+                best_second = hi;
+                best_where[0] = at[0];
+                best_where[1] = at[1];
+            }
+        }
+    }
+    free(spans);
+    if (best_second == UINT32_MAX)
+        return 0;
+    *first = best_first;
+    *second = best_second;
+    where[0] = best_where[0];
+    where[1] = best_where[1];
+    return 1;
 }

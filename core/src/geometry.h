@@ -129,4 +129,103 @@ int sluice_wall_layer_points(const sluice_wall_geometry *wall, sluice_real spaci
                              const sluice_real lattice_origin[3], sluice_real thickness,
                              sluice_points *out);
 
+/* ------------------------------------------------------------- profiles -- */
+
+/* A 2D profile: a polyline written as an engineer describes a structure, a
+ * start point followed by pieces appended in order, each starting where the
+ * previous one ended. Curved pieces are split into equal segments no longer
+ * than max_segment. The fluid is on the left of the direction of travel, as
+ * for every 2D wall polyline. Angles are in degrees, counter-clockwise from +x;
+ * a heading is the direction of travel. */
+typedef enum sluice_piece_kind {
+    SLUICE_PIECE_LINE = 0,  /* straight line */
+    SLUICE_PIECE_ARC = 1,   /* circular arc, tangent to the previous piece */
+    SLUICE_PIECE_CREST = 2, /* power-law (WES) crest y = -a x^n from its apex */
+    SLUICE_PIECE_STEPS = 3  /* flight of steps down towards +x */
+} sluice_piece_kind;
+
+/* Which keys a line was given. Its end is set by exactly one of: TO; DX and
+ * DY together; one extent (LENGTH, DX, DY, TO_X or TO_Y: up to x = to_x or
+ * y = to_y) along a direction, HEADING or SLOPE or else the previous piece's
+ * direction. */
+enum sluice_line_keys {
+    SLUICE_LINE_TO = 1u << 0,
+    SLUICE_LINE_DX = 1u << 1,
+    SLUICE_LINE_DY = 1u << 2,
+    SLUICE_LINE_LENGTH = 1u << 3,
+    SLUICE_LINE_HEADING = 1u << 4,
+    SLUICE_LINE_SLOPE = 1u << 5,
+    SLUICE_LINE_TO_X = 1u << 6,
+    SLUICE_LINE_TO_Y = 1u << 7
+};
+
+typedef struct sluice_profile_piece {
+    sluice_piece_kind kind;
+    /* LINE: to, to_x, to_y (m, absolute), dx, dy (m), length (m), heading
+     * (deg), slope (dy/dx; with length: towards +x) */
+    unsigned keys; /* sluice_line_keys given */
+    double to[2], to_x, to_y, dx, dy, length, heading, slope;
+    /* ARC: radius (m), turn (deg, > 0 counter-clockwise = to the left) */
+    double radius, turn;
+    /* CREST: y below the apex = unit * coefficient * (x / unit)^exponent, x
+     * from the apex towards +x; it ends where the slope dy/dx (downwards)
+     * reaches end_slope, or at x = end_x (in units) when end_at_x */
+    double coefficient, exponent, unit, end_slope, end_x;
+    int end_at_x;
+    /* STEPS: count steps of height (rise) and length (tread), each a riser
+     * down then a tread towards +x (tread first when tread_first) */
+    uint32_t count;
+    double height, step_length;
+    int tread_first;
+} sluice_profile_piece;
+
+typedef struct sluice_profile {
+    double start[2];
+    int has_heading;
+    double heading; /* deg: direction before the first piece */
+    const sluice_profile_piece *pieces;
+    uint32_t piece_count;
+    int closed;         /* join the last vertex to the start */
+    double max_segment; /* m: longest segment of a curved piece */
+} sluice_profile;
+
+/* The discretised profile: vertex_count vertices (x, y); piece[v] is the
+ * piece whose segment ends at vertex v (UINT32_MAX for the start). A closed
+ * profile does not repeat the start at the end. */
+typedef struct sluice_profile_path {
+    sluice_real *xy;
+    uint32_t *piece;
+    uint32_t vertex_count;
+} sluice_profile_path;
+
+/* Why a profile was refused: the piece at fault (UINT32_MAX: the profile as a
+ * whole), the other piece of a crossing (UINT32_MAX: none, or the closing
+ * segment when `closing`), the key at fault (NULL: the piece itself). */
+typedef struct sluice_profile_problem {
+    uint32_t piece, other;
+    int closing;
+    const char *key;
+    char message[400];
+} sluice_profile_problem;
+
+/* Most vertices of one profile. */
+#define SLUICE_PROFILE_MAX_VERTICES (1u << 22)
+
+/* Builds the vertices. Returns 0, or -1 with *problem filled (bad parameters,
+ * a line whose end is not determined, a curve needing more than
+ * SLUICE_PROFILE_MAX_VERTICES vertices, a profile that crosses, touches or
+ * folds back on itself, out of memory). */
+int sluice_profile_build(const sluice_profile *profile, sluice_profile_path *out,
+                         sluice_profile_problem *problem);
+void sluice_profile_path_free(sluice_profile_path *path);
+const char *sluice_piece_name(sluice_piece_kind kind);
+
+/* Segment crossing test of a polyline of n vertices (closed: also the
+ * segment n-1 -> 0): two segments that are not neighbours crossing or
+ * touching, or two neighbours folding back onto each other. Returns 1 and the
+ * two segments (*first < *second; the segment s runs from vertex s) and a
+ * point of contact, 0 when the polyline is simple, -1 on OOM. */
+int sluice_polyline_crossing(const sluice_real *xy, uint32_t n, int closed, uint32_t *first,
+                             uint32_t *second, double where[2]);
+
 #endif

@@ -133,12 +133,13 @@ typedef struct {
     int shape;
     sluice_real min[3], max[3];
     sluice_real_list points;
+    sluice_real start[3], heading, max_segment; /* profile */
     sluice_real velocity[3];
     sluice_real surface;
     sluice_real lattice_origin[3];
 } fluid_config;
 
-#define FLUID_SHAPES "box|polygon"
+#define FLUID_SHAPES "box|polygon|profile"
 #define FLUID_COMMON                                                                            \
     {"velocity", SLUICE_PARAM_VECTOR, OFF(fluid_config, velocity), "[0, 0] | [0, 0, 0]", 0, 0, \
      0, "m s^-1", "initial velocity of the region's particles", NULL, SLUICE_LENGTH_DIM},      \
@@ -175,15 +176,43 @@ static const sluice_param_spec fluid_polygon_specs[] = {
     FLUID_COMMON,
 };
 
+/* The keys of a profile. `pieces` is read by load_profile and taken out of
+ * the mapping while the binder reads the rest: its entry here is never
+ * bound, it names the key for the binder's suggestions and key lists. */
+#define PROFILE_KEYS(type)                                                                      \
+    {"pieces", SLUICE_PARAM_POINT_LIST, OFF(type, points), NULL, 0, 0, SLUICE_PARAM_OPTIONAL,    \
+     NULL, "the pieces (line, arc, crest, steps), in order from the start", NULL, 0},           \
+    {"start", SLUICE_PARAM_VECTOR, OFF(type, start), NULL, 0, 0, 0, "m",                        \
+     "first vertex of the profile (2D)", NULL, 2},                                              \
+    {"heading", SLUICE_PARAM_REAL, OFF(type, heading), NULL, 0, 0, SLUICE_PARAM_OPTIONAL, "deg", \
+     "direction of travel before the first piece, counter-clockwise from +x (needed when the "  \
+     "first piece continues a direction: an arc, a line by length)",                           \
+     NULL, 0},                                                                                  \
+    {                                                                                           \
+        "max_segment", SLUICE_PARAM_REAL, OFF(type, max_segment), NULL, 0, 0,                   \
+            SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_OPTIONAL, "m",     \
+            "longest segment of a curved piece (arc, crest); default particles.spacing / 2",    \
+            NULL, 0                                                                             \
+    }
+
+static const sluice_param_spec fluid_profile_specs[] = {
+    {"shape", SLUICE_PARAM_ENUM, OFF(fluid_config, shape), NULL, 0, 0, 0, NULL,
+     "profile: the region inside a profile closed back to its start (2D)", FLUID_SHAPES, 0},
+    PROFILE_KEYS(fluid_config),
+    FLUID_COMMON,
+};
+
 typedef struct {
     int shape;
     sluice_real min[3], max[3];
     sluice_real_list points;
+    sluice_real start[3], heading, max_segment; /* profile */
+    int closed;
     const char *scheme, *name;
     sluice_real lattice_origin[3];
 } wall_config;
 
-#define WALL_SHAPES "tank|box|polyline|polygon"
+#define WALL_SHAPES "tank|box|polyline|polygon|profile"
 #define WALL_COMMON                                                                             \
     {"scheme", SLUICE_PARAM_STRING, OFF(wall_config, scheme), NULL, 0, 0, SLUICE_PARAM_OPTIONAL, \
      NULL, "wall scheme plugin for this wall (default: the only one loaded)", NULL, 0},        \
@@ -217,6 +246,102 @@ static const sluice_param_spec wall_line_specs[] = {
     {"points", SLUICE_PARAM_POINT_LIST, OFF(wall_config, points), NULL, 0, 0, 0, "m",
      "vertices (2D)", NULL, 0},
     WALL_COMMON,
+};
+
+static const sluice_param_spec wall_profile_specs[] = {
+    {"shape", SLUICE_PARAM_ENUM, OFF(wall_config, shape), NULL, 0, 0, 0, NULL,
+     "profile: a 2D wall built from pieces (lines, arcs, crests, steps), the fluid on its left",
+     WALL_SHAPES, 0},
+    PROFILE_KEYS(wall_config),
+    {"closed", SLUICE_PARAM_BOOL, OFF(wall_config, closed), "false", 0, 0, 0, NULL,
+     "join the end back to the start (the fluid is still on the left: inside a "
+     "counter-clockwise profile, outside a clockwise one)",
+     NULL, 0},
+    WALL_COMMON,
+};
+
+/* ------------------------------------------------------------- pieces -- */
+
+typedef struct {
+    int piece;
+    sluice_real to[3], to_x, to_y, dx, dy, length, heading, slope; /* line; length: steps too */
+    sluice_real radius, turn;                          /* arc */
+    sluice_real coefficient, exponent, unit, end_slope, end_x; /* crest */
+    int64_t count;                                     /* steps */
+    sluice_real height;
+    int first;
+} piece_config;
+
+#define PIECE_KINDS "line|arc|crest|steps"
+#define PIECE_KEY                                                                               \
+    {"piece", SLUICE_PARAM_ENUM, OFF(piece_config, piece), NULL, 0, 0, 0, NULL,                 \
+     "kind of piece", PIECE_KINDS, 0}
+
+static const sluice_param_spec piece_line_specs[] = {
+    PIECE_KEY,
+    {"to", SLUICE_PARAM_VECTOR, OFF(piece_config, to), NULL, 0, 0, SLUICE_PARAM_OPTIONAL, "m",
+     "end point", NULL, 2},
+    {"to_x", SLUICE_PARAM_REAL, OFF(piece_config, to_x), NULL, 0, 0, SLUICE_PARAM_OPTIONAL, "m",
+     "or: the line runs along its direction up to x = to_x", NULL, 0},
+    {"to_y", SLUICE_PARAM_REAL, OFF(piece_config, to_y), NULL, 0, 0, SLUICE_PARAM_OPTIONAL, "m",
+     "or: the line runs along its direction up to y = to_y", NULL, 0},
+    {"dx", SLUICE_PARAM_REAL, OFF(piece_config, dx), NULL, 0, 0, SLUICE_PARAM_OPTIONAL, "m",
+     "extent along x (with dy: the end is start + (dx, dy))", NULL, 0},
+    {"dy", SLUICE_PARAM_REAL, OFF(piece_config, dy), NULL, 0, 0, SLUICE_PARAM_OPTIONAL, "m",
+     "extent along y", NULL, 0},
+    {"length", SLUICE_PARAM_REAL, OFF(piece_config, length), NULL, 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_OPTIONAL, "m",
+     "length along the direction (heading, slope, or the previous piece's)", NULL, 0},
+    {"heading", SLUICE_PARAM_REAL, OFF(piece_config, heading), NULL, 0, 0, SLUICE_PARAM_OPTIONAL,
+     "deg", "direction, counter-clockwise from +x (default: the previous piece's)", NULL, 0},
+    {"slope", SLUICE_PARAM_REAL, OFF(piece_config, slope), NULL, 0, 0, SLUICE_PARAM_OPTIONAL, "1",
+     "direction as dy/dx (with length: towards +x); -1.333 for a 1:0.75 chute", NULL, 0},
+};
+
+static const sluice_param_spec piece_arc_specs[] = {
+    PIECE_KEY,
+    {"radius", SLUICE_PARAM_REAL, OFF(piece_config, radius), NULL, 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "m", "radius of the arc", NULL, 0},
+    {"turn", SLUICE_PARAM_REAL, OFF(piece_config, turn), NULL, -360, 360,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "deg",
+     "change of direction along the arc: > 0 counter-clockwise (towards the fluid side), < 0 "
+     "clockwise",
+     NULL, 0},
+};
+
+static const sluice_param_spec piece_crest_specs[] = {
+    PIECE_KEY,
+    {"coefficient", SLUICE_PARAM_REAL, OFF(piece_config, coefficient), NULL, 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "1",
+     "a of the crest y = a x^n (y below the apex, x downstream of it, both in units)", NULL, 0},
+    {"exponent", SLUICE_PARAM_REAL, OFF(piece_config, exponent), NULL, 1, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "1", "n of the crest y = a x^n (1.85 for "
+     "the WES standard crest)", NULL, 0},
+    {"unit", SLUICE_PARAM_REAL, OFF(piece_config, unit), "1", 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "m",
+     "length of one unit of x and y in the crest's equation (0.01: centimetres)", NULL, 0},
+    {"end_slope", SLUICE_PARAM_REAL, OFF(piece_config, end_slope), NULL, 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_OPTIONAL, "1",
+     "the crest ends where its slope dy/dx reaches this (1.3333 for 1:0.75), the tangent "
+     "point",
+     NULL, 0},
+    {"end_x", SLUICE_PARAM_REAL, OFF(piece_config, end_x), NULL, 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_OPTIONAL, "units",
+     "or: the crest ends at this x from the apex (in units)", NULL, 0},
+};
+
+static const sluice_param_spec piece_steps_specs[] = {
+    PIECE_KEY,
+    {"count", SLUICE_PARAM_INT, OFF(piece_config, count), NULL, 1, 1000000,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1", "number of steps", NULL, 0},
+    {"height", SLUICE_PARAM_REAL, OFF(piece_config, height), NULL, 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "m", "rise of each step (riser)", NULL,
+     0},
+    {"length", SLUICE_PARAM_REAL, OFF(piece_config, length), NULL, 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "m",
+     "horizontal length of each step (tread)", NULL, 0},
+    {"first", SLUICE_PARAM_ENUM, OFF(piece_config, first), "riser", 0, 0, 0, NULL,
+     "each step is a riser down then a tread towards +x, or the tread first", "riser|tread", 0},
 };
 
 /* ------------------------------------------------------------- helpers -- */
@@ -400,6 +525,296 @@ static sluice_node *geometry_list(sluice_scene *scene, sluice_node *geometry, co
     return list;
 }
 
+/* ------------------------------------------------------------ profiles -- */
+
+/* A key taken out of a mapping while a schema binder reads the rest (the
+ * binder would report it as unknown); reattach() puts it back in place. */
+typedef struct detached_key {
+    size_t index;
+    sluice_node *key, *value; /* NULL: the key was absent */
+} detached_key;
+
+static detached_key detach(sluice_node *mapping, const char *name)
+{
+    detached_key d = {0, NULL, NULL};
+    if (!mapping || mapping->kind != SLUICE_NODE_MAPPING)
+        return d;
+    for (size_t i = 0; i < mapping->count; i++)
+        if (strcmp(mapping->keys[i]->value, name) == 0) {
+            d.index = i;
+            d.key = mapping->keys[i];
+            d.value = mapping->items[i];
+            memmove(mapping->keys + i, mapping->keys + i + 1,
+                    (mapping->count - i - 1) * sizeof *mapping->keys);
+            memmove(mapping->items + i, mapping->items + i + 1,
+                    (mapping->count - i - 1) * sizeof *mapping->items);
+            mapping->count--;
+            break;
+        }
+    return d;
+}
+
+/* 0, or -1 on OOM (the detached nodes are then freed). */
+static int reattach(sluice_node *mapping, detached_key d)
+{
+    if (!d.key)
+        return 0;
+    size_t count = mapping->count + 1;
+    sluice_node **keys = realloc(mapping->keys, count * sizeof *keys);
+    if (keys)
+        mapping->keys = keys;
+    sluice_node **items = keys ? realloc(mapping->items, count * sizeof *items) : NULL;
+    if (!items) {
+        sluice_node_free(d.key);
+        sluice_node_free(d.value);
+        return -1;
+    }
+    mapping->items = items;
+    size_t at = d.index <= mapping->count ? d.index : mapping->count;
+    memmove(mapping->keys + at + 1, mapping->keys + at,
+            (mapping->count - at) * sizeof *mapping->keys);
+    memmove(mapping->items + at + 1, mapping->items + at,
+            (mapping->count - at) * sizeof *mapping->items);
+    mapping->keys[at] = d.key;
+    mapping->items[at] = d.value;
+    mapping->count = count;
+    return 0;
+}
+
+/* The pieces of a profile, flattened: an entry of `pieces` that is itself a
+ * list (a YAML alias *name of pieces written elsewhere) is spliced in place.
+ * slot[k] is the tree slot of piece k, path[k] its dotted path. */
+#define PIECE_NESTING 8
+#define PIECE_PATH 128
+
+typedef struct piece_refs {
+    sluice_node ***slot;
+    char (*path)[PIECE_PATH];
+    size_t count, capacity;
+} piece_refs;
+
+static int collect_pieces(sluice_scene *scene, sluice_node *sequence, const char *path, int depth,
+                          piece_refs *refs, sluice_diag *diag)
+{
+    sequence->used = 1;
+    for (size_t i = 0; i < sequence->count; i++) {
+        sluice_node *item = sequence->items[i];
+        char here[PIECE_PATH];
+        if (snprintf(here, sizeof here, "%s.%zu", path, i) >= (int)sizeof here) {
+            error_at(diag, scene, item, "%s: pieces nest too deep", path);
+            return 1;
+        }
+        if (item->kind == SLUICE_NODE_SEQUENCE) {
+            if (depth >= PIECE_NESTING) {
+                error_at(diag, scene, item, "%s: lists of pieces nest more than %d deep", here,
+                         PIECE_NESTING);
+                return 1;
+            }
+            int e = collect_pieces(scene, item, here, depth + 1, refs, diag);
+            if (e)
+                return e;
+            continue;
+        }
+        if (refs->count == refs->capacity) {
+            size_t cap = refs->capacity ? 2 * refs->capacity : 16;
+            sluice_node ***slots = sluice_arena_alloc(scene->arena, cap * sizeof *slots);
+            char(*paths)[PIECE_PATH] = sluice_arena_alloc(scene->arena, cap * sizeof *paths);
+            if (!slots || !paths) {
+                error_at(diag, scene, item, "out of memory");
+                return 1;
+            }
+            if (refs->count) {
+                memcpy(slots, refs->slot, refs->count * sizeof *slots);
+                memcpy(paths, refs->path, refs->count * sizeof *paths);
+            }
+            refs->slot = slots;
+            refs->path = paths;
+            refs->capacity = cap;
+        }
+        refs->slot[refs->count] = &sequence->items[i];
+        memcpy(refs->path[refs->count], here, sizeof here);
+        refs->count++;
+    }
+    return 0;
+}
+
+/* Reads one piece into *out; returns the number of errors reported. */
+static int load_piece(sluice_scene *scene, sluice_node **slot, const char *path,
+                      sluice_profile_piece *out, sluice_diag *diag)
+{
+    sluice_node *item = *slot;
+    if (item->kind != SLUICE_NODE_MAPPING) {
+        error_at(diag, scene, item,
+                 "%s must be a mapping with a 'piece' (one of: line, arc, crest, steps)", path);
+        return 1;
+    }
+    const sluice_node *kind = sluice_node_get(item, "piece");
+    static const char *const kinds[] = {"line", "arc", "crest", "steps"};
+    int k = -1;
+    if (kind && kind->kind == SLUICE_NODE_SCALAR)
+        for (int i = 0; i < 4; i++)
+            if (strcmp(kind->value, kinds[i]) == 0)
+                k = i;
+    if (k < 0) {
+        if (!kind) {
+            error_at(diag, scene, item, "%s has no 'piece' (one of: line, arc, crest, steps)",
+                     path);
+            return 1;
+        }
+        const char *close =
+            kind->kind == SLUICE_NODE_SCALAR ? sluice_closest(kind->value, kinds, 4) : NULL;
+        if (close)
+            error_at(diag, scene, kind, "unknown piece '%s' in %s; did you mean '%s'?",
+                     kind->value, path, close);
+        else
+            error_at(diag, scene, kind, "unknown piece in %s (one of: line, arc, crest, steps)",
+                     path);
+        return 1;
+    }
+    static const sluice_param_spec *const specs[] = {piece_line_specs, piece_arc_specs,
+                                                     piece_crest_specs, piece_steps_specs};
+    static const uint32_t counts[] = {SLUICE_COUNT(piece_line_specs),
+                                      SLUICE_COUNT(piece_arc_specs),
+                                      SLUICE_COUNT(piece_crest_specs),
+                                      SLUICE_COUNT(piece_steps_specs)};
+    piece_config c;
+    memset(&c, 0, sizeof c);
+    int e = sluice_schema_bind(specs[k], counts[k], slot, item, path, scene->dimensions, &c,
+                               scene->arena, diag);
+    if (e)
+        return e;
+    item = *slot;
+    memset(out, 0, sizeof *out);
+    out->kind = (sluice_piece_kind)k;
+    switch (out->kind) {
+    case SLUICE_PIECE_LINE: {
+        static const char *const names[] = {"to",      "dx",    "dy",   "length",
+                                            "heading", "slope", "to_x", "to_y"};
+        for (unsigned i = 0; i < 8; i++)
+            if (sluice_node_get(item, names[i]))
+                out->keys |= 1u << i;
+        out->to[0] = c.to[0];
+        out->to[1] = c.to[1];
+        out->to_x = c.to_x;
+        out->to_y = c.to_y;
+        out->dx = c.dx;
+        out->dy = c.dy;
+        out->length = c.length;
+        out->heading = c.heading;
+        out->slope = c.slope;
+        break;
+    }
+    case SLUICE_PIECE_ARC:
+        out->radius = c.radius;
+        out->turn = c.turn;
+        break;
+    case SLUICE_PIECE_CREST: {
+        const sluice_node *slope = sluice_node_get(item, "end_slope");
+        const sluice_node *x = sluice_node_get(item, "end_x");
+        if (slope && x) {
+            error_at(diag, scene, x,
+                     "%s (crest): give the crest's end once: 'end_slope' (the tangent point) or "
+                     "'end_x'",
+                     path);
+            return 1;
+        }
+        if (!slope && !x) {
+            error_at(diag, scene, item,
+                     "%s (crest): a crest needs its end: 'end_slope' (the slope dy/dx of the "
+                     "tangent point, 1.3333 for 1:0.75) or 'end_x' (in units)",
+                     path);
+            return 1;
+        }
+        out->coefficient = c.coefficient;
+        out->exponent = c.exponent;
+        out->unit = c.unit;
+        out->end_slope = c.end_slope;
+        out->end_x = c.end_x;
+        out->end_at_x = x != NULL;
+        break;
+    }
+    case SLUICE_PIECE_STEPS:
+        out->count = (uint32_t)c.count;
+        out->height = c.height;
+        out->step_length = c.length;
+        out->tread_first = c.first == 1;
+        break;
+    }
+    return 0;
+}
+
+/* Reads and builds the profile of item (a wall or fluid region already bound
+ * to its own keys, `pieces` excepted): pieces, then the vertices into *out.
+ * Returns the number of errors reported. */
+static int load_profile(sluice_scene *scene, const sluice_node *item, sluice_node *pieces,
+                        const char *path, const sluice_real start[3], int has_heading,
+                        sluice_real heading, sluice_real max_segment, int closed,
+                        sluice_profile_path *out, sluice_diag *diag)
+{
+    char where[PIECE_PATH];
+    snprintf(where, sizeof where, "%.100s.pieces", path);
+    if (!pieces || pieces->kind != SLUICE_NODE_SEQUENCE || pieces->count == 0) {
+        error_at(diag, scene, pieces ? pieces : item,
+                 "%s needs 'pieces': a list of pieces (line, arc, crest, steps) appended in "
+                 "order from 'start'",
+                 path);
+        return 1;
+    }
+    piece_refs refs = {NULL, NULL, 0, 0};
+    int errors = collect_pieces(scene, pieces, where, 0, &refs, diag);
+    if (errors)
+        return errors;
+    size_t count = refs.count;
+    if (count == 0) {
+        error_at(diag, scene, pieces, "%s lists no piece", where);
+        return 1;
+    }
+    if (count > UINT32_MAX / 2) {
+        error_at(diag, scene, pieces, "%s lists too many pieces", where);
+        return 1;
+    }
+    sluice_profile_piece *list = sluice_arena_alloc(scene->arena, count * sizeof *list);
+    if (!list) {
+        error_at(diag, scene, pieces, "out of memory");
+        return 1;
+    }
+    for (size_t i = 0; i < count; i++)
+        errors += load_piece(scene, refs.slot[i], refs.path[i], &list[i], diag);
+    if (errors)
+        return errors;
+    if (!(scene->particles.spacing > 0))
+        return 0; /* reported with the particles section; nothing to discretise with */
+    sluice_profile profile;
+    memset(&profile, 0, sizeof profile);
+    profile.start[0] = start[0];
+    profile.start[1] = start[1];
+    profile.has_heading = has_heading;
+    profile.heading = heading;
+    profile.pieces = list;
+    profile.piece_count = (uint32_t)count;
+    profile.closed = closed;
+    profile.max_segment = max_segment > 0 ? max_segment : 0.5 * scene->particles.spacing;
+    sluice_profile_problem problem;
+    if (sluice_profile_build(&profile, out, &problem) == 0)
+        return 0;
+    if (problem.piece == UINT32_MAX) {
+        const sluice_node *at = problem.key ? sluice_node_get(item, problem.key) : NULL;
+        error_at(diag, scene, at ? at : item, "%s: %s", path, problem.message);
+        return 1;
+    }
+    const sluice_node *piece = *refs.slot[problem.piece];
+    const sluice_node *at = problem.key ? sluice_node_get(piece, problem.key) : NULL;
+    char other[160] = "";
+    if (problem.closing)
+        snprintf(other, sizeof other, " (with the closing segment back to the start)");
+    else if (problem.other != UINT32_MAX && problem.other != problem.piece)
+        snprintf(other, sizeof other, " (with %s, %s)", refs.path[problem.other],
+                 sluice_piece_name(list[problem.other].kind));
+    error_at(diag, scene, at ? at : piece, "%s (%s): %s%s", refs.path[problem.piece],
+             sluice_piece_name(list[problem.piece].kind), problem.message, other);
+    return 1;
+}
+
 static int load_fluids(sluice_scene *scene, sluice_node *geometry, sluice_diag *diag)
 {
     int errors;
@@ -421,14 +836,23 @@ static int load_fluids(sluice_scene *scene, sluice_node *geometry, sluice_diag *
         snprintf(path, sizeof path, "geometry.fluid.%zu", i);
         fluid_config c;
         memset(&c, 0, sizeof c);
-        int e = shape == 0 ? sluice_schema_bind(fluid_box_specs, SLUICE_COUNT(fluid_box_specs),
-                                                &list->items[i], item, path, scene->dimensions, &c,
-                                                scene->arena, diag)
-                           : sluice_schema_bind(fluid_polygon_specs,
-                                                SLUICE_COUNT(fluid_polygon_specs), &list->items[i],
-                                                item, path, scene->dimensions, &c, scene->arena,
-                                                diag);
+        detached_key pieces = shape == 2 ? detach(item, "pieces") : (detached_key){0, NULL, NULL};
+        int e = shape == 0   ? sluice_schema_bind(fluid_box_specs, SLUICE_COUNT(fluid_box_specs),
+                                                  &list->items[i], item, path, scene->dimensions,
+                                                  &c, scene->arena, diag)
+                : shape == 1 ? sluice_schema_bind(fluid_polygon_specs,
+                                                  SLUICE_COUNT(fluid_polygon_specs),
+                                                  &list->items[i], item, path, scene->dimensions,
+                                                  &c, scene->arena, diag)
+                             : sluice_schema_bind(fluid_profile_specs,
+                                                  SLUICE_COUNT(fluid_profile_specs),
+                                                  &list->items[i], item, path, scene->dimensions,
+                                                  &c, scene->arena, diag);
         item = list->items[i];
+        if (reattach(item, pieces) != 0) {
+            error_at(diag, scene, item, "out of memory");
+            return errors + 1;
+        }
         if (e) {
             errors += e;
             continue;
@@ -454,8 +878,34 @@ static int load_fluids(sluice_scene *scene, sluice_node *geometry, sluice_diag *
         } else {
             if (scene->dimensions != 2) {
                 error_at(diag, scene, sluice_node_get(item, "shape"),
-                         "shape 'polygon' in %s is only available in 2D", path);
+                         "shape '%s' in %s is only available in 2D",
+                         shape == 1 ? "polygon" : "profile", path);
                 errors++;
+                continue;
+            }
+            if (shape == 2) {
+                /* the region inside the profile closed back to its start */
+                sluice_profile_path outline = {0};
+                int pe = load_profile(scene, item, sluice_node_get(item, "pieces"), path, c.start,
+                                      sluice_node_get(item, "heading") != NULL, c.heading,
+                                      c.max_segment, 1, &outline, diag);
+                if (pe || !outline.xy) {
+                    errors += pe;
+                    sluice_profile_path_free(&outline);
+                    continue;
+                }
+                sluice_real *xy = sluice_arena_alloc(scene->arena, (size_t)outline.vertex_count *
+                                                                       2 * sizeof *xy);
+                if (!xy) {
+                    sluice_profile_path_free(&outline);
+                    return errors + 1;
+                }
+                memcpy(xy, outline.xy, (size_t)outline.vertex_count * 2 * sizeof *xy);
+                f->region.shape = SLUICE_REGION_POLYGON;
+                f->region.polygon = xy;
+                f->region.vertex_count = outline.vertex_count;
+                sluice_profile_path_free(&outline);
+                scene->fluid_count++;
                 continue;
             }
             if (c.points.count < 3) {
@@ -496,14 +946,22 @@ static int load_walls(sluice_scene *scene, sluice_node *geometry, sluice_diag *d
         snprintf(path, sizeof path, "geometry.walls.%zu", i);
         wall_config c;
         memset(&c, 0, sizeof c);
-        int boxlike = shape <= 1;
-        int e = boxlike ? sluice_schema_bind(wall_box_specs, SLUICE_COUNT(wall_box_specs),
-                                             &list->items[i], item, path, scene->dimensions, &c,
-                                             scene->arena, diag)
-                        : sluice_schema_bind(wall_line_specs, SLUICE_COUNT(wall_line_specs),
-                                             &list->items[i], item, path, scene->dimensions, &c,
-                                             scene->arena, diag);
+        int boxlike = shape <= 1, profile = shape == 4;
+        detached_key pieces = profile ? detach(item, "pieces") : (detached_key){0, NULL, NULL};
+        int e = boxlike   ? sluice_schema_bind(wall_box_specs, SLUICE_COUNT(wall_box_specs),
+                                               &list->items[i], item, path, scene->dimensions, &c,
+                                               scene->arena, diag)
+                : profile ? sluice_schema_bind(wall_profile_specs, SLUICE_COUNT(wall_profile_specs),
+                                               &list->items[i], item, path, scene->dimensions, &c,
+                                               scene->arena, diag)
+                          : sluice_schema_bind(wall_line_specs, SLUICE_COUNT(wall_line_specs),
+                                               &list->items[i], item, path, scene->dimensions, &c,
+                                               scene->arena, diag);
         item = list->items[i];
+        if (reattach(item, pieces) != 0) {
+            error_at(diag, scene, item, "out of memory");
+            return errors + 1;
+        }
         if (e) {
             errors += e;
             continue;
@@ -532,8 +990,30 @@ static int load_walls(sluice_scene *scene, sluice_node *geometry, sluice_diag *d
             if (scene->dimensions != 2) {
                 error_at(diag, scene, sluice_node_get(item, "shape"),
                          "shape '%s' in %s is only available in 2D (3D walls: tank or box)",
-                         shape == 2 ? "polyline" : "polygon", path);
+                         shape == 2 ? "polyline" : shape == 3 ? "polygon" : "profile", path);
                 errors++;
+                continue;
+            }
+            if (profile) {
+                sluice_profile_path outline = {0};
+                int pe = load_profile(scene, item, sluice_node_get(item, "pieces"), path, c.start,
+                                      sluice_node_get(item, "heading") != NULL, c.heading,
+                                      c.max_segment, c.closed, &outline, diag);
+                if (pe || !outline.xy) {
+                    errors += pe;
+                    sluice_profile_path_free(&outline);
+                    continue;
+                }
+                rc = sluice_wall_build_polyline(&w->geometry, outline.xy, outline.vertex_count,
+                                                c.closed, &reason);
+                sluice_profile_path_free(&outline);
+                if (rc != 0) {
+                    error_at(diag, scene, item, "%s: %s", path, reason ? reason : "out of memory");
+                    sluice_wall_geometry_free(&w->geometry);
+                    errors++;
+                    continue;
+                }
+                scene->wall_count++;
                 continue;
             }
             int closed = shape == 3;
