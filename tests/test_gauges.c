@@ -105,6 +105,62 @@ START_TEST(point_gauge_hydrostatic_start)
 }
 END_TEST
 
+/* Runs the tank with the fixture tests/fixtures/do_phase_fixture.c marking
+ * the fluid at or above y = 0.25 as air, the water carrying u = 1 and the air
+ * u = 2, and a point gauge of the velocity with `phase_line` at (0.5, 0.25)
+ * (on the interface) and (0.5, 0.35) (0.1 m inside the air, beyond the
+ * support 0.06 m), min_kernel_sum 0.1 (a point on the interface has about
+ * half a kernel sum in each phase); row: time, u and v at each point. */
+static void phase_gauge_row(const char *phase_line, double row[5])
+{
+    const char *fixtures = getenv("SLUICE_FIXTURE_DIR");
+    ck_assert_ptr_nonnull(fixtures);
+    char gauges[512], body[4096], yaml[8192];
+    snprintf(gauges, sizeof gauges,
+             "  do_phase_fixture: {air_above: 0.25}\n"
+             "  point_gauge: {points: [[0.5, 0.25], [0.5, 0.35]], fields: velocity, "
+             "min_kernel_sum: 0.1%s}\n",
+             phase_line);
+    snprintf(body, sizeof body, tank_scene, gauges);
+    snprintf(yaml, sizeof yaml, "plugin_path: %s\n%s", fixtures, body);
+    sluice_sim *sim = test_load("point-gauge-phase", yaml, NULL, 0);
+    const sluice_view *v = sluice_sim_view(sim);
+    sluice_real *u = test_column(sim, "velocity", 0);
+    for (sluice_index i = 0; i < v->count; i++)
+        if (v->kind[i] == SLUICE_KIND_FLUID)
+            u[i] = v->position[1][i] >= 0.25 ? 2 : 1;
+    char *dir = test_scratch("point-gauge-phase-out");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    char *path = NULL;
+    ck_assert_int_ge(asprintf(&path, "%s/points.csv", dir), 0);
+    ck_assert_int_eq(first_row(path, row, 5), 5);
+    free(path);
+    free(dir);
+    sluice_sim_free(sim);
+}
+
+/* phase: water / air sums over that phase only: on the interface the water
+ * gauge reads 1 and the air gauge 2 exactly (Shepard interpolation of a
+ * constant), the unfiltered one something in between; inside the air there
+ * is no water, so the water gauge writes nan there. */
+START_TEST(point_gauge_phase_filter)
+{
+    double water[5], air[5], all[5];
+    phase_gauge_row(", phase: water", water);
+    phase_gauge_row(", phase: air", air);
+    phase_gauge_row("", all);
+    fprintf(stderr, "point gauge on the interface: u = %g (water), %g (air), %g (both)\n",
+            water[1], air[1], all[1]);
+    ck_assert_msg(fabs(water[1] - 1) <= 1e-12, "water gauge u = %.15g", water[1]);
+    ck_assert_msg(fabs(air[1] - 2) <= 1e-12, "air gauge u = %.15g", air[1]);
+    ck_assert_msg(all[1] > 1.1 && all[1] < 1.9, "unfiltered gauge u = %g", all[1]);
+    ck_assert_msg(isnan(water[3]), "water gauge inside the air: %g", water[3]);
+    ck_assert_msg(fabs(air[3] - 2) <= 1e-12 && fabs(all[3] - 2) <= 1e-12,
+                  "inside the air: %g (air gauge), %g (unfiltered)", air[3], all[3]);
+}
+END_TEST
+
 START_TEST(point_gauge_unknown_field)
 {
     char yaml[4096];
@@ -216,6 +272,7 @@ int main(void)
     Suite *s = suite_create("gauges");
     TCase *c = tcase_create("gauges");
     tcase_add_test(c, point_gauge_hydrostatic_start);
+    tcase_add_test(c, point_gauge_phase_filter);
     tcase_add_test(c, point_gauge_unknown_field);
     tcase_add_test(c, wall_monitor_lattice_and_crossing);
     suite_add_tcase(s, c);

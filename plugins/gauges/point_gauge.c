@@ -7,7 +7,12 @@
  * (exact for a constant field). A point whose kernel sum sum_j V_j W is below
  * `min_kernel_sum` lies outside the fluid (or at its edge, where the estimate
  * is biased): its values are written as nan. Columns: time, then for each
- * point k and field f: pK_f (vectors: pK_f_x, pK_f_y[, pK_f_z]). */
+ * point k and field f: pK_f (vectors: pK_f_x, pK_f_y[, pK_f_z]).
+ *
+ * In a two-phase scene (the field `phase` of the two_phase plugin: 0 water,
+ * 1 air) `phase: water` or `phase: air` sums over the particles of that phase
+ * only: the dissolved oxygen of the water, or the water's velocity, next to
+ * the interface, where the default sums over both. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -21,7 +26,10 @@ typedef struct gauge_config {
     const char *fields;
     sluice_real interval, min_kernel_sum;
     const char *file;
+    int phase;
 } gauge_config;
+
+enum { PHASE_ALL = 0, PHASE_WATER = 1, PHASE_AIR = 2 };
 
 typedef struct gauge_state {
     const sluice_api *api;
@@ -34,7 +42,8 @@ typedef struct gauge_state {
     uint32_t field_count, value_count; /* value_count: columns per point */
     char *names[MAX_FIELDS];
     sluice_field fields[MAX_FIELDS];
-    sluice_field density, mass;
+    sluice_field density, mass, phase;
+    int phase_filter; /* PHASE_*: PHASE_ALL sums over every fluid particle */
     double *sums;   /* per point: kernel sum, then value_count weighted sums */
     double *row;
     sluice_table *table;
@@ -53,7 +62,15 @@ static const sluice_param_spec params[] = {
      "points whose kernel sum sum_j V_j W is below this are outside the fluid (nan)", NULL, 0},
     {"file", SLUICE_PARAM_STRING, offsetof(gauge_config, file), "points.csv", 0, 0, 0, NULL,
      "output file in the run directory", NULL, 0},
+    {"phase", SLUICE_PARAM_ENUM, offsetof(gauge_config, phase), "all", 0, 0, 0, NULL,
+     "all: every fluid particle; water or air: that phase only (field 'phase' of the "
+     "two_phase plugin, required then)",
+     "all|water|air", 0},
 };
+
+static const sluice_field_spec phase_field = {
+    "phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_READ, 0, NULL, 0,
+    "phase of a fluid particle: 0 water, 1 air"};
 
 static const sluice_field_spec fields[] = {
     {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", 0, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
@@ -91,6 +108,11 @@ static int gauge_create(const sluice_api *api, sluice_host *host, const void *co
     s->interval = c->interval;
     s->min_kernel_sum = c->min_kernel_sum;
     s->file = c->file;
+    s->phase_filter = c->phase;
+    if (s->phase_filter != PHASE_ALL && api->declare_field(host, &phase_field) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
     s->points = malloc((3 * (size_t)s->count + 3) * sizeof *s->points);
     size_t text_length = strlen(c->fields);
     s->field_text = malloc(text_length + 1);
@@ -136,7 +158,8 @@ static int gauge_bind(void *state, sluice_host *host)
     gauge_state *s = state;
     const sluice_api *api = s->api;
     if (api->field(host, "density", &s->density) != SLUICE_OK ||
-        api->field(host, "mass", &s->mass) != SLUICE_OK)
+        api->field(host, "mass", &s->mass) != SLUICE_OK ||
+        (s->phase_filter != PHASE_ALL && api->field(host, "phase", &s->phase) != SLUICE_OK))
         return SLUICE_ERROR;
     s->value_count = 0;
     for (uint32_t f = 0; f < s->field_count; f++) {
@@ -206,12 +229,17 @@ static void accumulate(void *context, const sluice_view *v, const sluice_pair_ba
     const sluice_real *rho = sluice_real_column(v, s->density, 0);
     const sluice_real *m = sluice_real_column(v, s->mass, 0);
     const uint32_t stride = s->value_count + 1;
+    const uint8_t *phase =
+        s->phase_filter != PHASE_ALL ? (const uint8_t *)v->columns[s->phase.column] : NULL;
+    const uint8_t wanted = s->phase_filter == PHASE_AIR ? 1 : 0;
     for (sluice_index t = 0; t < b->target_count; t++) {
         double *sum = s->sums + (size_t)b->target[t] * stride;
         for (uint32_t c = 0; c < stride; c++)
             sum[c] = 0;
         for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
             const sluice_index j = b->neighbour[k];
+            if (phase && phase[j] != wanted)
+                continue;
             const double w = (double)m[j] / (double)rho[j] * (double)b->kernel[k];
             sum[0] += w;
             uint32_t slot = 1;
@@ -288,4 +316,4 @@ static const sluice_component components[] = {{
     .load_state = gauge_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("point_gauge", "1.0.0", "point gauges", SLUICE_DIMS_ALL, components)
+SLUICE_DEFINE_LIBRARY("point_gauge", "1.1.0", "point gauges", SLUICE_DIMS_ALL, components)
