@@ -451,6 +451,138 @@ START_TEST(schedule_has_fewest_pair_passes)
 }
 END_TEST
 
+/* api->request_reach (ABI 1.6): the fixture reach_probe asks for every fluid
+ * pair within twice the kernel support (a kernel of smoothing length 2h, as
+ * the air's cohesion). Its counts, summed distances and x offsets must equal
+ * brute force over all fluid pairs, at the start and after the particles
+ * moved by up to 0.45 of the skin without a list rebuild (the cells it scans
+ * must cover the motion); its batches carry no kernel values; the terms
+ * within the support keep their single pass. Closed and periodic domains. */
+static void check_reach(int periodic)
+{
+    char yaml[2048];
+    const double dx = 0.02, radius = 4 * 1.3 * dx; /* 2 x the support 2h, h = 1.3 dx */
+    snprintf(yaml, sizeof yaml,
+             "dimensions: 2\n"
+             "plugin_path: %s\n"
+             "particles: {spacing: %g, smoothing_length_ratio: 1.3}\n"
+             "time: {end: 1, max_step: 1e-4}\n"
+             "domain: {min: [0, -0.1], max: [0.6, 0.5]%s}\n"
+             "geometry:\n"
+             "  fluid: [{shape: box, min: [%g, 0], max: [%g, 0.3]}]\n"
+             "  walls: [{shape: polyline, points: [[0, 0], [0.6, 0]]}]\n"
+             "initial: {density: rest}\n"
+             "plugins: {wendland_c2: {}, tait: {speed_of_sound: 10}, continuity: {}, "
+             "pressure_gradient: {}, dbc: {}, reach_probe: {radius: %.17g}, symplectic: {}}\n",
+             fixture_dir(), dx, periodic ? ", periodic: x" : "", periodic ? 0.0 : 0.1,
+             periodic ? 0.6 : 0.5, radius);
+    sluice_sim *sim = test_load(periodic ? "reach-periodic" : "reach", yaml, NULL, 0);
+    uint32_t pair_passes = 0, reach_passes = 0;
+    for (uint32_t p = 0; p < sim->pass_count; p++)
+        if (sim->passes[p].is_pair) {
+            pair_passes++;
+            reach_passes += sim->passes[p].pair.reach > 0;
+        }
+    ck_assert_uint_eq(pair_passes, 2);
+    ck_assert_uint_eq(reach_passes, 1);
+    const double skin = sim->grid.skin, length = 0.6;
+    for (int round = 0; round < 2; round++) {
+        const sluice_index rebuilds = (sluice_index)sim->grid.rebuilds;
+        ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
+        if (round == 1)
+            ck_assert_msg(sim->grid.rebuilds == rebuilds, "the list was rebuilt");
+        const sluice_view *v = sluice_sim_view(sim);
+        const sluice_real *count = test_column(sim, "reach_count", 0);
+        const sluice_real *distance = test_column(sim, "reach_distance", 0);
+        const sluice_real *offset = test_column(sim, "reach_offset_x", 0);
+        const sluice_real *null = test_column(sim, "reach_kernel_null", 0);
+        double worst = 0, pairs = 0;
+        int targets = 0;
+        for (sluice_index i = 0; i < v->count; i++) {
+            if (v->kind[i] != SLUICE_KIND_FLUID)
+                continue;
+            double n = 0, r = 0, x = 0;
+            for (sluice_index j = 0; j < v->count; j++) {
+                if (j == i || v->kind[j] != SLUICE_KIND_FLUID)
+                    continue;
+                double ex = v->position[0][i] - v->position[0][j];
+                double ey = v->position[1][i] - v->position[1][j];
+                if (periodic)
+                    ex -= length * nearbyint(ex / length);
+                double e = sqrt(ex * ex + ey * ey);
+                if (e < radius) {
+                    n += 1;
+                    r += e;
+                    x += ex;
+                }
+            }
+            ck_assert_msg(count[i] == n, "round %d, particle %u: %g pairs, brute force %g", round,
+                          (unsigned)i, count[i], n);
+            worst = fmax(worst, fabs(distance[i] - r) + fabs(offset[i] - x));
+            ck_assert(null[i] == 1);
+            pairs += n;
+            targets++;
+        }
+        fprintf(stderr, "reach %g m (%s, round %d): %d targets, %.0f pairs (%.1f each) as brute "
+                        "force; largest difference of the summed distances and offsets %.2e m\n",
+                radius, periodic ? "periodic" : "closed", round, targets, pairs, pairs / targets,
+                worst);
+        ck_assert_msg(worst < 1e-12, "summed distances and offsets differ by %g m", worst);
+        /* move every fluid particle by up to 0.45 skin (no rebuild: < skin / 2) */
+        sluice_real *px = (sluice_real *)v->position[0], *py = (sluice_real *)v->position[1];
+        for (sluice_index i = 0; i < v->count; i++)
+            if (v->kind[i] == SLUICE_KIND_FLUID) {
+                double a = 2 * M_PI * uniform(), m = 0.45 * skin * uniform();
+                px[i] += (sluice_real)(m * cos(a));
+                py[i] += (sluice_real)(m * sin(a));
+                if (periodic)
+                    px[i] -= (sluice_real)(length * floor(px[i] / length));
+            }
+    }
+    sluice_sim_free(sim);
+}
+
+START_TEST(reach_matches_brute_force) { check_reach(0); }
+END_TEST
+
+START_TEST(reach_matches_brute_force_periodic) { check_reach(1); }
+END_TEST
+
+/* A reach longer than half a periodic side (plus a cell) is refused at load,
+ * naming the plugin. */
+START_TEST(reach_longer_than_periodic_side_refused)
+{
+    char yaml[2048];
+    snprintf(yaml, sizeof yaml,
+             "dimensions: 2\n"
+             "plugin_path: %s\n"
+             "particles: {spacing: 0.02, smoothing_length_ratio: 1.3}\n"
+             "time: {end: 1, max_step: 1e-4}\n"
+             "domain: {min: [0, -0.1], max: [0.3, 0.5], periodic: x}\n"
+             "geometry: {fluid: [{shape: box, min: [0, 0], max: [0.3, 0.3]}]}\n"
+             "initial: {density: rest}\n"
+             "plugins: {wendland_c2: {}, tait: {speed_of_sound: 10}, reach_probe: {radius: 0.2}, "
+             "symplectic: {}}\n",
+             fixture_dir());
+    char *dir = test_scratch("reach-refused");
+    char *path = test_write_file(dir, "scene.yaml", yaml);
+    sluice_diag *diag = sluice_diag_create();
+    sluice_load_options options = {NULL, 0, 0, 0, 0};
+    sluice_sim *sim = sluice_sim_load(path, &options, diag);
+    ck_assert_ptr_null(sim);
+    int found = 0;
+    for (size_t i = 0; i < sluice_diag_count(diag); i++) {
+        fprintf(stderr, "%s\n", sluice_diag_message(diag, i));
+        found |= strstr(sluice_diag_message(diag, i), "reach_probe") != NULL &&
+                 strstr(sluice_diag_message(diag, i), "periodic side") != NULL;
+    }
+    ck_assert_msg(found, "no message names the plugin and the periodic side");
+    sluice_diag_destroy(diag);
+    free(path);
+    free(dir);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("core_api");
@@ -463,6 +595,9 @@ int main(void)
     tcase_add_test(c, plugin_built_for_abi_1_4_checkpoints);
     tcase_add_test(c, region_and_wall_lattice_origin);
     tcase_add_test(c, schedule_has_fewest_pair_passes);
+    tcase_add_test(c, reach_matches_brute_force);
+    tcase_add_test(c, reach_matches_brute_force_periodic);
+    tcase_add_test(c, reach_longer_than_periodic_side_refused);
     suite_add_tcase(s, c);
     return test_run_suite(s);
 }

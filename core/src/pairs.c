@@ -123,8 +123,15 @@ static void flush(sluice_pair_engine *engine, const sluice_pair_pass *pass,
     if (targets == 0)
         return;
     sluice_real *restrict r = w->distance;
-    engine->kernel->kernel(engine->kernel_state, pairs, w->distance_squared, r,
-                           pass->needs_kernel[kind] ? w->kernel : NULL, w->gradient);
+    const int reach = pass->reach > 0; /* beyond the support: no kernel values */
+    if (reach) {
+        const sluice_real *restrict r2 = w->distance_squared;
+        for (sluice_index p = 0; p < pairs; p++)
+            r[p] = sqrt(r2[p]);
+    } else {
+        engine->kernel->kernel(engine->kernel_state, pairs, w->distance_squared, r,
+                               pass->needs_kernel[kind] ? w->kernel : NULL, w->gradient);
+    }
     const sluice_index *restrict nb = w->neighbour;
     const uint8_t *restrict kinds = view->kind;
     uint8_t *restrict nk = w->neighbour_kind;
@@ -154,8 +161,8 @@ static void flush(sluice_pair_engine *engine, const sluice_pair_pass *pass,
     batch.offset[1] = w->offset[1];
     batch.offset[2] = view->dimensions == 3 ? w->offset[2] : NULL;
     batch.distance = r;
-    batch.kernel = pass->needs_kernel[kind] ? w->kernel : NULL;
-    batch.kernel_gradient = w->gradient;
+    batch.kernel = !reach && pass->needs_kernel[kind] ? w->kernel : NULL;
+    batch.kernel_gradient = reach ? NULL : w->gradient;
     batch.gathered = w->gathered;
     batch.kernel_self = engine->kernel_self;
     for (uint32_t t = 0; t < pass->term_count; t++) {
@@ -255,9 +262,171 @@ static fill_fn choose_fill(uint32_t dims, int periodic, int all_kinds)
     return table[dims == 3][periodic != 0][all_kinds != 0];
 }
 
+/* Cells per axis that the reach spans: a pair within `reach` now was within
+ * reach + skin at the last build (each particle has moved at most skin/2),
+ * and particles sit in the cells of that build. */
+static int64_t reach_cells(const sluice_grid *grid, sluice_real reach, uint32_t d)
+{
+    return (int64_t)ceil(((double)reach + (double)grid->skin) * grid->inverse_cell_size[d]);
+}
+
+int sluice_pair_reach_check(const sluice_grid *grid, sluice_real reach)
+{
+    for (uint32_t d = 0; d < grid->dimensions; d++)
+        if (grid->periodic[d] && grid->cells[d] < 2 * reach_cells(grid, reach, d) + 1)
+            return -1;
+    return 0;
+}
+
+/* Appends the pairs of target i within `reach` (beyond the support) found
+ * through the cells around i's cell; returns the new pair count, or
+ * (sluice_index)-1 when the workspace had to grow and could not. Flushes the
+ * batch first when the candidates would not fit. */
+static sluice_index fill_reach(sluice_pair_engine *engine, const sluice_pair_pass *pass,
+                               const sluice_grid *grid, const sluice_view *view,
+                               sluice_pair_workspace *w, sluice_index i, sluice_index *t,
+                               sluice_index np, uint32_t kind, uint32_t mask, int *failed)
+{
+    const uint32_t dims = view->dimensions;
+    const double reach2 = (double)pass->reach * (double)pass->reach;
+    const uint32_t cell = grid->cell_of[i];
+    int64_t c[3], range[3] = {0, 0, 0};
+    c[0] = (int64_t)(cell % (uint32_t)grid->cells[0]);
+    c[1] = (int64_t)((cell / (uint32_t)grid->cells[0]) % (uint32_t)grid->cells[1]);
+    c[2] = (int64_t)(cell / ((uint32_t)grid->cells[0] * (uint32_t)grid->cells[1]));
+    for (uint32_t d = 0; d < dims; d++)
+        range[d] = reach_cells(grid, pass->reach, d);
+    /* candidates: every particle of the cells in range */
+    sluice_index candidates = 0;
+    for (int pass_over = 0; pass_over < 2; pass_over++) {
+        if (pass_over == 1) {
+            if (np + candidates > w->pair_capacity && *t > 0) {
+                w->pair_begin[*t] = np;
+                flush(engine, pass, view, w, *t, np, kind);
+                *t = 0;
+                np = 0;
+            }
+            if (candidates > w->pair_capacity) {
+                if (workspace_reserve(w, candidates, pass->gathered_max) != 0) {
+                    *failed = 1;
+                    return np;
+                }
+                for (uint32_t col = 0; col < w->column_count; col++)
+                    w->gathered[col] = NULL;
+            }
+            w->target[*t] = i;
+            w->pair_begin[*t] = np;
+        }
+        const double xi[3] = {(double)view->position[0][i], (double)view->position[1][i],
+                              dims == 3 ? (double)view->position[2][i] : 0.0};
+        for (int64_t dz = -range[2]; dz <= range[2]; dz++) {
+            int64_t cz = c[2] + dz;
+            if (cz < 0 || cz >= grid->cells[2]) {
+                if (!grid->periodic[2])
+                    continue;
+                cz = (cz % grid->cells[2] + grid->cells[2]) % grid->cells[2];
+            }
+            for (int64_t dy = -range[1]; dy <= range[1]; dy++) {
+                int64_t cy = c[1] + dy;
+                if (cy < 0 || cy >= grid->cells[1]) {
+                    if (!grid->periodic[1])
+                        continue;
+                    cy = (cy % grid->cells[1] + grid->cells[1]) % grid->cells[1];
+                }
+                for (int64_t dx = -range[0]; dx <= range[0]; dx++) {
+                    int64_t cx = c[0] + dx;
+                    if (cx < 0 || cx >= grid->cells[0]) {
+                        if (!grid->periodic[0])
+                            continue;
+                        cx = (cx % grid->cells[0] + grid->cells[0]) % grid->cells[0];
+                    }
+                    const size_t at = ((size_t)cz * (size_t)grid->cells[1] + (size_t)cy) *
+                                          (size_t)grid->cells[0] +
+                                      (size_t)cx;
+                    const sluice_index j0 = grid->cell_start[at], j1 = grid->cell_start[at + 1];
+                    if (pass_over == 0) {
+                        candidates += j1 - j0;
+                        continue;
+                    }
+                    for (sluice_index j = j0; j < j1; j++) {
+                        if (j == i || !((mask >> view->kind[j]) & 1u))
+                            continue;
+                        double e[3] = {0, 0, 0}, s2 = 0;
+                        for (uint32_t d = 0; d < dims; d++) {
+                            e[d] = xi[d] - (double)view->position[d][j];
+                            if (grid->periodic[d])
+                                e[d] = minimum_image(e[d], grid->length[d]);
+                            s2 += e[d] * e[d];
+                        }
+                        if (!(s2 < reach2))
+                            continue;
+                        w->neighbour[np] = j;
+                        w->offset[0][np] = (sluice_real)e[0];
+                        w->offset[1][np] = (sluice_real)e[1];
+                        if (dims == 3)
+                            w->offset[2][np] = (sluice_real)e[2];
+                        w->distance_squared[np] = (sluice_real)s2;
+                        np++;
+                    }
+                }
+            }
+        }
+    }
+    (*t)++;
+    return np;
+}
+
+/* A pass of terms that reach beyond the support (api->request_reach). */
+static int pair_pass_run_reach(sluice_pair_engine *engine, const sluice_pair_pass *pass,
+                               const sluice_grid *grid, const sluice_view *view)
+{
+    const sluice_index n = view->count;
+    sluice_index chunk_targets = engine->batch_pairs / 128;
+    if (chunk_targets < 1)
+        chunk_targets = 1;
+    if (chunk_targets > TARGET_CHUNK)
+        chunk_targets = TARGET_CHUNK;
+    const sluice_index chunks = (n + chunk_targets - 1) / chunk_targets;
+    int failed = 0;
+
+#pragma omp parallel num_threads(engine->thread_count) reduction(| : failed)
+    {
+        sluice_pair_workspace *w = &engine->workspaces[omp_get_thread_num()];
+        if (workspace_reserve(w, engine->batch_pairs, pass->gathered_max) != 0)
+            failed = 1;
+        for (uint32_t c = 0; c < w->column_count && !failed; c++)
+            w->gathered[c] = NULL;
+        const uint8_t *kind = view->kind;
+
+#pragma omp for schedule(dynamic, 4)
+        for (sluice_index chunk = 0; chunk < chunks; chunk++) {
+            if (failed)
+                continue;
+            const sluice_index a = chunk * chunk_targets;
+            const sluice_index b = a + chunk_targets < n ? a + chunk_targets : n;
+            for (uint32_t k = 0; k < SLUICE_KIND_COUNT && !failed; k++) {
+                const uint32_t mask = pass->neighbour_mask[k];
+                if (!mask)
+                    continue;
+                sluice_index t = 0, np = 0;
+                for (sluice_index i = a; i < b && !failed; i++)
+                    if (kind[i] == k)
+                        np = fill_reach(engine, pass, grid, view, w, i, &t, np, k, mask, &failed);
+                if (failed)
+                    break;
+                w->pair_begin[t] = np;
+                flush(engine, pass, view, w, t, np, k);
+            }
+        }
+    }
+    return failed ? -1 : 0;
+}
+
 int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pass,
                          const sluice_grid *grid, const sluice_view *view)
 {
+    if (pass->reach > 0)
+        return pair_pass_run_reach(engine, pass, grid, view);
     const sluice_index n = view->count;
     const uint32_t dims = view->dimensions;
     const double support2 = (double)grid->support * (double)grid->support;

@@ -26,6 +26,10 @@ typedef struct sluice_pair_pass {
     uint32_t *gathered_columns[SLUICE_KIND_COUNT];
     uint32_t gathered_max; /* largest gathered_count */
     int needs_kernel[SLUICE_KIND_COUNT];
+    /* 0: pairs within the kernel support, from the Verlet list; > 0: pairs
+     * within this radius (m, beyond the support), found through the cell
+     * grid, with no kernel values (api->request_reach) */
+    sluice_real reach;
 } sluice_pair_pass;
 
 typedef struct sluice_pair_workspace {
@@ -69,6 +73,11 @@ int sluice_point_pass_run(sluice_pair_engine *engine, const sluice_grid *grid,
                           void (*fn)(void *context, const sluice_view *view,
                                      const sluice_pair_batch *batch),
                           void *context);
+
+/* 0 when a pass of radius `reach` visits no cell twice across a periodic
+ * side (the periodic axes span at least 2 ceil((reach + skin) / cell) + 1
+ * cells), -1 otherwise. */
+int sluice_pair_reach_check(const sluice_grid *grid, sluice_real reach);
 
 /* Pairs handed to terms since the engine was created (all threads). */
 uint64_t sluice_pair_engine_pairs(const sluice_pair_engine *engine);

@@ -1053,6 +1053,27 @@ static int api_point_pass(sluice_host *host, const sluice_real *points, sluice_i
     return SLUICE_OK;
 }
 
+static int api_request_reach(sluice_host *host, sluice_real radius)
+{
+    sluice_sim *sim = host->sim;
+    if (host->instance == SLUICE_CORE_INSTANCE || sim->creating != (int64_t)host->instance) {
+        api_error(host, "api->request_reach is for a component's create()");
+        return SLUICE_ERROR;
+    }
+    sluice_instance *in = &sim->instances[host->instance];
+    if (!in->component->pair) {
+        api_error(host, "api->request_reach: '%s' has no pair term", in->name);
+        return SLUICE_ERROR;
+    }
+    if (!(radius > 0) || !isfinite(radius)) {
+        api_error(host, "api->request_reach: the radius %g m is not positive and finite",
+                  (double)radius);
+        return SLUICE_ERROR;
+    }
+    in->reach = radius;
+    return SLUICE_OK;
+}
+
 static const sluice_api api_table = {
     sizeof(sluice_api),
     SLUICE_ABI_MAJOR,
@@ -1096,6 +1117,7 @@ static const sluice_api api_table = {
     sluice_api_state_write,
     sluice_api_state_read,
     sluice_api_state_length,
+    api_request_reach,
 };
 
 /* ------------------------------------------------------------ schedule -- */
@@ -1398,24 +1420,38 @@ static int build_schedule(sluice_sim *sim)
                 }
             continue;
         }
+        /* the terms within the support share one pass; a term that reaches
+         * beyond it (api->request_reach) gets a pass of its own, after */
         uint32_t terms = 0;
         for (uint32_t v = 0; v < n; v++)
-            terms += is_evaluation(sim->instances[v].component) && slot[v] == s;
-        if (!terms)
-            continue;
-        sluice_pass *p = &sim->passes[sim->pass_count++];
-        p->is_pair = 1;
-        uint32_t *members = calloc(terms, sizeof *members);
-        if (!members)
-            goto oom;
-        uint32_t m = 0;
-        for (uint32_t v = 0; v < n; v++)
-            if (is_evaluation(sim->instances[v].component) && slot[v] == s)
-                members[m++] = v;
-        int rc = fill_pair_pass(sim, &p->pair, members, m);
-        free(members);
-        if (rc != 0)
-            goto oom;
+            terms += is_evaluation(sim->instances[v].component) && slot[v] == s &&
+                     !(sim->instances[v].reach > sim->support);
+        if (terms) {
+            sluice_pass *p = &sim->passes[sim->pass_count++];
+            p->is_pair = 1;
+            uint32_t *members = calloc(terms, sizeof *members);
+            if (!members)
+                goto oom;
+            uint32_t m = 0;
+            for (uint32_t v = 0; v < n; v++)
+                if (is_evaluation(sim->instances[v].component) && slot[v] == s &&
+                    !(sim->instances[v].reach > sim->support))
+                    members[m++] = v;
+            int rc = fill_pair_pass(sim, &p->pair, members, m);
+            free(members);
+            if (rc != 0)
+                goto oom;
+        }
+        for (uint32_t v = 0; v < n; v++) {
+            if (!is_evaluation(sim->instances[v].component) || slot[v] != s ||
+                !(sim->instances[v].reach > sim->support))
+                continue;
+            sluice_pass *p = &sim->passes[sim->pass_count++];
+            p->is_pair = 1;
+            if (fill_pair_pass(sim, &p->pair, &v, 1) != 0)
+                goto oom;
+            p->pair.reach = sim->instances[v].reach;
+        }
     }
     /* accumulated columns, zeroed before every evaluation */
     sim->accumulate_columns = calloc(sim->column_count + 1, sizeof *sim->accumulate_columns);
@@ -1439,6 +1475,8 @@ static int build_schedule(sluice_sim *sim)
         in->on_demand = calloc(1, sizeof *in->on_demand);
         if (!in->on_demand || fill_pair_pass(sim, in->on_demand, &v, 1) != 0)
             goto oom;
+        if (in->reach > sim->support)
+            in->on_demand->reach = in->reach;
     }
     free(edge);
     free(slot);
@@ -2164,6 +2202,17 @@ static int load(sluice_sim *sim, const char *scene_path, const sluice_load_optio
                         domain ? domain->line : 1, domain ? domain->column : 1, "domain: %s",
                         reason);
         return 1;
+    }
+    /* passes beyond the support must not see a cell twice across a periodic side */
+    for (uint32_t v = 0; v < sim->instance_count; v++) {
+        const sluice_instance *in = &sim->instances[v];
+        if (in->reach > sim->support && sluice_pair_reach_check(&sim->grid, in->reach) != 0) {
+            report(sim, v,
+                   "plugin '%s' reaches %g m, more than half the length of a periodic side of "
+                   "the domain (plus a cell); lengthen the periodic side or shorten the reach",
+                   in->name, (double)in->reach);
+            return 1;
+        }
     }
     sim->threads = omp_get_max_threads();
     if (sluice_pair_engine_init(&sim->engine, sim->threads,

@@ -55,6 +55,7 @@ typedef struct sluice_instance {
     int created;
     sluice_host host;
     sluice_pair_pass *on_demand; /* SLUICE_COMPONENT_ON_DEMAND: its own pass */
+    sluice_real reach;           /* 1.6: pair radius beyond the support (m), 0: the support */
 } sluice_instance;
 
 typedef struct sluice_pass {

@@ -33,7 +33,7 @@ extern "C" {
 #endif
 
 #define SLUICE_ABI_MAJOR 1
-#define SLUICE_ABI_MINOR 5
+#define SLUICE_ABI_MINOR 6
 #define SLUICE_PLUGIN_MAGIC 0x534c4349u /* "SLCI" */
 
 #if defined(__GNUC__)
@@ -417,6 +417,19 @@ typedef struct sluice_api {
     int (*state_read)(sluice_host *host, const char *name, sluice_state_type type,
                       uint64_t count, void *data);
     int64_t (*state_length)(sluice_host *host, const char *name);
+
+    /* -- 1.6: pair terms that reach beyond the kernel support (a kernel of
+     * their own with a longer smoothing length, e.g. the air's cohesion with
+     * H = 2h). Called in the component's create(), once: the term then
+     * receives every pair within `radius` m (> the scene kernel's support)
+     * instead of the support, in passes of its own that the core traverses
+     * through the cell grid (the Verlet list stays at the support, so no
+     * other term pays for the reach). In its batches `kernel` and
+     * `kernel_gradient` are NULL: the term evaluates its own kernel from
+     * `distance`. Fails after create(), for a non-pair component, or for a
+     * radius that is not finite and positive; a radius within the support
+     * changes nothing. */
+    int (*request_reach)(sluice_host *host, sluice_real radius);
 } sluice_api;
 
 /* ----------------------------------------------------------- components -- */
