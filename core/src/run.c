@@ -263,6 +263,11 @@ static int watchdog(sluice_sim *sim)
     const double rho0 = (double)sim->rest_density, band = (double)scene->watchdog.density_band;
     const sluice_real *density =
         sim->density.column >= 0 ? (const sluice_real *)v->columns[sim->density.column] : NULL;
+    /* each particle's own rest density, m_i / dx^d: the core gives every
+     * particle rest_density dx^d, a two-phase plugin the air rho0_a dx^d */
+    const sluice_real *mass =
+        sim->mass.column >= 0 ? (const sluice_real *)v->columns[sim->mass.column] : NULL;
+    const double inverse_volume = 1.0 / pow((double)sim->spacing, (double)v->dimensions);
     sluice_index first = n;
     int what = 0; /* 1 non-finite, 2 density band, 3 outside domain */
     const sluice_field_entry *bad_field = NULL;
@@ -290,7 +295,8 @@ static int watchdog(sluice_sim *sim)
         const uint8_t *kind = v->kind;
 #pragma omp parallel for schedule(static) reduction(min : found) reduction(max : deviation)
         for (sluice_index i = 0; i < n; i++) {
-            double r = (double)density[i] / rho0 - 1.0;
+            const double rest = mass ? (double)mass[i] * inverse_volume : rho0;
+            double r = (double)density[i] / rest - 1.0;
             if (!(fabs(r) <= band) && i < found)
                 found = i;
             if (kind[i] == SLUICE_KIND_FLUID && fabs(r) > deviation)
@@ -376,12 +382,13 @@ static int watchdog(sluice_sim *sim)
                         sim->instances[sim->integrator].name);
     } else if (what == 2) {
         const sluice_field_entry *e = sluice_sim_find_field(sim, "density");
+        const double rest = mass ? (double)mass[i] * inverse_volume : rho0;
         sluice_sim_fail(sim,
                         "step %lld, t = %.9g s: %s: field 'density' = %.6g kg m^-3 is outside the "
-                        "band [%.6g, %.6g] = rest density x (1 -/+ watchdog.density_band) (written "
-                        "by %s; integrated by '%s')",
+                        "band [%.6g, %.6g] = its rest density (mass / spacing^d) x (1 -/+ "
+                        "watchdog.density_band) (written by %s; integrated by '%s')",
                         (long long)sim->step, sim->time, who, (double)density[i],
-                        rho0 * (1 - band), rho0 * (1 + band),
+                        rest * (1 - band), rest * (1 + band),
                         e ? sluice_field_writers(sim, e, writers, sizeof writers) : "?",
                         sim->instances[sim->integrator].name);
     } else if (what == 4) {
