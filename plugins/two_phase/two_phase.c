@@ -1,0 +1,646 @@
+/* Air-water two-phase weakly compressible SPH (seed 001, Wan et al. 2017,
+ * after Colagrossi & Landrini 2003, J. Comput. Phys. 191, and Nugent & Posch
+ * 2000, Phys. Rev. E 62). Two components:
+ *
+ *  two_phase: the particle phase and the equation of state of both phases.
+ *    - field `phase` (uint8, 0 = water, 1 = air), set once at initialise
+ *      from the air description (air_above, air_box_min/max, air_polygon):
+ *      a fluid particle inside any of them is air. Air particles get the
+ *      mass rho_a dx^d and the hydrostatic air density (below). Wall and
+ *      open-boundary particles are water (phase 0).
+ *    - the Tait equation of state of each phase k with one B (Colagrossi &
+ *      Landrini 2003; seed 001 eq. 10):
+ *          p = B ((rho / rho0_k)^gamma_k - 1) + p_b,
+ *          B = c0_w^2 rho0_w / gamma_w,  c0_k = sqrt(gamma_k B / rho0_k),
+ *          c = c0_k (rho / rho0_k)^((gamma_k - 1) / 2)   (c^2 = dp/drho).
+ *      One B makes both phases equally stiff in pressure: at rest density
+ *      both have p = p_b, so the pressure is continuous across an interface
+ *      at rest, and c0_air = c0_w sqrt((gamma_a / gamma_w) (rho0_w / rho0_a))
+ *      (379.3 m/s for seed 001's table 1: c0_w = 28 m/s, rho 1000 / 1.09,
+ *      gamma 7 / 1.4). p_b, the background pressure, is the same for both
+ *      phases: it keeps the air's pressure positive where the flow expands
+ *      it, which removes the tensile instability of the light phase
+ *      (Colagrossi & Landrini 2003), and it cancels from the pressure force
+ *      wherever a particle's support is complete (sum_j V_j grad W = 0):
+ *      where it is not (a disordered, shearing flow) 2 p_b sum_j V_j grad W
+ *      / rho_i acts on every particle, so p_b is kept as small as the air
+ *      allows (docs/physics.md). It is published as 'reference_pressure',
+ *      so that the core's hydrostatic start puts p_b at the water's surface.
+ *    - initial air density: hydrostatic in the air, p = p_b - rho_a g (z -
+ *      z_s), inverted exactly through the air's Tait law, with z_s the top
+ *      of the highest water particle (its centre + dx/2): the pressure is
+ *      p_b on both sides of a horizontal interface (the water below starts
+ *      at p_b + rho_w g depth from the core). The air's weight is tiny
+ *      (rho_a g = 10.7 Pa/m against B = 1.1e5 Pa for seed 001), but starting
+ *      from it saves an acoustic transient in the air.
+ *
+ *  air_cohesion: the cohesion of the air (Nugent & Posch 2000; Colagrossi &
+ *    Landrini 2003; seed 001 eq. 12): an attractive van der Waals pressure
+ *    -a rho^2 in the air, evaluated with a longer smoothing length H, gives
+ *        dv_i/dt += 2 a sum_{j air} m_j grad_i W(r_ij, H)     (i air)
+ *    (water: a = 0). The pair force is antisymmetric (momentum is conserved)
+ *    and derives from the potential -a sum_i m_i rho^H_i, so it conserves
+ *    energy. H = 2h in Nugent & Posch: the pairs reach 2H = 4h, beyond the
+ *    scene kernel's support (2h); the term asks the core for them with
+ *    api->request_reach (plugin ABI 1.6) and evaluates W(r, H) itself from
+ *    the pair distances (its batches carry no kernel values). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "plugin_util.h"
+
+enum { PHASE_WATER = 0, PHASE_AIR = 1 };
+
+/* ================================================================ phase ==== */
+
+typedef struct two_phase_config {
+    sluice_real speed_of_sound, gamma, air_gamma, air_rest_density, background_pressure;
+    sluice_real_list air_above, air_box_min, air_box_max, air_polygon;
+} two_phase_config;
+
+typedef struct two_phase_state {
+    const sluice_api *api;
+    uint32_t dims;
+    sluice_real dx;
+    sluice_real rho_w, rho_a, inverse_rho_w, inverse_rho_a;
+    sluice_real gamma_w, gamma_a, B, c_w, c_a, background;
+    int seven;
+    /* the air description, copied from the configuration (3 reals a point) */
+    sluice_real *above, *box_min, *box_max, *polygon;
+    uint32_t above_count, box_count, polygon_count;
+    sluice_field phase, density, pressure, sound_speed, mass;
+} two_phase_state;
+
+static const sluice_param_spec phase_params[] = {
+    {"speed_of_sound", SLUICE_PARAM_REAL, offsetof(two_phase_config, speed_of_sound), NULL, 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "m s^-1",
+     "numerical speed of sound of the water c0_w at its rest density (particles.rest_density); "
+     "it sets the one B = c0_w^2 rho0_w / gamma and, through it, the air's c0_a (seed 001: 28 "
+     "m/s, Chanson chute; 35 m/s, Cheng spillway)",
+     NULL, 0},
+    {"gamma", SLUICE_PARAM_REAL, offsetof(two_phase_config, gamma), "7", 1, 20,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1", "polytropic exponent of the water", NULL,
+     0},
+    {"air_gamma", SLUICE_PARAM_REAL, offsetof(two_phase_config, air_gamma), "1.4", 1, 20,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
+     "polytropic exponent of the air (isentropic, seed 001: 1.4)", NULL, 0},
+    {"air_rest_density", SLUICE_PARAM_REAL, offsetof(two_phase_config, air_rest_density), "1.09",
+     0, 0, SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "kg m^-3",
+     "rest density of the air rho0_a (seed 001: 1.09); air particles have the mass rho0_a dx^d",
+     NULL, 0},
+    {"background_pressure", SLUICE_PARAM_REAL, offsetof(two_phase_config, background_pressure),
+     NULL, 0, 0, SLUICE_PARAM_HAS_MIN, "Pa",
+     "p_b added to the pressure of both phases (Colagrossi & Landrini 2003): it must exceed the "
+     "largest drop of the pressure below its value at rest density, so that the air never "
+     "reaches a negative pressure (tensile instability), and the cohesion pressure a rho0_a^2 "
+     "(air_cohesion)",
+     NULL, 0},
+    {"air_above", SLUICE_PARAM_POINT_LIST, offsetof(two_phase_config, air_above), NULL, 0, 0,
+     SLUICE_PARAM_OPTIONAL, "m",
+     "fluid particles above this line are air: one point gives a level (its vertical "
+     "coordinate); in 2D several points give a polyline with increasing x, continued "
+     "horizontally beyond its ends",
+     NULL, 0},
+    {"air_box_min", SLUICE_PARAM_POINT_LIST, offsetof(two_phase_config, air_box_min), NULL, 0, 0,
+     SLUICE_PARAM_OPTIONAL, "m",
+     "lower corners of boxes whose fluid particles are air (one per box, with air_box_max)",
+     NULL, 0},
+    {"air_box_max", SLUICE_PARAM_POINT_LIST, offsetof(two_phase_config, air_box_max), NULL, 0, 0,
+     SLUICE_PARAM_OPTIONAL, "m", "upper corners of the air boxes, in the order of air_box_min",
+     NULL, 0},
+    {"air_polygon", SLUICE_PARAM_POINT_LIST, offsetof(two_phase_config, air_polygon), NULL, 0, 0,
+     SLUICE_PARAM_OPTIONAL, "m", "vertices of a polygon (2D) whose fluid particles are air", NULL,
+     0},
+};
+
+static const sluice_field_spec phase_fields[] = {
+    {"phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_WRITE, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
+     NULL, 0, "phase of the particle: 0 water, 1 air (set at the start)"},
+    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ,
+     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
+    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
+    {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_WRITE, SLUICE_FIELD_OUTPUT, NULL, 0,
+     "pressure from the equation of state of the particle's phase"},
+    {"sound_speed", SLUICE_TYPE_REAL, 1, "m s^-1", SLUICE_WRITE, 0, NULL, 0,
+     "local speed of sound c = sqrt(dp/drho) of the particle's phase"},
+};
+
+static void phase_destroy(void *state)
+{
+    two_phase_state *s = state;
+    if (!s)
+        return;
+    free(s->above);
+    free(s->box_min);
+    free(s->box_max);
+    free(s->polygon);
+    free(s);
+}
+
+static sluice_real *copy_points(const sluice_real_list *list)
+{
+    if (list->count == 0)
+        return NULL;
+    sluice_real *copy = malloc((size_t)list->count * 3 * sizeof *copy);
+    if (copy)
+        memcpy(copy, list->values, (size_t)list->count * 3 * sizeof *copy);
+    return copy;
+}
+
+/* Checks the air description; returns the error text or NULL. */
+static const char *check_air(const two_phase_config *c, uint32_t dims, char *text, size_t size)
+{
+    if (c->air_above.count == 0 && c->air_box_min.count == 0 && c->air_box_max.count == 0 &&
+        c->air_polygon.count == 0)
+        return "no air is described: give air_above (a level or a polyline), air_box_min with "
+               "air_box_max, or air_polygon";
+    if (c->air_above.count > 1) {
+        if (dims == 3)
+            return "air_above takes one point (a level) in 3D; use air_box_min/air_box_max for "
+                   "other shapes";
+        for (uint32_t k = 1; k < c->air_above.count; k++)
+            if (!(c->air_above.values[3 * k] > c->air_above.values[3 * (k - 1)])) {
+                snprintf(text, size,
+                         "air_above: the polyline's x must increase from point to point (point "
+                         "%u at x = %g m follows x = %g m)",
+                         k, (double)c->air_above.values[3 * k],
+                         (double)c->air_above.values[3 * (k - 1)]);
+                return text;
+            }
+    }
+    if (c->air_box_min.count != c->air_box_max.count) {
+        snprintf(text, size,
+                 "air_box_min has %u corners and air_box_max %u: give one of each per box",
+                 c->air_box_min.count, c->air_box_max.count);
+        return text;
+    }
+    for (uint32_t b = 0; b < c->air_box_min.count; b++)
+        for (uint32_t d = 0; d < dims; d++)
+            if (!(c->air_box_min.values[3 * b + d] < c->air_box_max.values[3 * b + d])) {
+                snprintf(text, size,
+                         "air box %u: air_box_min %c = %g m is not below air_box_max %c = %g m",
+                         b, "xyz"[d], (double)c->air_box_min.values[3 * b + d], "xyz"[d],
+                         (double)c->air_box_max.values[3 * b + d]);
+                return text;
+            }
+    if (c->air_polygon.count > 0) {
+        if (dims == 3)
+            return "air_polygon is 2D only; use air_box_min/air_box_max or air_above in 3D";
+        if (c->air_polygon.count < 3) {
+            snprintf(text, size, "air_polygon has %u points; a polygon needs at least 3",
+                     c->air_polygon.count);
+            return text;
+        }
+    }
+    return NULL;
+}
+
+static int phase_create(const sluice_api *api, sluice_host *host, const void *config,
+                        void **state)
+{
+    const two_phase_config *c = config;
+    two_phase_state *s = sluice_util_state(api, host, sizeof *s);
+    if (!s)
+        return SLUICE_ERROR;
+    s->api = api;
+    sluice_real dims;
+    if (sluice_util_constant(api, host, "rest_density", &s->rho_w) != SLUICE_OK ||
+        sluice_util_constant(api, host, "spacing", &s->dx) != SLUICE_OK ||
+        sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    s->dims = (uint32_t)dims;
+    char text[300];
+    const char *problem = check_air(c, s->dims, text, sizeof text);
+    if (problem) {
+        api->error(host, "%s", problem);
+        free(s);
+        return SLUICE_ERROR;
+    }
+    if (!(c->air_rest_density < s->rho_w)) {
+        api->error(host,
+                   "air_rest_density = %g kg m^-3 is not below the water's rest density "
+                   "(particles.rest_density = %g kg m^-3): the air is the light phase",
+                   (double)c->air_rest_density, (double)s->rho_w);
+        free(s);
+        return SLUICE_ERROR;
+    }
+    s->rho_a = c->air_rest_density;
+    s->inverse_rho_w = 1 / s->rho_w;
+    s->inverse_rho_a = 1 / s->rho_a;
+    s->gamma_w = c->gamma;
+    s->gamma_a = c->air_gamma;
+    s->seven = s->gamma_w == 7;
+    s->c_w = c->speed_of_sound;
+    s->B = s->c_w * s->c_w * s->rho_w / s->gamma_w;
+    s->c_a = sqrt(s->gamma_a * s->B / s->rho_a);
+    s->background = c->background_pressure;
+    s->above_count = c->air_above.count;
+    s->box_count = c->air_box_min.count;
+    s->polygon_count = c->air_polygon.count;
+    s->above = copy_points(&c->air_above);
+    s->box_min = copy_points(&c->air_box_min);
+    s->box_max = copy_points(&c->air_box_max);
+    s->polygon = copy_points(&c->air_polygon);
+    if ((s->above_count && !s->above) || (s->box_count && (!s->box_min || !s->box_max)) ||
+        (s->polygon_count && !s->polygon)) {
+        api->error(host, "out of memory");
+        phase_destroy(s);
+        return SLUICE_ERROR;
+    }
+    if (api->publish_constant(host, "speed_of_sound", &s->c_w, 1, "m s^-1") != SLUICE_OK ||
+        api->publish_constant(host, "air_speed_of_sound", &s->c_a, 1, "m s^-1") != SLUICE_OK ||
+        api->publish_constant(host, "air_rest_density", &s->rho_a, 1, "kg m^-3") != SLUICE_OK ||
+        api->publish_constant(host, "reference_pressure", &s->background, 1, "Pa") !=
+            SLUICE_OK) {
+        phase_destroy(s);
+        return SLUICE_ERROR;
+    }
+    *state = s;
+    return SLUICE_OK;
+}
+
+static int phase_bind(void *state, sluice_host *host)
+{
+    two_phase_state *s = state;
+    static const char *const names[] = {"phase", "density", "pressure", "sound_speed", "mass"};
+    sluice_field f[5];
+    if (sluice_util_fields(s->api, host, names, f, 5) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->phase = f[0];
+    s->density = f[1];
+    s->pressure = f[2];
+    s->sound_speed = f[3];
+    s->mass = f[4];
+    return SLUICE_OK;
+}
+
+/* Level of the air_above polyline at x (2D), or its one level. */
+static sluice_real above_level(const two_phase_state *s, sluice_real x)
+{
+    const uint32_t up = s->dims - 1, n = s->above_count;
+    const sluice_real *p = s->above;
+    if (n == 1 || x <= p[0])
+        return p[up];
+    for (uint32_t k = 1; k < n; k++)
+        if (x <= p[3 * k]) {
+            const sluice_real x0 = p[3 * (k - 1)], x1 = p[3 * k];
+            const sluice_real y0 = p[3 * (k - 1) + up], y1 = p[3 * k + up];
+            return y0 + (y1 - y0) * (x - x0) / (x1 - x0);
+        }
+    return p[3 * (n - 1) + up];
+}
+
+/* Crossing-number test of a point against the air polygon (2D). */
+static int in_polygon(const two_phase_state *s, sluice_real x, sluice_real y)
+{
+    int inside = 0;
+    const uint32_t n = s->polygon_count;
+    const sluice_real *p = s->polygon;
+    for (uint32_t a = 0, b = n - 1; a < n; b = a++) {
+        const sluice_real xa = p[3 * a], ya = p[3 * a + 1], xb = p[3 * b], yb = p[3 * b + 1];
+        if ((ya > y) != (yb > y) && x < xa + (xb - xa) * (y - ya) / (yb - ya))
+            inside = !inside;
+    }
+    return inside;
+}
+
+static int is_air(const two_phase_state *s, const sluice_real *x)
+{
+    const uint32_t up = s->dims - 1;
+    if (s->above_count && x[up] > above_level(s, x[0]))
+        return 1;
+    for (uint32_t b = 0; b < s->box_count; b++) {
+        int inside = 1;
+        for (uint32_t d = 0; d < s->dims; d++)
+            inside &= x[d] >= s->box_min[3 * b + d] && x[d] <= s->box_max[3 * b + d];
+        if (inside)
+            return 1;
+    }
+    return s->polygon_count && in_polygon(s, x[0], x[1]);
+}
+
+static int phase_initialise(void *state, sluice_host *host)
+{
+    two_phase_state *s = state;
+    const sluice_api *api = s->api;
+    const sluice_view *v = api->view(host);
+    const uint32_t dims = s->dims, up = dims - 1;
+    uint8_t *restrict phase = v->columns[s->phase.column];
+    sluice_real *restrict rho = sluice_real_column(v, s->density, 0);
+    sluice_real *restrict mass = sluice_real_column(v, s->mass, 0);
+    sluice_index air = 0, water = 0;
+    sluice_real top = -(sluice_real)INFINITY, bottom = (sluice_real)INFINITY;
+    for (sluice_index i = 0; i < v->count; i++) {
+        phase[i] = PHASE_WATER;
+        if (v->kind[i] != SLUICE_KIND_FLUID)
+            continue;
+        sluice_real x[3] = {0, 0, 0};
+        for (uint32_t d = 0; d < dims; d++)
+            x[d] = v->position[d][i];
+        if (is_air(s, x)) {
+            phase[i] = PHASE_AIR;
+            air++;
+            bottom = x[up] < bottom ? x[up] : bottom;
+        } else {
+            water++;
+            top = x[up] > top ? x[up] : top;
+        }
+    }
+    if (air == 0) {
+        api->error(host, "the air description selects none of the %u fluid particles (are "
+                         "air_above, air_box_min/max or air_polygon inside the fluid regions?)",
+                   (unsigned)water);
+        return SLUICE_ERROR;
+    }
+    if (water == 0)
+        api->warning(host, "every fluid particle is air: the scene has no water");
+    /* the air's hydrostatic pressure, p_b at the top of the highest water
+     * particle (or at the bottom of the lowest air particle without water) */
+    const sluice_real surface = water ? top + s->dx / 2 : bottom - s->dx / 2;
+    sluice_real g[3] = {0, 0, 0};
+    const uint32_t gravity = api->constant(host, "gravity", g, 3);
+    const sluice_real weight = gravity >= dims ? -g[up] * s->rho_a : 0; /* rho_a g, Pa/m */
+    const sluice_real volume = (sluice_real)pow((double)s->dx, (double)dims);
+    for (sluice_index i = 0; i < v->count; i++) {
+        if (phase[i] != PHASE_AIR)
+            continue;
+        mass[i] = s->rho_a * volume;
+        const sluice_real excess = weight * (surface - v->position[up][i]); /* p - p_b */
+        rho[i] = s->rho_a * (sluice_real)pow(1 + (double)(excess / s->B), 1 / (double)s->gamma_a);
+    }
+    api->info(host,
+              "%u air and %u water particles; B = %.6g Pa, c0 water %.6g m/s, c0 air %.6g m/s, "
+              "p_b = %.6g Pa",
+              (unsigned)air, (unsigned)water, (double)s->B, (double)s->c_w, (double)s->c_a,
+              (double)s->background);
+    return SLUICE_OK;
+}
+
+static void phase_particle(void *state, const sluice_view *v, sluice_index begin,
+                           sluice_index end)
+{
+    const two_phase_state *s = state;
+    const uint8_t *restrict phase = v->columns[s->phase.column];
+    const sluice_real *restrict rho = sluice_real_column(v, s->density, 0);
+    sluice_real *restrict p = sluice_real_column(v, s->pressure, 0);
+    sluice_real *restrict c = sluice_real_column(v, s->sound_speed, 0);
+    const sluice_real iw = s->inverse_rho_w, ia = s->inverse_rho_a, B = s->B, pb = s->background;
+    const sluice_real cw = s->c_w, ca = s->c_a, gw = s->gamma_w, ga = s->gamma_a;
+    const sluice_real ew = (gw - 1) / 2;
+    for (sluice_index i = begin; i < end; i++) {
+        if (phase[i] == PHASE_AIR) {
+            const sluice_real x = rho[i] * ia, xg = pow(x, ga);
+            p[i] = B * (xg - 1) + pb;
+            c[i] = ca * sqrt(xg / x);
+        } else if (s->seven) {
+            const sluice_real x = rho[i] * iw, x2 = x * x, x3 = x2 * x;
+            p[i] = B * (x3 * x3 * x - 1) + pb;
+            c[i] = cw * x3;
+        } else {
+            const sluice_real x = rho[i] * iw;
+            p[i] = B * (pow(x, gw) - 1) + pb;
+            c[i] = cw * pow(x, ew);
+        }
+    }
+}
+
+/* The water's inverse: the core's hydrostatic start fills every fluid
+ * region with it before the phases are known; initialise then sets the air
+ * particles' density with the air's law. */
+static void phase_density_from_pressure(void *state, sluice_index n, const sluice_real *pressure,
+                                        sluice_real *density)
+{
+    const two_phase_state *s = state;
+    for (sluice_index i = 0; i < n; i++)
+        density[i] = s->rho_w * (sluice_real)pow(1 + (double)((pressure[i] - s->background) / s->B),
+                                                 1 / (double)s->gamma_w);
+}
+
+/* ============================================================= cohesion ==== */
+
+typedef struct cohesion_config {
+    sluice_real coefficient, smoothing_length_ratio;
+    int kernel;
+} cohesion_config;
+
+enum { KERNEL_WENDLAND = 0, KERNEL_CUBIC = 1 };
+
+typedef struct cohesion_state {
+    const sluice_api *api;
+    uint32_t dims;
+    int kernel;
+    sluice_real a, ratio, h, H, inverse_H, gradient_normalisation;
+    sluice_field phase, mass, acceleration;
+} cohesion_state;
+
+static const sluice_param_spec cohesion_params[] = {
+    {"coefficient", SLUICE_PARAM_REAL, offsetof(cohesion_config, coefficient), NULL, 0, 0,
+     SLUICE_PARAM_HAS_MIN, "m^5 kg^-1 s^-2",
+     "a of the cohesion pressure -a rho^2 of the air (Nugent & Posch 2000); a rho0_a^2 must "
+     "stay below two_phase's background_pressure",
+     NULL, 0},
+    {"smoothing_length_ratio", SLUICE_PARAM_REAL,
+     offsetof(cohesion_config, smoothing_length_ratio), "2", 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "1",
+     "H / h, the smoothing length of the cohesion kernel W(r, H) over the scene's h (Nugent & "
+     "Posch 2000: 2); the pairs reach 2H, beyond the kernel's support when H > h (the core then "
+     "gives this term passes of its own, with (H/h)^d times the pairs of a support pass)",
+     NULL, 0},
+    {"kernel", SLUICE_PARAM_ENUM, offsetof(cohesion_config, kernel), "wendland_c2", 0, 0, 0, NULL,
+     "shape of W(r, H) (support 2H): the Wendland C2 kernel of seed 001 or the cubic B-spline",
+     "wendland_c2|cubic_spline", 0},
+};
+
+static const sluice_field_spec cohesion_fields[] = {
+    {"phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_READ, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
+     NULL, 0, "phase of the particle: 0 water, 1 air"},
+    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
+     "particle mass"},
+    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", 0,
+     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
+    {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0,
+     "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
+};
+
+static int cohesion_create(const sluice_api *api, sluice_host *host, const void *config,
+                           void **state)
+{
+    const cohesion_config *c = config;
+    cohesion_state *s = sluice_util_state(api, host, sizeof *s);
+    if (!s)
+        return SLUICE_ERROR;
+    s->api = api;
+    sluice_real dims;
+    if (sluice_util_constant(api, host, "smoothing_length", &s->h) != SLUICE_OK ||
+        sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    s->dims = (uint32_t)dims;
+    s->a = c->coefficient;
+    s->ratio = c->smoothing_length_ratio;
+    s->kernel = c->kernel;
+    s->H = s->ratio * s->h;
+    s->inverse_H = 1 / s->H;
+    /* (dW/dr)/r = gradient_normalisation x shape(q), q = r / H */
+    const int wendland = s->kernel == KERNEL_WENDLAND;
+    const double n2 = wendland ? 7.0 / (4.0 * SLUICE_PI) : 10.0 / (7.0 * SLUICE_PI);
+    const double n3 = wendland ? 21.0 / (16.0 * SLUICE_PI) : 1.0 / SLUICE_PI;
+    const double H = (double)s->H;
+    s->gradient_normalisation =
+        (sluice_real)((s->dims == 3 ? n3 / (H * H * H) : n2 / (H * H)) / (H * H));
+    /* the pairs within 2H: beyond the scene kernel's support the core gives
+     * this term passes of its own (ABI 1.6); within it this changes nothing */
+    if (api->request_reach(host, 2 * s->H) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    *state = s;
+    return SLUICE_OK;
+}
+
+static int cohesion_bind(void *state, sluice_host *host)
+{
+    cohesion_state *s = state;
+    const sluice_api *api = s->api;
+    static const char *const names[] = {"phase", "mass", "acceleration"};
+    sluice_field f[3];
+    if (sluice_util_fields(api, host, names, f, 3) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->phase = f[0];
+    s->mass = f[1];
+    s->acceleration = f[2];
+    sluice_real rho_a, background;
+    if (api->constant(host, "air_rest_density", &rho_a, 1) < 1 ||
+        api->constant(host, "reference_pressure", &background, 1) < 1) {
+        api->error(host, "needs the two_phase plugin, which sets the field 'phase' and publishes "
+                         "'air_rest_density' and the background pressure: load two_phase");
+        return SLUICE_ERROR;
+    }
+    if (s->a > 0 && !(s->a * rho_a * rho_a < background)) {
+        api->error(host,
+                   "the cohesion pressure a rho0_a^2 = %g Pa is not below the background "
+                   "pressure p_b = %g Pa: the air's pressure p_b - a rho^2 would be negative "
+                   "(tensile instability); lower the coefficient below %g m^5 kg^-1 s^-2 or "
+                   "raise two_phase's background_pressure",
+                   (double)(s->a * rho_a * rho_a), (double)background,
+                   (double)(background / (rho_a * rho_a)));
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
+static void cohesion_destroy(void *state)
+{
+    free(state);
+}
+
+/* (dW/dr)/r of the cohesion kernel at q = r/H, without its normalisation;
+ * zero beyond q = 2. Wendland C2: -5 (1 - q/2)^3; cubic B-spline: -3 +
+ * 2.25 q (q < 1), -0.75 (2 - q)^2 / q (1 <= q < 2). */
+static inline sluice_real cohesion_shape(const sluice_real q, const int kernel)
+{
+    if (kernel == KERNEL_WENDLAND) {
+        sluice_real t = 1 - (sluice_real)0.5 * q;
+        t = t > 0 ? t : 0;
+        return -5 * t * t * t;
+    }
+    sluice_real t = 2 - q;
+    t = t > 0 ? t : 0;
+    const sluice_real inner = -3 + (sluice_real)2.25 * q;
+    const sluice_real outer = (sluice_real)-0.75 * t * t / (q > (sluice_real)1e-12 ? q : 1);
+    return q < 1 ? inner : outer;
+}
+
+static inline void cohesion_pairs(const cohesion_state *s, const sluice_view *v,
+                                  const sluice_pair_batch *b, const uint32_t dims,
+                                  const int kernel)
+{
+    const uint8_t *restrict phase = v->columns[s->phase.column];
+    const sluice_index *restrict nb = b->neighbour;
+    const sluice_real *restrict mj = b->gathered[s->mass.column];
+    const sluice_real *restrict r = b->distance;
+    const sluice_real *restrict rx = b->offset[0], *restrict ry = b->offset[1];
+    const sluice_real *restrict rz = dims == 3 ? b->offset[2] : b->offset[1];
+    sluice_real *restrict ax = sluice_real_column(v, s->acceleration, 0);
+    sluice_real *restrict ay = sluice_real_column(v, s->acceleration, 1);
+    sluice_real *restrict az = dims == 3 ? sluice_real_column(v, s->acceleration, 2) : ay;
+    const sluice_real iH = s->inverse_H;
+    const sluice_real scale = 2 * s->a * s->gradient_normalisation; /* 2 a x normalisation */
+    for (sluice_index t = 0; t < b->target_count; t++) {
+        const sluice_index i = b->target[t];
+        if (phase[i] != PHASE_AIR)
+            continue; /* a = 0 in the water */
+        sluice_real sx = 0, sy = 0, sz = 0;
+        for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
+            const sluice_real air = (sluice_real)(phase[nb[k]] == PHASE_AIR);
+            const sluice_real c = air * mj[k] * cohesion_shape(r[k] * iH, kernel);
+            sx += c * rx[k];
+            sy += c * ry[k];
+            if (dims == 3)
+                sz += c * rz[k];
+        }
+        ax[i] += scale * sx;
+        ay[i] += scale * sy;
+        if (dims == 3)
+            az[i] += scale * sz;
+    }
+}
+
+static void cohesion_pair(void *state, const sluice_view *v, const sluice_pair_batch *b)
+{
+    const cohesion_state *s = state;
+    const int key = ((v->dimensions == 3) << 1) | (s->kernel == KERNEL_CUBIC);
+    switch (key) {
+    case 0: cohesion_pairs(s, v, b, 2, KERNEL_WENDLAND); break;
+    case 1: cohesion_pairs(s, v, b, 2, KERNEL_CUBIC); break;
+    case 2: cohesion_pairs(s, v, b, 3, KERNEL_WENDLAND); break;
+    default: cohesion_pairs(s, v, b, 3, KERNEL_CUBIC); break;
+    }
+}
+
+static const sluice_component components[] = {
+    {
+        .name = "two_phase",
+        .summary = "air-water phases: the phase field, the air's mass and density, and Tait's "
+                   "equation of state of each phase with one B and a background pressure",
+        .reference = "Colagrossi & Landrini (2003); Wan et al. (2017, seed 001) eq. 10",
+        .dimensions = SLUICE_DIMS_ALL,
+        .params = phase_params,
+        .param_count = SLUICE_COUNT(phase_params),
+        .config_size = sizeof(two_phase_config),
+        .fields = phase_fields,
+        .field_count = SLUICE_COUNT(phase_fields),
+        .particle_kinds = SLUICE_KINDS_ALL,
+        .create = phase_create,
+        .destroy = phase_destroy,
+        .bind = phase_bind,
+        .initialise = phase_initialise,
+        .particle = phase_particle,
+        .density_from_pressure = phase_density_from_pressure,
+    },
+    {
+        .name = "air_cohesion",
+        .summary = "cohesion of the air: dv_i/dt += 2 a sum_{j air} m_j grad W(r_ij, H)",
+        .reference = "Nugent & Posch (2000); Colagrossi & Landrini (2003); Wan et al. (2017, "
+                     "seed 001) eq. 12",
+        .dimensions = SLUICE_DIMS_ALL,
+        .params = cohesion_params,
+        .param_count = SLUICE_COUNT(cohesion_params),
+        .config_size = sizeof(cohesion_config),
+        .fields = cohesion_fields,
+        .field_count = SLUICE_COUNT(cohesion_fields),
+        .target_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+        .neighbour_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+        .create = cohesion_create,
+        .destroy = cohesion_destroy,
+        .bind = cohesion_bind,
+        .pair = cohesion_pair,
+    },
+};
+
+SLUICE_DEFINE_LIBRARY("two_phase", "1.0.0", "air-water two-phase SPH: phases, equation of state, "
+                      "cohesion of the air", SLUICE_DIMS_ALL, components)
