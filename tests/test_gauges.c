@@ -161,6 +161,55 @@ START_TEST(point_gauge_phase_filter)
 }
 END_TEST
 
+/* The surface gauges with a phase filter: in the tank (water up to 0.5 m) the
+ * fixture marks the fluid at or above y = 0.25 as air, so the water's own
+ * surface is the top of its last row, 0.24 m. free_surface_gauge and
+ * section_gauge with `phase: water` must find it (within dx/2, the bound of
+ * the single-phase gauge tests), and without the filter the top of the air,
+ * 0.5 m. */
+static void surface_rows(const char *phase_line, double *fs, double *sec)
+{
+    const char *fixtures = getenv("SLUICE_FIXTURE_DIR");
+    ck_assert_ptr_nonnull(fixtures);
+    char gauges[512], body[4096], yaml[8192];
+    snprintf(gauges, sizeof gauges,
+             "  do_phase_fixture: {air_above: 0.25}\n"
+             "  free_surface_gauge: {positions: [0.5], top: [0.8]%s}\n"
+             "  section_gauge: {positions: [0.5], top: [0.8]%s}\n",
+             phase_line, phase_line);
+    snprintf(body, sizeof body, tank_scene, gauges);
+    snprintf(yaml, sizeof yaml, "plugin_path: %s\n%s", fixtures, body);
+    sluice_sim *sim = test_load("surface-phase", yaml, NULL, 0);
+    char *dir = test_scratch("surface-phase-out");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    char *path = NULL;
+    ck_assert_int_ge(asprintf(&path, "%s/free_surface.csv", dir), 0);
+    ck_assert_int_eq(first_row(path, fs, 2), 2);
+    free(path);
+    ck_assert_int_ge(asprintf(&path, "%s/sections.csv", dir), 0);
+    ck_assert_int_eq(first_row(path, sec, 5), 5);
+    free(path);
+    free(dir);
+    sluice_sim_free(sim);
+}
+
+START_TEST(surface_gauges_phase_filter)
+{
+    const double dx = 0.02;
+    double fs_water[2], sec_water[5], fs_all[2], sec_all[5];
+    surface_rows(", phase: water", fs_water, sec_water);
+    surface_rows("", fs_all, sec_all);
+    fprintf(stderr, "water under air from y = 0.25 m: free surface %.4f m (water), %.4f m (all); "
+                    "section depth %.4f m (water), %.4f m (all)\n",
+            fs_water[1], fs_all[1], sec_water[1], sec_all[1]);
+    ck_assert_msg(fabs(fs_water[1] - 0.24) <= dx / 2, "water surface %g", fs_water[1]);
+    ck_assert_msg(fabs(sec_water[1] - 0.24) <= dx / 2, "water depth %g", sec_water[1]);
+    ck_assert_msg(fabs(fs_all[1] - 0.5) <= dx / 2, "unfiltered surface %g", fs_all[1]);
+    ck_assert_msg(fabs(sec_all[1] - 0.5) <= dx / 2, "unfiltered depth %g", sec_all[1]);
+}
+END_TEST
+
 START_TEST(point_gauge_unknown_field)
 {
     char yaml[4096];
@@ -273,6 +322,7 @@ int main(void)
     TCase *c = tcase_create("gauges");
     tcase_add_test(c, point_gauge_hydrostatic_start);
     tcase_add_test(c, point_gauge_phase_filter);
+    tcase_add_test(c, surface_gauges_phase_filter);
     tcase_add_test(c, point_gauge_unknown_field);
     tcase_add_test(c, wall_monitor_lattice_and_crossing);
     suite_add_tcase(s, c);

@@ -23,6 +23,9 @@
  * each position also needs its y (`lateral`). The state is the integrated one
  * (position, mass, density): no evaluation is needed.
  *
+ * In a two-phase scene `phase: water` sums over the water only, so that the
+ * surface is the water's, not the top of the air (phase_filter.h).
+ *
  * Cost: one api->point_pass over every sample of every column per output row;
  * the samples are bounded (MAX_SAMPLES; the scene is refused beyond it).
  * Columns: time, eta_x<k> (m) for k = 0, 1, ... in the order of `positions`. */
@@ -31,6 +34,7 @@
 #include <string.h>
 
 #include "gauge_column.h"
+#include "phase_filter.h"
 
 #define MAX_SAMPLES 1000000u
 
@@ -38,6 +42,7 @@ typedef struct fs_config {
     sluice_real_list positions, lateral, bottom, top;
     sluice_real sample_spacing, threshold, interval;
     const char *file;
+    int phase;
 } fs_config;
 
 typedef struct fs_state {
@@ -50,7 +55,8 @@ typedef struct fs_state {
     double *row;
     sluice_real threshold, interval;
     const char *file;
-    sluice_field density, mass;
+    sluice_field density, mass, phase;
+    int phase_filter;
     sluice_table *table;
     int64_t written;
 } fs_state;
@@ -83,6 +89,7 @@ static const sluice_param_spec params[] = {
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between samples", NULL, 0},
     {"file", SLUICE_PARAM_STRING, offsetof(fs_config, file), "free_surface.csv", 0, 0, 0, NULL,
      "output file in the run directory", NULL, 0},
+    SLUICE_PHASE_PARAM(fs_config, phase),
 };
 
 static const sluice_field_spec fields[] = {
@@ -128,6 +135,11 @@ static int fs_create(const sluice_api *api, sluice_host *host, const void *confi
     s->threshold = c->threshold;
     s->interval = c->interval;
     s->file = c->file;
+    s->phase_filter = c->phase;
+    if (sluice_phase_declare(api, host, s->phase_filter) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
     const char *per = "positions";
     if (sluice_gauge_check_list(api, host, "lateral", &c->lateral, s->columns, per) != SLUICE_OK ||
         sluice_gauge_check_list(api, host, "bottom", &c->bottom, s->columns, per) != SLUICE_OK ||
@@ -210,7 +222,8 @@ static int fs_bind(void *state, sluice_host *host)
 {
     fs_state *s = state;
     if (s->api->field(host, "density", &s->density) != SLUICE_OK ||
-        s->api->field(host, "mass", &s->mass) != SLUICE_OK)
+        s->api->field(host, "mass", &s->mass) != SLUICE_OK ||
+        sluice_phase_bind(s->api, host, s->phase_filter, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;
 }
@@ -240,10 +253,14 @@ static void kernel_sums(void *context, const sluice_view *v, const sluice_pair_b
     const sluice_real *restrict m = sluice_real_column(v, s->mass, 0);
     const sluice_real *restrict W = b->kernel;
     const sluice_index *restrict nb = b->neighbour;
+    const uint8_t *phase = sluice_phase_column(v, s->phase);
+    const uint8_t wanted = sluice_phase_wanted(s->phase_filter);
     for (sluice_index t = 0; t < b->target_count; t++) {
         double sum = 0;
         for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
             const sluice_index j = nb[k];
+            if (sluice_phase_skips(phase, wanted, j))
+                continue;
             sum += (double)(m[j] / rho[j] * W[k]);
         }
         s->sum[b->target[t]] = sum;

@@ -17,7 +17,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include "phase_filter.h"
 
 #define MAX_FIELDS 16
 
@@ -28,8 +28,6 @@ typedef struct gauge_config {
     const char *file;
     int phase;
 } gauge_config;
-
-enum { PHASE_ALL = 0, PHASE_WATER = 1, PHASE_AIR = 2 };
 
 typedef struct gauge_state {
     const sluice_api *api;
@@ -43,7 +41,7 @@ typedef struct gauge_state {
     char *names[MAX_FIELDS];
     sluice_field fields[MAX_FIELDS];
     sluice_field density, mass, phase;
-    int phase_filter; /* PHASE_*: PHASE_ALL sums over every fluid particle */
+    int phase_filter; /* SLUICE_PHASE_* (phase_filter.h) */
     double *sums;   /* per point: kernel sum, then value_count weighted sums */
     double *row;
     sluice_table *table;
@@ -62,15 +60,8 @@ static const sluice_param_spec params[] = {
      "points whose kernel sum sum_j V_j W is below this are outside the fluid (nan)", NULL, 0},
     {"file", SLUICE_PARAM_STRING, offsetof(gauge_config, file), "points.csv", 0, 0, 0, NULL,
      "output file in the run directory", NULL, 0},
-    {"phase", SLUICE_PARAM_ENUM, offsetof(gauge_config, phase), "all", 0, 0, 0, NULL,
-     "all: every fluid particle; water or air: that phase only (field 'phase' of the "
-     "two_phase plugin, required then)",
-     "all|water|air", 0},
+    SLUICE_PHASE_PARAM(gauge_config, phase),
 };
-
-static const sluice_field_spec phase_field = {
-    "phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_READ, 0, NULL, 0,
-    "phase of a fluid particle: 0 water, 1 air"};
 
 static const sluice_field_spec fields[] = {
     {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", 0, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
@@ -109,7 +100,7 @@ static int gauge_create(const sluice_api *api, sluice_host *host, const void *co
     s->min_kernel_sum = c->min_kernel_sum;
     s->file = c->file;
     s->phase_filter = c->phase;
-    if (s->phase_filter != PHASE_ALL && api->declare_field(host, &phase_field) != SLUICE_OK) {
+    if (sluice_phase_declare(api, host, s->phase_filter) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
@@ -159,7 +150,7 @@ static int gauge_bind(void *state, sluice_host *host)
     const sluice_api *api = s->api;
     if (api->field(host, "density", &s->density) != SLUICE_OK ||
         api->field(host, "mass", &s->mass) != SLUICE_OK ||
-        (s->phase_filter != PHASE_ALL && api->field(host, "phase", &s->phase) != SLUICE_OK))
+        sluice_phase_bind(api, host, s->phase_filter, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
     s->value_count = 0;
     for (uint32_t f = 0; f < s->field_count; f++) {
@@ -229,16 +220,15 @@ static void accumulate(void *context, const sluice_view *v, const sluice_pair_ba
     const sluice_real *rho = sluice_real_column(v, s->density, 0);
     const sluice_real *m = sluice_real_column(v, s->mass, 0);
     const uint32_t stride = s->value_count + 1;
-    const uint8_t *phase =
-        s->phase_filter != PHASE_ALL ? (const uint8_t *)v->columns[s->phase.column] : NULL;
-    const uint8_t wanted = s->phase_filter == PHASE_AIR ? 1 : 0;
+    const uint8_t *phase = sluice_phase_column(v, s->phase);
+    const uint8_t wanted = sluice_phase_wanted(s->phase_filter);
     for (sluice_index t = 0; t < b->target_count; t++) {
         double *sum = s->sums + (size_t)b->target[t] * stride;
         for (uint32_t c = 0; c < stride; c++)
             sum[c] = 0;
         for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
             const sluice_index j = b->neighbour[k];
-            if (phase && phase[j] != wanted)
+            if (sluice_phase_skips(phase, wanted, j))
                 continue;
             const double w = (double)m[j] / (double)rho[j] * (double)b->kernel[k];
             sum[0] += w;

@@ -33,6 +33,10 @@
  * the exact integral of u over the wet part.
  * A dry section (no wet sample) gives d = 0, q = 0, U = Fr = nan.
  *
+ * In a two-phase scene `phase: water` sums over the water only: the depth,
+ * discharge and Froude number of the water, not of the air above it
+ * (phase_filter.h).
+ *
  * 2D only: in 3D a section would be a width-averaged surface integral (not
  * implemented; the scene is refused). The state is the integrated one
  * (position, velocity, mass, density): no evaluation is needed. Cost: one
@@ -44,6 +48,7 @@
 #include <string.h>
 
 #include "gauge_column.h"
+#include "phase_filter.h"
 
 #define MAX_SAMPLES 1000000u
 
@@ -51,6 +56,7 @@ typedef struct sg_config {
     sluice_real_list positions, bed_elevation, top;
     sluice_real sample_spacing, threshold, interval;
     const char *file;
+    int phase;
 } sg_config;
 
 typedef struct sg_state {
@@ -64,7 +70,8 @@ typedef struct sg_state {
     sluice_real threshold, interval;
     double g;             /* gravity along -y, m s^-2 */
     const char *file;
-    sluice_field density, mass, velocity;
+    sluice_field density, mass, velocity, phase;
+    int phase_filter;
     sluice_table *table;
     int64_t written;
 } sg_state;
@@ -91,6 +98,7 @@ static const sluice_param_spec params[] = {
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between samples", NULL, 0},
     {"file", SLUICE_PARAM_STRING, offsetof(sg_config, file), "sections.csv", 0, 0, 0, NULL,
      "output file in the run directory", NULL, 0},
+    SLUICE_PHASE_PARAM(sg_config, phase),
 };
 
 static const sluice_field_spec fields[] = {
@@ -153,6 +161,11 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
     s->threshold = c->threshold;
     s->interval = c->interval;
     s->file = c->file;
+    s->phase_filter = c->phase;
+    if (sluice_phase_declare(api, host, s->phase_filter) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
     s->first = calloc((size_t)s->sections + 1, sizeof *s->first);
     s->bed = malloc((size_t)s->sections * sizeof *s->bed);
     if (!s->first || !s->bed) {
@@ -217,6 +230,8 @@ static int sg_bind(void *state, sluice_host *host)
     s->density = f[0];
     s->mass = f[1];
     s->velocity = f[2];
+    if (sluice_phase_bind(api, host, s->phase_filter, &s->phase) != SLUICE_OK)
+        return SLUICE_ERROR;
     sluice_real g[3] = {0, 0, 0};
     if (api->constant(host, "gravity", g, 3) < 2) {
         api->error(host, "needs the constant 'gravity' for the Froude number: load the gravity "
@@ -260,10 +275,14 @@ static void section_sums(void *context, const sluice_view *v, const sluice_pair_
     const sluice_real *restrict u = sluice_real_column(v, s->velocity, 0);
     const sluice_real *restrict W = b->kernel;
     const sluice_index *restrict nb = b->neighbour;
+    const uint8_t *phase = sluice_phase_column(v, s->phase);
+    const uint8_t wanted = sluice_phase_wanted(s->phase_filter);
     for (sluice_index t = 0; t < b->target_count; t++) {
         double sum = 0, flux = 0;
         for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
             const sluice_index j = nb[k];
+            if (sluice_phase_skips(phase, wanted, j))
+                continue;
             const double w = (double)(m[j] / rho[j] * W[k]);
             sum += w;
             flux += w * (double)u[j];
