@@ -244,7 +244,7 @@ END_TEST
 /* Water (0.2 m wide, H = 0.15 m deep) under 0.1 m of air, dbc walls and a
  * lid; or (air = 0) the same water alone with a free surface. c0_w = 20 m/s
  * >= 10 sqrt(g H). */
-static char *column_scene(int air)
+static char *column_scene(int air, const char *extra)
 {
     char *text = NULL;
     ck_assert_int_ge(
@@ -270,13 +270,15 @@ static char *column_scene(int air)
                  "  gravity: {}\n"
                  "  dbc: {}\n"
                  "  time_step: {}\n"
-                 "  symplectic: {}\n",
+                 "  symplectic: {}\n"
+                 "%s",
                  air ? "    - {shape: box, min: [0, 0.15], max: [0.2, 0.25]}\n" : "",
                  air ? "    - {shape: polyline, points: [[0.2, 0.25], [0, 0.25]], name: lid}\n"
                      : "",
                  air ? "  two_phase: {speed_of_sound: 20, background_pressure: 100,"
                        " air_above: [[0, 0.15]]}\n"
-                     : "  tait: {speed_of_sound: 20}\n"),
+                     : "  tait: {speed_of_sound: 20}\n",
+                 extra),
         0);
     return text;
 }
@@ -311,10 +313,10 @@ typedef struct column_result {
 /* Runs the column for `duration` s; the pressure of every water particle is
  * averaged over the second half (every 20 steps, evaluated at the sampled
  * state) and fitted away from the walls and the surface (3 dx). */
-static column_result run_column(int air, double duration)
+static column_result run_column(int air, double duration, const char *extra)
 {
     const double dx = 0.01, H = 0.15, width = 0.2;
-    char *yaml = column_scene(air);
+    char *yaml = column_scene(air, extra);
     sluice_sim *sim = test_load(air ? "column-air" : "column-water", yaml, NULL, 0);
     ck_assert_int_eq(sluice_sim_begin(sim, NULL), SLUICE_RUN_COMPLETE);
     const sluice_view *v = sluice_sim_view(sim);
@@ -415,7 +417,7 @@ START_TEST(still_two_layer_column)
 {
     const double dx = 0.01, H = 0.15, width = 0.2, c0 = 20, rho_w = 1000, pb = 100;
     const double M = lattice_moment(1.225), rho_g = rho_w * G, scale = rho_g * H;
-    const column_result two = run_column(1, 0.15), one = run_column(0, 0.15);
+    const column_result two = run_column(1, 0.15, ""), one = run_column(0, 0.15, "");
     /* the elastic energy of the start: the dbc walls begin at rest density
      * (pressure p_b) under water at p_b + rho g (H - y): at most the energy
      * of that pressure misfit over the water, (rho g H)^2 / (2 rho c0^2)
@@ -457,6 +459,39 @@ START_TEST(still_two_layer_column)
                   two.energy, elastic);
     /* |P| <= sqrt(2 M E) for any velocity field of energy E */
     ck_assert(two.momentum <= sqrt(2 * mass_w * elastic));
+}
+END_TEST
+
+/* delta-SPH in two phases acts within each phase only (each with its own
+ * c0 and hydrostatic correction): with it loaded the still column stays at
+ * rest (kinetic energy below the elastic energy of the start), the
+ * interface moves less than 0.1 dx, the surface pressure is p_b within
+ * rho g dx, and no particle crosses into the other phase. Across the
+ * interface (before it was phase-aware) the air reached 275 m/s within 500
+ * steps. */
+START_TEST(still_two_layer_column_with_delta_sph)
+{
+    const double dx = 0.01, H = 0.15, width = 0.2, c0 = 20, rho_w = 1000, pb = 100;
+    const double rho_g = rho_w * G, scale = rho_g * H;
+    const char *delta = "  delta_sph: {delta: 0.1}\n";
+    const column_result two = run_column(1, 0.15, delta), one = run_column(0, 0.15, delta);
+    const double elastic = scale * scale / (2 * rho_w * c0 * c0) * width * H;
+    fprintf(stderr,
+            "still column with delta-SPH: -dp/dy = %.1f Pa/m under air, %.1f Pa/m alone (rho g = "
+            "%.1f); surface %+.1f Pa over p_b; interface moved %.3f dx; air in water %d, water in "
+            "air %d; kinetic energy <= %.3g J/m (elastic start %.3g); %d steps\n",
+            two.slope, one.slope, rho_g, two.surface - pb, two.shift / dx, two.air_in_water,
+            two.water_in_air, two.energy, elastic, two.steps);
+    /* stability and a sharp interface are asserted; the water's pressure
+     * gradient under air is not: with delta-SPH it comes out 1.9 % steeper
+     * than the water alone's (0.6 % without delta-SPH), which is not
+     * understood yet (docs/validation.md) */
+    ck_assert_msg(fabs(two.surface - pb) <= rho_g * dx, "surface pressure %.1f Pa", two.surface);
+    ck_assert_msg(two.shift <= 0.1 * dx, "interface rows moved by %g m", two.shift);
+    ck_assert_int_eq(two.air_in_water, 0);
+    ck_assert_int_eq(two.water_in_air, 0);
+    ck_assert_msg(two.energy <= elastic, "kinetic energy %g J/m above the elastic start %g",
+                  two.energy, elastic);
 }
 END_TEST
 
@@ -805,6 +840,7 @@ int main(void)
     TCase *flow = tcase_create("flow");
     tcase_set_timeout(flow, 300);
     tcase_add_test(flow, still_two_layer_column);
+    tcase_add_test(flow, still_two_layer_column_with_delta_sph);
     tcase_add_test(flow, dam_break_in_air);
     suite_add_tcase(s, flow);
     TCase *cohesion = tcase_create("cohesion");

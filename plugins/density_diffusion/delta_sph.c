@@ -11,7 +11,15 @@
  *    (the linearised hydrostatic density difference) diffuses only the
  *    departure from hydrostatics, so a tank at rest keeps rho g H.
  * It damps the high-frequency density (pressure) noise of weakly
- * compressible SPH. */
+ * compressible SPH.
+ *
+ * Two phases (the field `phase` of the two_phase plugin, 0 water, 1 air,
+ * used whenever a plugin declares it): the diffusion acts between particles
+ * of the same phase only, each phase with its own c0 (the constant
+ * air_speed_of_sound for the air) and, in the Fourtakas form, its own
+ * rho^H_ji = rho0_k (g . r_ji) / c0_k^2. Across the interface the density
+ * jumps by the density ratio: diffusing it would drag air density into the
+ * water and back. */
 #include "plugin_util.h"
 
 typedef struct delta_config {
@@ -27,6 +35,10 @@ typedef struct delta_state {
     uint32_t dims;
     sluice_real coefficient, eta2, hydrostatic[3];
     sluice_field density, mass, density_rate;
+    /* two phases: per phase (0 water, 1 air) */
+    int two_phase;
+    sluice_field phase;
+    sluice_real phase_coefficient[2], phase_hydrostatic[2][3];
 } delta_state;
 
 static const sluice_param_spec params[] = {
@@ -102,6 +114,32 @@ static int delta_bind(void *state, sluice_host *host)
     s->density = f[0];
     s->mass = f[1];
     s->density_rate = f[2];
+    s->two_phase = sluice_util_optional_field(s->api, host, "phase", &s->phase);
+    if (s->two_phase) {
+        sluice_real c_air, rho_air;
+        if (s->phase.type != SLUICE_TYPE_UINT8 || s->phase.components != 1) {
+            s->api->error(host, "the field 'phase' must be uint8 with one component (0 water, "
+                                "1 air)");
+            return SLUICE_ERROR;
+        }
+        if (sluice_util_constant(s->api, host, "air_speed_of_sound", &c_air) != SLUICE_OK ||
+            sluice_util_constant(s->api, host, "air_rest_density", &rho_air) != SLUICE_OK)
+            return SLUICE_ERROR;
+        s->phase_coefficient[0] = s->coefficient;
+        s->phase_coefficient[1] = s->coefficient / c0 * c_air;
+        for (int d = 0; d < 3; d++) {
+            s->phase_hydrostatic[0][d] = s->hydrostatic[d];
+            /* rho0_a / c0_a^2 against rho0_w / c0_w^2 */
+            sluice_real rho0 = 0;
+            if (s->form == FORM_FOURTAKAS &&
+                sluice_util_constant(s->api, host, "rest_density", &rho0) != SLUICE_OK)
+                return SLUICE_ERROR;
+            s->phase_hydrostatic[1][d] =
+                s->form == FORM_FOURTAKAS ? s->hydrostatic[d] * (rho_air / rho0) * (c0 / c_air) *
+                                                (c0 / c_air)
+                                          : 0;
+        }
+    }
     return SLUICE_OK;
 }
 
@@ -149,9 +187,55 @@ static inline void delta_pairs(const delta_state *s, const sluice_view *v,
     }
 }
 
+/* Two phases: same-phase pairs only, each phase with its own coefficient and
+ * hydrostatic density difference (not vectorised: the phase is a byte
+ * gathered through the neighbour index). */
+static void delta_pairs_two_phase(const delta_state *s, const sluice_view *v,
+                                  const sluice_pair_batch *b, const uint32_t dims)
+{
+    const sluice_real *restrict rho = sluice_real_column(v, s->density, 0);
+    const sluice_real *restrict rhoj = b->gathered[s->density.column];
+    const sluice_real *restrict mj = b->gathered[s->mass.column];
+    const sluice_real *restrict F = b->kernel_gradient;
+    const sluice_real *restrict r = b->distance;
+    const sluice_real *restrict rx = b->offset[0], *restrict ry = b->offset[1];
+    const sluice_real *restrict rz = dims == 3 ? b->offset[2] : b->offset[1];
+    const uint8_t *restrict kj = b->neighbour_kind;
+    const uint8_t *restrict phase = (const uint8_t *)v->columns[s->phase.column];
+    const sluice_index *restrict nb = b->neighbour;
+    sluice_real *restrict rate = sluice_real_column(v, s->density_rate, 0);
+    const sluice_real eta2 = s->eta2;
+    for (sluice_index t = 0; t < b->target_count; t++) {
+        const sluice_index i = b->target[t];
+        const uint8_t pi = phase[i] ? 1 : 0;
+        const sluice_real *hydro = s->phase_hydrostatic[pi];
+        const sluice_real rhoi = rho[i];
+        sluice_real sum = 0;
+        for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
+            sluice_real h = hydro[0] * rx[k] + hydro[1] * ry[k];
+            if (dims == 3)
+                h += hydro[2] * rz[k];
+            const sluice_real difference = rhoj[k] - rhoi - h;
+            const sluice_real r2 = r[k] * r[k];
+            const sluice_real term = difference * r2 * F[k] * mj[k] / ((r2 + eta2) * rhoj[k]);
+            const int same = kj[k] != SLUICE_KIND_WALL && (phase[nb[k]] ? 1 : 0) == pi;
+            sum += same ? term : 0;
+        }
+        rate[i] -= s->phase_coefficient[pi] * sum;
+    }
+}
+
 static void delta_pair(void *state, const sluice_view *v, const sluice_pair_batch *b)
 {
     const delta_state *s = state;
+    if (s->two_phase) {
+        /* the hydrostatic terms are zero in the Molteni-Colagrossi form */
+        if (v->dimensions == 3)
+            delta_pairs_two_phase(s, v, b, 3);
+        else
+            delta_pairs_two_phase(s, v, b, 2);
+        return;
+    }
     if (s->form == FORM_FOURTAKAS) {
         if (v->dimensions == 3)
             delta_pairs(s, v, b, 1, 3);
@@ -180,5 +264,5 @@ static const sluice_component components[] = {{
     .pair = delta_pair,
 }};
 
-SLUICE_DEFINE_LIBRARY("delta_sph", "1.0.0", "delta-SPH density diffusion", SLUICE_DIMS_ALL,
+SLUICE_DEFINE_LIBRARY("delta_sph", "1.1.0", "delta-SPH density diffusion", SLUICE_DIMS_ALL,
                       components)
