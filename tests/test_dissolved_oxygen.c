@@ -701,22 +701,7 @@ static void expect_refused(const char *dir, const char *extra, const char *needl
 {
     char *yaml = NULL;
     ck_assert_int_ge(asprintf(&yaml, input_base, dir, extra), 0);
-    char *scratch = test_scratch("do-input");
-    ck_assert_ptr_nonnull(scratch);
-    char *path = test_write_file(scratch, "scene.yaml", yaml);
-    sluice_diag *diag = sluice_diag_create();
-    sluice_load_options options = {NULL, 0, 0, 0, 0};
-    sluice_sim *sim = sluice_sim_load(path, &options, diag);
-    ck_assert_msg(sim == NULL, "scene with\n%s\nloaded", extra);
-    int found = 0;
-    for (size_t i = 0; i < sluice_diag_count(diag); i++) {
-        fprintf(stderr, "  %s\n", sluice_diag_message(diag, i));
-        found |= strstr(sluice_diag_message(diag, i), needle) != NULL;
-    }
-    ck_assert_msg(found, "no message containing '%s'", needle);
-    sluice_diag_destroy(diag);
-    free(path);
-    free(scratch);
+    test_load_refused("do-input", yaml, needle);
     free(yaml);
 }
 

@@ -105,39 +105,56 @@ START_TEST(point_gauge_hydrostatic_start)
 }
 END_TEST
 
-/* Runs the tank with the fixture tests/fixtures/do_phase_fixture.c marking
- * the fluid at or above y = 0.25 as air, the water carrying u = 1 and the air
- * u = 2, and a point gauge of the velocity with `phase_line` at (0.5, 0.25)
- * (on the interface) and (0.5, 0.35) (0.1 m inside the air, beyond the
- * support 0.06 m), min_kernel_sum 0.1 (a point on the interface has about
- * half a kernel sum in each phase); row: time, u and v at each point. */
-static void phase_gauge_row(const char *phase_line, double row[5])
+/* Runs the tank (water up to 0.5 m) with the fixture
+ * tests/fixtures/do_phase_fixture.c marking the fluid at or above y = 0.25 as
+ * air, and the plugin lines `gauges`; with `velocities` the water carries
+ * u = 1 and the air u = 2. Returns the output directory (free it). */
+static char *run_tank_under_air(const char *gauges, int velocities)
 {
     const char *fixtures = getenv("SLUICE_FIXTURE_DIR");
     ck_assert_ptr_nonnull(fixtures);
-    char gauges[512], body[4096], yaml[8192];
+    char plugins[1024], body[4096], yaml[8192];
+    snprintf(plugins, sizeof plugins, "  do_phase_fixture: {air_above: 0.25}\n%s", gauges);
+    snprintf(body, sizeof body, tank_scene, plugins);
+    snprintf(yaml, sizeof yaml, "plugin_path: %s\n%s", fixtures, body);
+    sluice_sim *sim = test_load("tank-under-air", yaml, NULL, 0);
+    if (velocities) {
+        const sluice_view *v = sluice_sim_view(sim);
+        sluice_real *u = test_column(sim, "velocity", 0);
+        for (sluice_index i = 0; i < v->count; i++)
+            if (v->kind[i] == SLUICE_KIND_FLUID)
+                u[i] = v->position[1][i] >= 0.25 ? 2 : 1;
+    }
+    char *dir = test_scratch("tank-under-air-out");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    sluice_sim_free(sim);
+    return dir;
+}
+
+/* The first data row of dir/file, which must hold `count` values. */
+static void first_row_of(const char *dir, const char *file, double *values, int count)
+{
+    char *path = NULL;
+    ck_assert_int_ge(asprintf(&path, "%s/%s", dir, file), 0);
+    ck_assert_int_eq(first_row(path, values, count), count);
+    free(path);
+}
+
+/* A point gauge of the velocity with `phase_line` at (0.5, 0.25) (on the
+ * interface) and (0.5, 0.35) (0.1 m inside the air, beyond the support
+ * 0.06 m), min_kernel_sum 0.1 (a point on the interface has about half a
+ * kernel sum in each phase); row: time, u and v at each point. */
+static void phase_gauge_row(const char *phase_line, double row[5])
+{
+    char gauges[512];
     snprintf(gauges, sizeof gauges,
-             "  do_phase_fixture: {air_above: 0.25}\n"
              "  point_gauge: {points: [[0.5, 0.25], [0.5, 0.35]], fields: velocity, "
              "min_kernel_sum: 0.1%s}\n",
              phase_line);
-    snprintf(body, sizeof body, tank_scene, gauges);
-    snprintf(yaml, sizeof yaml, "plugin_path: %s\n%s", fixtures, body);
-    sluice_sim *sim = test_load("point-gauge-phase", yaml, NULL, 0);
-    const sluice_view *v = sluice_sim_view(sim);
-    sluice_real *u = test_column(sim, "velocity", 0);
-    for (sluice_index i = 0; i < v->count; i++)
-        if (v->kind[i] == SLUICE_KIND_FLUID)
-            u[i] = v->position[1][i] >= 0.25 ? 2 : 1;
-    char *dir = test_scratch("point-gauge-phase-out");
-    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
-    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
-    char *path = NULL;
-    ck_assert_int_ge(asprintf(&path, "%s/points.csv", dir), 0);
-    ck_assert_int_eq(first_row(path, row, 5), 5);
-    free(path);
+    char *dir = run_tank_under_air(gauges, 1);
+    first_row_of(dir, "points.csv", row, 5);
     free(dir);
-    sluice_sim_free(sim);
 }
 
 /* phase: water / air sums over that phase only: on the interface the water
@@ -169,29 +186,15 @@ END_TEST
  * 0.5 m. */
 static void surface_rows(const char *phase_line, double *fs, double *sec)
 {
-    const char *fixtures = getenv("SLUICE_FIXTURE_DIR");
-    ck_assert_ptr_nonnull(fixtures);
-    char gauges[512], body[4096], yaml[8192];
+    char gauges[512];
     snprintf(gauges, sizeof gauges,
-             "  do_phase_fixture: {air_above: 0.25}\n"
              "  free_surface_gauge: {positions: [0.5], top: [0.8]%s}\n"
              "  section_gauge: {positions: [0.5], top: [0.8]%s}\n",
              phase_line, phase_line);
-    snprintf(body, sizeof body, tank_scene, gauges);
-    snprintf(yaml, sizeof yaml, "plugin_path: %s\n%s", fixtures, body);
-    sluice_sim *sim = test_load("surface-phase", yaml, NULL, 0);
-    char *dir = test_scratch("surface-phase-out");
-    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
-    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
-    char *path = NULL;
-    ck_assert_int_ge(asprintf(&path, "%s/free_surface.csv", dir), 0);
-    ck_assert_int_eq(first_row(path, fs, 2), 2);
-    free(path);
-    ck_assert_int_ge(asprintf(&path, "%s/sections.csv", dir), 0);
-    ck_assert_int_eq(first_row(path, sec, 5), 5);
-    free(path);
+    char *dir = run_tank_under_air(gauges, 0);
+    first_row_of(dir, "free_surface.csv", fs, 2);
+    first_row_of(dir, "sections.csv", sec, 5);
     free(dir);
-    sluice_sim_free(sim);
 }
 
 START_TEST(surface_gauges_phase_filter)

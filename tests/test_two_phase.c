@@ -33,29 +33,6 @@ static const uint8_t *phase_column(sluice_sim *sim)
     return sluice_sim_view(sim)->columns[f.column];
 }
 
-/* Loads `yaml`, expecting failure with a message containing `needle`. */
-static void expect_load_error(const char *tag, const char *yaml, const char *needle)
-{
-    char *dir = test_scratch(tag);
-    ck_assert_ptr_nonnull(dir);
-    char *path = test_write_file(dir, "scene.yaml", yaml);
-    ck_assert_ptr_nonnull(path);
-    sluice_diag *diag = sluice_diag_create();
-    sluice_load_options options = {NULL, 0, 0, 0, 0};
-    sluice_sim *sim = sluice_sim_load(path, &options, diag);
-    int found = 0;
-    for (size_t i = 0; i < sluice_diag_count(diag); i++) {
-        const char *message = sluice_diag_message(diag, i);
-        fprintf(stderr, "%s: %s\n", tag, message);
-        found |= strstr(message, needle) != NULL && strstr(message, "error") != NULL;
-    }
-    ck_assert_msg(sim == NULL, "%s: the scene loaded, expected an error with '%s'", tag, needle);
-    ck_assert_msg(found, "%s: no error message contains '%s'", tag, needle);
-    sluice_diag_destroy(diag);
-    free(path);
-    free(dir);
-}
-
 /* --------------------------------------------------------- small scene -- */
 
 /* A closed 2D box, water below y = 0.1, air above; `plugins` appended. */
@@ -717,7 +694,7 @@ START_TEST(cohesion_refusals)
 {
     char *yaml = box_scene("speed_of_sound: 28, background_pressure: 400, air_above: [[0, 0.1]]",
                            "  air_cohesion: {coefficient: 400, smoothing_length_ratio: 1}\n");
-    expect_load_error("cohesion-pressure", yaml, "is not below the background pressure");
+    test_load_refused("cohesion-pressure", yaml, "is not below the background pressure");
     free(yaml);
 }
 END_TEST
@@ -807,7 +784,7 @@ START_TEST(bad_input)
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         char *yaml = box_scene(cases[k].settings, cases[k].extra);
-        expect_load_error(cases[k].tag, yaml, cases[k].needle);
+        test_load_refused(cases[k].tag, yaml, cases[k].needle);
         free(yaml);
     }
     /* cohesion without the phases */
@@ -824,7 +801,7 @@ START_TEST(bad_input)
                               "  air_cohesion: {coefficient: 1, smoothing_length_ratio: 1}\n"
                               "  symplectic: {}\n"),
                      0);
-    expect_load_error("cohesion-alone", yaml, "load two_phase");
+    test_load_refused("cohesion-alone", yaml, "load two_phase");
     free(yaml);
 }
 END_TEST

@@ -278,6 +278,15 @@ int sluice_pair_reach_check(const sluice_grid *grid, sluice_real reach)
     return 0;
 }
 
+/* Cell index c along an axis of n cells, wrapped across a periodic side;
+ * -1 beyond a closed side. */
+static inline int64_t wrap_cell(int64_t c, int64_t n, int periodic)
+{
+    if (c >= 0 && c < n)
+        return c;
+    return periodic ? (c % n + n) % n : -1;
+}
+
 /* Appends the pairs of target i within `reach` (beyond the support) found
  * through the cells around i's cell; returns the new pair count, or
  * (sluice_index)-1 when the workspace had to grow and could not. Flushes the
@@ -320,26 +329,17 @@ static sluice_index fill_reach(sluice_pair_engine *engine, const sluice_pair_pas
         const double xi[3] = {(double)view->position[0][i], (double)view->position[1][i],
                               dims == 3 ? (double)view->position[2][i] : 0.0};
         for (int64_t dz = -range[2]; dz <= range[2]; dz++) {
-            int64_t cz = c[2] + dz;
-            if (cz < 0 || cz >= grid->cells[2]) {
-                if (!grid->periodic[2])
-                    continue;
-                cz = (cz % grid->cells[2] + grid->cells[2]) % grid->cells[2];
-            }
+            const int64_t cz = wrap_cell(c[2] + dz, grid->cells[2], grid->periodic[2]);
+            if (cz < 0)
+                continue;
             for (int64_t dy = -range[1]; dy <= range[1]; dy++) {
-                int64_t cy = c[1] + dy;
-                if (cy < 0 || cy >= grid->cells[1]) {
-                    if (!grid->periodic[1])
-                        continue;
-                    cy = (cy % grid->cells[1] + grid->cells[1]) % grid->cells[1];
-                }
+                const int64_t cy = wrap_cell(c[1] + dy, grid->cells[1], grid->periodic[1]);
+                if (cy < 0)
+                    continue;
                 for (int64_t dx = -range[0]; dx <= range[0]; dx++) {
-                    int64_t cx = c[0] + dx;
-                    if (cx < 0 || cx >= grid->cells[0]) {
-                        if (!grid->periodic[0])
-                            continue;
-                        cx = (cx % grid->cells[0] + grid->cells[0]) % grid->cells[0];
-                    }
+                    const int64_t cx = wrap_cell(c[0] + dx, grid->cells[0], grid->periodic[0]);
+                    if (cx < 0)
+                        continue;
                     const size_t at = ((size_t)cz * (size_t)grid->cells[1] + (size_t)cy) *
                                           (size_t)grid->cells[0] +
                                       (size_t)cx;
