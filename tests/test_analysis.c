@@ -23,7 +23,14 @@
  *  - the momentum limits at an abrupt drop: Belanger at s = 0, and the order
  *    they give seed 004's table 1 (see drop_table1);
  *  - the CLI: headline numbers, CSV written, and one message with exit 2 on
- *    a missing run, file or column. */
+ *    a missing run, file or column;
+ *  - stepped chutes (seed 001): the velocity along the pseudo-bottom and the
+ *    distance along its normal; Y90, the clear-water depth d and C_mean to
+ *    the trapezoid rule's known error on a quadratic air-concentration
+ *    profile (exact on a linear one); step-profiles on a synthetic point
+ *    gauge CSV (power-law velocity, stepped air-concentration profiles,
+ *    dry samples, rows outside the window): the time means, Y90, d,
+ *    C_mean, the inception edge, the shallow-Y90 warning and bad input. */
 #include <math.h>
 #include <stdint.h>
 
@@ -1023,6 +1030,420 @@ START_TEST(cli)
 }
 END_TEST
 
+/* ------------------------------------------- stepped chute (seed 001) -- */
+
+START_TEST(chute_geometry)
+{
+    const double theta = atan(0.4); /* Chanson's chute: 0.1 m steps, 0.25 m treads */
+    /* a velocity U along the pseudo-bottom plus any normal component W */
+    const double U = 1.7, W = 0.3, c = cos(theta), s = sin(theta);
+    ck_assert_double_eq_tol(sluice_hyd_chute_velocity(U * c + W * s, -U * s + W * c, theta), U,
+                            1e-15);
+    /* a point y along the normal from the edge, shifted by t along the
+     * pseudo-bottom */
+    double offset;
+    const double y = 0.037, t = -0.002;
+    double d = sluice_hyd_normal_distance(0.5 + y * s + t * c, 0.2 + y * c - t * s, 0.5, 0.2,
+                                          theta, &offset);
+    ck_assert_double_eq_tol(d, y, 1e-16);
+    ck_assert_double_eq_tol(offset, t, 1e-16);
+}
+END_TEST
+
+/* The profile integral is the trapezoid rule on the finite points, with C
+ * held below the first: exact on a piecewise-linear profile. Y90, d and
+ * C_mean of a profile rising quadratically from C0 at y = a to 0.9 at
+ * y = Yt (grid points, spacing Delta): the trapezoid rule on a quadratic
+ * overestimates the integral of C by exactly L Delta^2 C''/12 =
+ * (0.9 - C0) Delta^2 / (6 L), L = Yt - a, so
+ *   d = Yt - [C0 Yt + (0.9 - C0) L/3 + (0.9 - C0) Delta^2 / (6 L)]
+ * to round-off, against the exact Yt (1 - C0) - (0.9 - C0) L/3. */
+START_TEST(aerated_depths)
+{
+    enum { N = 21 };
+    const double delta = 0.005;
+    double y[N], c[N];
+    /* piecewise linear with a nan point and the first point at y = 2 Delta */
+    for (int k = 0; k < N; k++) {
+        y[k] = (k + 2) * delta;
+        c[k] = y[k] < 0.05 ? 0.1 : 0.1 + 15.0 * (y[k] - 0.05);
+    }
+    c[4] = NAN;
+    /* integral over [0, 0.07]: 0.1 x 0.05 + (0.1 + 0.4)/2 x 0.02 (C held
+     * at 0.1 below the first point, 0.01 m) */
+    ck_assert_double_eq_tol(sluice_hyd_profile_integral(y, c, N, 0.0, 0.07),
+                            0.1 * 0.05 + 0.5 * (0.1 + 0.4) * 0.02, 1e-15);
+    ck_assert(isnan(sluice_hyd_profile_integral(y, c, N, 0.0, 0.2)));
+    ck_assert_double_eq_tol(sluice_hyd_band_mean(y, c, N, 0.01, 0.04), 0.1, 1e-15);
+    /* linear part: the band mean is the midpoint value */
+    ck_assert_double_eq_tol(sluice_hyd_band_mean(y, c, N, 0.06, 0.08), 0.1 + 15.0 * 0.02, 1e-14);
+    /* Y90 on the linear part: 0.05 + 0.8/15 (between grid points) */
+    double y90, d, cm;
+    ck_assert_int_eq(sluice_hyd_aerated_depths(y, c, N, 0.9, &y90, &d, &cm), 0);
+    const double y90_exact = 0.05 + 0.8 / 15.0;
+    ck_assert_double_eq_tol(y90, y90_exact, 1e-15);
+    const double d_exact = y90_exact - (0.1 * 0.05 + 0.5 * (0.1 + 0.9) * (y90_exact - 0.05));
+    ck_assert_double_eq_tol(d, d_exact, 1e-15);
+    ck_assert_double_eq_tol(cm, 1.0 - d_exact / y90_exact, 1e-14);
+
+    /* quadratic rise: the trapezoid's known error */
+    const double c0 = 0.15, a = 0.04, Yt = 0.075, L = Yt - a;
+    for (int k = 0; k < N; k++) {
+        y[k] = k * delta;
+        const double z = (y[k] - a) / L;
+        c[k] = y[k] <= a ? c0 : y[k] <= Yt + 1e-12 ? c0 + (0.9 - c0) * z * z : 1.0;
+    }
+    ck_assert_int_eq(sluice_hyd_aerated_depths(y, c, N, 0.9, &y90, &d, &cm), 0);
+    const double trapezoid = Yt - (c0 * Yt + (0.9 - c0) * L / 3 + (0.9 - c0) * delta * delta /
+                                                                      (6 * L));
+    const double exact = Yt * (1 - c0) - (0.9 - c0) * L / 3;
+    fprintf(stderr, "aerated depths (quadratic C): Y90 = %.6f m, d = %.9f m (trapezoid "
+                    "expected %.9f, exact %.9f), C_mean = %.6f\n",
+            y90, d, trapezoid, exact, cm);
+    ck_assert_double_eq_tol(y90, Yt, 1e-15);
+    ck_assert_double_eq_tol(d, trapezoid, 1e-15);
+    ck_assert_double_eq_tol(cm, 1 - trapezoid / Yt, 1e-14);
+    ck_assert_double_eq_tol(sluice_hyd_band_mean(y, c, N, 0.2 * y90, 0.5 * y90), c0, 1e-15);
+
+    /* no Y90: never reaching 0.9, or already above it at the first point */
+    for (int k = 0; k < N; k++)
+        c[k] = 0.5;
+    ck_assert_int_eq(sluice_hyd_aerated_depths(y, c, N, 0.9, &y90, &d, &cm), -1);
+    ck_assert(isnan(y90) && isnan(d) && isnan(cm));
+    c[0] = NAN;
+    c[1] = 0.95;
+    ck_assert_int_eq(sluice_hyd_aerated_depths(y, c, N, 0.9, &y90, &d, &cm), -1);
+    /* the first value above a threshold, nan skipped */
+    const double core[5] = {0.0, NAN, 0.03, 0.06, 0.2};
+    ck_assert_int_eq(sluice_hyd_first_above(core, 5, 0.05), 3);
+    ck_assert_int_eq(sluice_hyd_first_above(core, 5, 0.5), -1);
+}
+END_TEST
+
+/* A synthetic chute: six lines of 21 points (y = 0 .. 0.1 m, Delta = 5 mm)
+ * normal to a 21.8 deg pseudo-bottom at step edges 0.25 m apart (steps 3-8),
+ * the odd lines listed from the top down. Along the pseudo-bottom
+ * U = Umax_l (y/0.05)^(1/6) (Umax_l above 0.05 m), Umax_l = 1 + 0.2 l, plus a
+ * normal component 0.3 m/s, times (1 + 0.2 s_i) with s = 1, 0.5, -1, -0.5
+ * over the rows (zero mean over every 4 rows and over the even rows); the
+ * points at y >= 0.085 m are dry (nan) in the odd rows, the top one in
+ * every row. Air concentration (if with_air): C = C0 up to a, quadratic to
+ * 0.9 at Yt, linear to 1 over 2 Delta (line 5: linear from C0 at a to 1 at
+ * b, Y90 between grid points), plus 0.1 C (1 - C) s_i. Rows 100..199
+ * (t = 1.00 .. 1.99 s) are the window; the others carry U = 100 m/s and
+ * C = 0.5, which a wrong window would show. */
+typedef struct step_line_spec {
+    double c0, a, yt, b; /* b > 0: line 5's linear rise to 1 at b */
+} step_line_spec;
+
+static const step_line_spec step_lines[6] = {
+    {0.00, 0.040, 0.060, 0}, {0.03, 0.035, 0.065, 0}, {0.06, 0.040, 0.070, 0},
+    {0.15, 0.040, 0.075, 0}, {0.25, 0.045, 0.080, 0}, {0.30, 0.045, 0, 0.085},
+};
+#define STEP_N 21
+#define STEP_DY 0.005
+#define STEP_THETA_DEG 21.8
+
+static double step_c(int l, double y)
+{
+    const step_line_spec *s = &step_lines[l];
+    if (y <= s->a + 1e-12)
+        return s->c0;
+    if (s->b > 0)
+        return y >= s->b - 1e-12 ? 1.0 : s->c0 + (1.0 - s->c0) * (y - s->a) / (s->b - s->a);
+    if (y <= s->yt + 1e-12) {
+        const double z = (y - s->a) / (s->yt - s->a);
+        return s->c0 + (0.9 - s->c0) * z * z;
+    }
+    return y >= s->yt + 2 * STEP_DY - 1e-12 ? 1.0 : 0.9 + 0.1 * (y - s->yt) / (2 * STEP_DY);
+}
+
+static double step_u(int l, double y)
+{
+    const double umax = 1.0 + 0.2 * l;
+    return y >= 0.05 ? umax : umax * pow(y / 0.05, 1.0 / 6.0);
+}
+
+/* Point k of the gauge: line l, grid index j (odd lines top down). */
+static void step_point(int k, int *l, int *j)
+{
+    *l = k / STEP_N;
+    *j = *l % 2 ? STEP_N - 1 - k % STEP_N : k % STEP_N;
+}
+
+static char *make_step_run(int with_air)
+{
+    char *dir = test_scratch("analysis-steps");
+    if (!dir)
+        return NULL;
+    const double theta = STEP_THETA_DEG * M_PI / 180.0, s = sin(theta), c = cos(theta);
+    char *path = NULL;
+    FILE *f;
+    if (asprintf(&path, "%s/scene.resolved.yaml", dir) < 0 || !(f = fopen(path, "w")))
+        return NULL;
+    fputs("dimensions: 2\nparticles:\n  spacing: 0.008\n  smoothing_length_ratio: 1.225\n"
+          "plugins:\n  point_gauge:\n    fields: velocity, air_fraction\n    file: points.csv\n"
+          "    points:\n",
+          f);
+    for (int k = 0; k < 6 * STEP_N; k++) {
+        int l, j;
+        step_point(k, &l, &j);
+        const double ex = 0.6 + 0.25 * l, ey = 0.9 - 0.1 * l, y = j * STEP_DY;
+        fprintf(f, "      - [%.17g, %.17g]\n", ex + y * s, ey + y * c);
+    }
+    fclose(f);
+    free(path);
+    if (asprintf(&path, "%s/points.csv", dir) < 0 || !(f = fopen(path, "w")))
+        return NULL;
+    fputs("time", f);
+    for (int k = 0; k < 6 * STEP_N; k++) {
+        fprintf(f, ",p%d_velocity_x,p%d_velocity_y", k, k);
+        if (with_air)
+            fprintf(f, ",p%d_air_fraction", k);
+    }
+    fputc('\n', f);
+    static const double pattern[4] = {1.0, 0.5, -1.0, -0.5};
+    for (int i = 0; i < 220; i++) {
+        fprintf(f, "%.17g", 0.01 * i);
+        const int inside = i >= 100 && i < 200;
+        const double si = pattern[i % 4];
+        for (int k = 0; k < 6 * STEP_N; k++) {
+            int l, j;
+            step_point(k, &l, &j);
+            const double y = j * STEP_DY;
+            const double U = inside ? step_u(l, y) * (1 + 0.2 * si) : 100.0, W = 0.3;
+            if (j == STEP_N - 1 || (y >= 0.085 - 1e-12 && i % 2))
+                fputs(",nan,nan", f);
+            else
+                fprintf(f, ",%.17g,%.17g", U * c + W * s, -U * s + W * c);
+            if (with_air) {
+                const double C = step_c(l, y);
+                fprintf(f, ",%.17g", inside ? C + 0.1 * C * (1 - C) * si : 0.5);
+            }
+        }
+        fputc('\n', f);
+    }
+    fclose(f);
+    free(path);
+    return dir;
+}
+
+/* The rows after the n-th (0-based) line equal to `header`. */
+static const char *csv_section(const char *text, const char *header, int n)
+{
+    size_t len = strlen(header);
+    for (const char *line = text; line && *line;) {
+        if (strncmp(line, header, len) == 0 && line[len] == '\n' && n-- == 0)
+            return line + len + 1;
+        line = strchr(line, '\n');
+        if (line)
+            line++;
+    }
+    return NULL;
+}
+
+START_TEST(cli_step_profiles)
+{
+    char *run = make_step_run(1);
+    ck_assert_ptr_nonnull(run);
+    const double theta = STEP_THETA_DEG * M_PI / 180.0, s = sin(theta), c = cos(theta);
+    const double dc = 0.07, uc = 0.668;
+    char edges[512] = "";
+    for (int l = 0; l < 6; l++) {
+        size_t used = strlen(edges);
+        snprintf(edges + used, sizeof edges - used, "%s%.17g,%.17g", l ? ";" : "",
+                 0.6 + 0.25 * l, 0.9 - 0.1 * l);
+    }
+    char *args = NULL, *out = NULL, *err = NULL;
+    ck_assert(asprintf(&args,
+                       "step-profiles %s/points.csv --per-line 21 --edges '%s' --theta 21.8 "
+                       "--dc 0.07 --uc 0.668 --from 0.995 --to 1.995 --first-step 3",
+                       run, edges) > 0);
+    int status = analyze(run, args, &out, &err);
+    fprintf(stderr, "cli step-profiles: exit %d\n%s%s", status, out, err);
+    ck_assert_int_eq(status, 0);
+    ck_assert_int_eq(test_count_lines(err, "warning"), 0);
+    /* the points: y, y/dc, the time means and their sample counts; the
+     * program prints 10 significant digits */
+    for (int l = 0; l < 6; l++) {
+        const char *row = csv_section(out, "step,point,y,y_dc,U_Uc,U_samples,C,C_samples", l);
+        ck_assert_ptr_nonnull(row);
+        for (int j = 0; j < STEP_N; j++) {
+            long step;
+            size_t point, nu, nc;
+            double y, ydc, u, cc;
+            ck_assert_int_eq(sscanf(row, "%ld,%zu,%lf,%lf,%lf,%zu,%lf,%zu", &step, &point, &y,
+                                    &ydc, &u, &nu, &cc, &nc),
+                             8);
+            const double ye = j * STEP_DY;
+            /* sorted by y whatever the gauge order (odd lines top down) */
+            ck_assert_uint_eq(point, (size_t)(l * STEP_N + (l % 2 ? STEP_N - 1 - j : j)));
+            ck_assert_int_eq(step, 3 + l);
+            ck_assert_double_eq_tol(y, ye, 1e-12);
+            ck_assert_double_eq_tol(ydc, ye / dc, 1e-9);
+            if (j == STEP_N - 1) {
+                ck_assert(isnan(u));
+                ck_assert_uint_eq(nu, 0);
+            } else {
+                ck_assert_double_eq_tol(u, step_u(l, ye) / uc, 1e-9);
+                ck_assert_uint_eq(nu, ye >= 0.085 - 1e-12 ? 50 : 100);
+            }
+            ck_assert_double_eq_tol(cc, step_c(l, ye), 1e-9);
+            ck_assert_uint_eq(nc, 100);
+            row = strchr(row, '\n') + 1;
+        }
+    }
+    /* per edge: Y90 and d against the trapezoid's known value (quadratic
+     * rise: error (0.9 - C0) Delta^2 / (6 L) in the integral of C; line 5
+     * linear: exact), C_mean, max U/Uc = Umax/Uc, C_core = C0 */
+    const char *row = csv_section(out, "step,edge_x,edge_y,Y90,Y90_dc,d,d_dc,C_mean,U_Uc_max,"
+                                       "C_core", 0);
+    ck_assert_ptr_nonnull(row);
+    for (int l = 0; l < 6; l++) {
+        long step;
+        double ex, ey, y90, y90dc, d, ddc, cm, um, core;
+        ck_assert_int_eq(sscanf(row, "%ld,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &step, &ex, &ey,
+                                &y90, &y90dc, &d, &ddc, &cm, &um, &core),
+                         10);
+        const step_line_spec *sp = &step_lines[l];
+        double y90e, de, exact;
+        if (sp->b > 0) {
+            y90e = sp->a + (0.9 - sp->c0) / (1 - sp->c0) * (sp->b - sp->a);
+            de = exact = y90e - (sp->c0 * sp->a + 0.5 * (sp->c0 + 0.9) * (y90e - sp->a));
+        } else {
+            const double L = sp->yt - sp->a;
+            y90e = sp->yt;
+            de = y90e - (sp->c0 * sp->yt + (0.9 - sp->c0) * L / 3 +
+                         (0.9 - sp->c0) * STEP_DY * STEP_DY / (6 * L));
+            exact = y90e * (1 - sp->c0) - (0.9 - sp->c0) * L / 3;
+        }
+        fprintf(stderr, "step %ld: Y90 = %.6f m (expected %.6f), d = %.8f m (trapezoid %.8f, "
+                        "exact %.8f), C_mean = %.5f, U/Uc max = %.5f, C_core = %.5f\n",
+                step, y90, y90e, d, de, exact, cm, um, core);
+        ck_assert_int_eq(step, 3 + l);
+        ck_assert_double_eq_tol(y90, y90e, 1e-11);
+        ck_assert_double_eq_tol(y90dc, y90e / dc, 1e-9);
+        ck_assert_double_eq_tol(d, de, 1e-11);
+        ck_assert_double_eq_tol(cm, 1 - de / y90e, 1e-9);
+        ck_assert_double_eq_tol(um, (1.0 + 0.2 * l) / uc, 1e-9);
+        ck_assert_double_eq_tol(core, sp->c0, 1e-9);
+        row = strchr(row, '\n') + 1;
+    }
+    /* inception: the first edge whose C_core exceeds 0.05: step 5 (line 1's
+     * 0.03 stays below) */
+    row = csv_section(out, "inception_step,edge_x,edge_y,C_core,threshold", 0);
+    ck_assert_ptr_nonnull(row);
+    long inception = 0;
+    double core = NAN;
+    ck_assert_int_eq(sscanf(row, "%ld,%*f,%*f,%lf", &inception, &core), 2);
+    ck_assert_int_eq(inception, 5);
+    ck_assert_double_eq_tol(core, 0.06, 1e-9);
+    free(args);
+    free(out);
+    free(err);
+
+    /* a higher threshold moves it to step 7; above every C_core: none, exit
+     * 1 after the profiles; a larger h warns about the shallowest edge only
+     * (Y90 = 0.06 m < 5.4 h = 0.0648 m) */
+    ck_assert(asprintf(&args,
+                       "step-profiles %s/points.csv --per-line 21 --edges '%s' --theta 21.8 "
+                       "--dc 0.07 --uc 0.668 --from 0.995 --to 1.995 --first-step 3 "
+                       "--threshold 0.2 --h 0.012",
+                       run, edges) > 0);
+    status = analyze(run, args, &out, &err);
+    fprintf(stderr, "cli step-profiles --threshold 0.2 --h 0.012: exit %d\n%s", status, err);
+    ck_assert_int_eq(status, 0);
+    row = csv_section(out, "inception_step,edge_x,edge_y,C_core,threshold", 0);
+    ck_assert_ptr_nonnull(row);
+    ck_assert_int_eq(atoi(row), 7);
+    ck_assert_int_eq(test_count_lines(err, "warning"), 1);
+    ck_assert_ptr_nonnull(strstr(err, "warning: step 3:"));
+    free(args);
+    free(out);
+    free(err);
+    ck_assert(asprintf(&args,
+                       "step-profiles %s/points.csv --per-line 21 --edges '%s' --theta 21.8 "
+                       "--dc 0.07 --uc 0.668 --threshold 0.5",
+                       run, edges) > 0);
+    status = analyze(run, args, &out, &err);
+    fprintf(stderr, "cli step-profiles --threshold 0.5: exit %d, %s", status, err);
+    ck_assert_int_eq(status, 1);
+    ck_assert_ptr_nonnull(strstr(out, "\nnan,nan,nan,nan,0.5\n"));
+    ck_assert_ptr_nonnull(strstr(err, "no step edge"));
+    free(args);
+    free(out);
+    free(err);
+
+    /* bad input: one line on stderr naming the problem, exit 2 */
+    char points[8192] = "";
+    for (int k = 0; k < 6 * STEP_N - 1; k++) {
+        int l, j;
+        step_point(k, &l, &j);
+        size_t used = strlen(points);
+        snprintf(points + used, sizeof points - used, "%s%.17g,%.17g", k ? ";" : "",
+                 0.6 + 0.25 * l + j * STEP_DY * s, 0.9 - 0.1 * l + j * STEP_DY * c);
+    }
+    const char *common = "--edges '%s' --theta 21.8 --dc 0.07";
+    static const struct {
+        const char *args, *needle;
+    } bad[] = {
+        {"step-profiles %s/points.csv --per-line 21 %s", "needs --uc"},
+        {"step-profiles %s/points.csv --per-line 20 %s --uc 0.668", "has 126 points"},
+        {"step-profiles %s/points.csv --per-line 21 %s --uc 0.668 --points '%s'",
+         "125 point coordinates"},
+        {"step-profiles %s/points.csv --per-line 21 %s --uc 0.668 --theta 30", "off the normal"},
+        {"step-profiles %s/points.csv --per-line 21 --theta 21.8 --dc 0.07 --uc 0.668 %.0s",
+         "needs --edges"},
+        {"step-profiles %s/nowhere.csv --per-line 21 %s --uc 0.668", "nowhere.csv"},
+        {"step-profiles %s/points.csv --per-line 2.5 %s --uc 0.668", "whole number"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+        char *opts = NULL;
+        ck_assert(asprintf(&opts, common, edges) > 0);
+        ck_assert(asprintf(&args, bad[i].args, run, opts, points) > 0);
+        free(opts);
+        status = analyze(run, args, &out, &err);
+        fprintf(stderr, "cli step-profiles bad input %zu: exit %d, stderr: %s", i, status, err);
+        ck_assert_int_eq(status, 2);
+        ck_assert_int_eq(test_count_lines(err, ""), 1);
+        ck_assert_ptr_nonnull(strstr(err, bad[i].needle));
+        free(args);
+        free(out);
+        free(err);
+    }
+    ck_assert(asprintf(&args, "rm -rf '%s'", run) > 0);
+    ck_assert_int_eq(system(args), 0);
+    free(args);
+    free(run);
+
+    /* without air_fraction columns: the velocity profiles alone, exit 0 */
+    run = make_step_run(0);
+    ck_assert_ptr_nonnull(run);
+    ck_assert(asprintf(&args,
+                       "step-profiles %s/points.csv --per-line 21 --edges '%s' --theta 21.8 "
+                       "--dc 0.07 --uc 0.668 --from 0.995 --to 1.995",
+                       run, edges) > 0);
+    status = analyze(run, args, &out, &err);
+    fprintf(stderr, "cli step-profiles without air: exit %d, %s", status, err);
+    ck_assert_int_eq(status, 0);
+    ck_assert_ptr_nonnull(strstr(err, "no p<k>_air_fraction"));
+    row = csv_section(out, "step,point,y,y_dc,U_Uc,U_samples,C,C_samples", 2);
+    ck_assert_ptr_nonnull(row);
+    for (int j = 0; j < 12; j++)
+        row = strchr(row, '\n') + 1;
+    double u12 = NAN;
+    ck_assert_int_eq(sscanf(row, "%*d,%*u,%*f,%*f,%lf", &u12), 1);
+    ck_assert_double_eq_tol(u12, step_u(2, 12 * STEP_DY) / uc, 1e-9);
+    free(args);
+    free(out);
+    free(err);
+    ck_assert(asprintf(&args, "rm -rf '%s'", run) > 0);
+    ck_assert_int_eq(system(args), 0);
+    free(args);
+    free(run);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("analysis");
@@ -1044,6 +1465,9 @@ int main(void)
     tcase_add_test(c, drop_table1);
     tcase_add_test(c, drop_states_and_type);
     tcase_add_test(c, cli);
+    tcase_add_test(c, chute_geometry);
+    tcase_add_test(c, aerated_depths);
+    tcase_add_test(c, cli_step_profiles);
     suite_add_tcase(s, c);
     return test_run_suite(s);
 }

@@ -5,6 +5,12 @@
  *    interior up to the small variation of V_j = m_j / rho_j across the
  *    support (derived bound below); a uniform velocity exactly; nan outside
  *    the fluid; an unknown field refused at its line in the scene;
+ *  - air_fraction in a still two-layer tank (two_phase, water under air): 0
+ *    exactly more than one kernel support below the interface, 1 above it,
+ *    1/2 on it and C(d) + C(-d) = 1 at the mirrored points, up to the spread
+ *    of the particle volumes m/rho of the hydrostatic start (bound derived
+ *    below); computed over both phases under `phase: water`, and refused
+ *    without two_phase naming the parameter;
  *  - the lattice start of a tank: no particle behind a wall, smallest gap and
  *    first-layer gap dx/2; a particle moved behind the floor is counted, and
  *    with stop_on_crossing the run stops naming it. */
@@ -213,6 +219,192 @@ START_TEST(surface_gauges_phase_filter)
 }
 END_TEST
 
+/* ------------------------------------------------------- air fraction -- */
+
+/* A still two-layer tank (as tests/test_two_phase.c's column): water up to
+ * H = 0.15 m under 0.1 m of air, dbc walls and a lid at 0.25 m, dx = 0.01 m,
+ * h = 1.225 dx, the two_phase plugin with c0_w = 20 m/s and p_b = 100 Pa,
+ * hydrostatic start. Rows lie at (k + 1/2) dx: the interface y = 0.15 m is
+ * dx/2 from the top water row and the bottom air row, so the lattice is
+ * mirror-symmetric about it. */
+static const char two_layer_scene[] =
+    "dimensions: 2\n"
+    "particles: {spacing: 0.01, smoothing_length_ratio: 1.225, rest_density: 1000}\n"
+    "time: {end: 0.001}\n"
+    "domain: {min: [-0.1, -0.1], max: [0.3, 0.4]}\n"
+    "geometry:\n"
+    "  fluid:\n"
+    "    - {shape: box, min: [0, 0], max: [0.2, 0.15]}\n"
+    "    - {shape: box, min: [0, 0.15], max: [0.2, 0.25]}\n"
+    "  walls:\n"
+    "    - {shape: tank, min: [0, 0], max: [0.2, 0.3], name: tank}\n"
+    "    - {shape: polyline, points: [[0.2, 0.25], [0, 0.25]], name: lid}\n"
+    "initial: {density: hydrostatic}\n"
+    "plugins:\n"
+    "  wendland_c2: {}\n"
+    "  two_phase: {speed_of_sound: 20, background_pressure: 100, air_above: [[0, 0.15]]}\n"
+    "  continuity: {form: volume}\n"
+    "  pressure_gradient: {form: density_product}\n"
+    "  gravity: {}\n"
+    "  dbc: {}\n"
+    "  time_step: {}\n"
+    "  symplectic: {}\n"
+    "  point_gauge: {points: [%s], fields: \"%s\", min_kernel_sum: 0.1%s}\n";
+
+/* Heights of the gauge points at x = 0.1 m (between two particle columns):
+ * 0.12 (deep water: 0.035 m from the bottom air row, more than the support
+ * 2h = 0.0245 m), 0.145 / 0.15 / 0.155 and 0.14 / 0.16 (the interface band,
+ * mirrored about 0.15), 0.18 (deep air, 0.035 m from the top water row),
+ * 0.28 (above the lid, 0.035 m from the top air row: outside the fluid). */
+#define AIR_POINTS 8
+static const double air_y[AIR_POINTS] = {0.12, 0.14, 0.145, 0.15, 0.155, 0.16, 0.18, 0.28};
+
+/* Runs the tank to its first gauge row (t = 0) with `fields` and the
+ * `phase_line`, the water moving at u = 1 and the air at u = 2; returns the
+ * output directory (free it). */
+static char *run_two_layer(const char *fields, const char *phase_line)
+{
+    char points[512] = "", yaml[4096];
+    for (int k = 0; k < AIR_POINTS; k++) {
+        size_t used = strlen(points);
+        snprintf(points + used, sizeof points - used, "%s[0.1, %g]", k ? ", " : "", air_y[k]);
+    }
+    snprintf(yaml, sizeof yaml, two_layer_scene, points, fields, phase_line);
+    sluice_sim *sim = test_load("air-fraction", yaml, NULL, 0);
+    const sluice_view *v = sluice_sim_view(sim);
+    sluice_real *u = test_column(sim, "velocity", 0);
+    for (sluice_index i = 0; i < v->count; i++)
+        if (v->kind[i] == SLUICE_KIND_FLUID)
+            u[i] = v->position[1][i] >= 0.15 ? 2 : 1;
+    char *dir = test_scratch("air-fraction-out");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    sluice_sim_free(sim);
+    return dir;
+}
+
+/* air_fraction = sum_air V_j W / sum_all V_j W. With equal particle volumes
+ * V_j the lattice's mirror symmetry about the interface gives C = 1/2 on it
+ * and C(0.15 + d) + C(0.15 - d) = 1 exactly (each air particle's weight
+ * equals that of its mirrored water particle). The hydrostatic start makes
+ * the volumes unequal: a water particle at depth z below the top (0.15 m) has
+ * rho = rho0 (1 + rho0 g z / B)^(1/7), so V = V0 (1 - beta) with
+ * beta <= rho0 g z / (7 B); an air particle z above it has rho = rho0_a
+ * (1 - rho0_a g z / B)^(1/1.4), V = V0 (1 + alpha), alpha = (1 - rho0_a g z
+ * / B)^(-1/1.4) - 1, B = c0_w^2 rho0 / 7. Writing C = A/(A + W) with the
+ * equal-volume sums A0, W0 and the weighted means abar <= alpha, bbar <=
+ * beta: C - C0 = C0 (1 - C0) (abar + bbar) / (1 + C0 abar - (1 - C0) bbar)
+ * <= (alpha + beta) / (4 (1 - beta)), z up to 2h + 0.01 m (the farthest
+ * particle within the support of the points 0.01 m from the interface). So
+ * |C - 1/2| <= that bound on the interface, and |C(d) + C(-d) - 1| <= twice
+ * it. Deep in the water no air particle is within the support: C = 0
+ * exactly; deep in the air the two sums add the same terms: C = 1 to the
+ * last bit. Above the lid the kernel sum is 0 < min_kernel_sum: nan. */
+static double air_fraction_bound(void)
+{
+    const double g = 9.81, rho_w = 1000, rho_a = 1.09, B = 20.0 * 20.0 * rho_w / 7.0;
+    const double z = 2 * 1.225 * 0.01 + 0.01;
+    const double beta = rho_w * g * z / (7 * B);
+    const double alpha = pow(1 - rho_a * g * z / B, -1 / 1.4) - 1;
+    return (alpha + beta) / (4 * (1 - beta));
+}
+
+static void check_air_fraction(const double *c, const char *label)
+{
+    const double bound = air_fraction_bound();
+    fprintf(stderr, "air_fraction (%s) at y =", label);
+    for (int k = 0; k < AIR_POINTS; k++)
+        fprintf(stderr, " %g: %.9g%s", air_y[k], c[k], k + 1 < AIR_POINTS ? "," : "\n");
+    fprintf(stderr, "  |C(0.15) - 1/2| = %.3g, |C(0.145) + C(0.155) - 1| = %.3g, "
+                    "|C(0.14) + C(0.16) - 1| = %.3g (bound %.3g and twice it)\n",
+            fabs(c[3] - 0.5), fabs(c[2] + c[4] - 1), fabs(c[1] + c[5] - 1), bound);
+    ck_assert_msg(c[0] == 0, "deep in the water C = %.17g", c[0]);
+    ck_assert_msg(fabs(c[6] - 1) <= 1e-15, "deep in the air C = %.17g", c[6]);
+    ck_assert_msg(isnan(c[7]), "above the lid C = %g", c[7]);
+    ck_assert_msg(fabs(c[3] - 0.5) <= bound, "on the interface C = %.17g (bound %g)", c[3],
+                  bound);
+    ck_assert_msg(fabs(c[2] + c[4] - 1) <= 2 * bound && fabs(c[1] + c[5] - 1) <= 2 * bound,
+                  "mirror sums %.17g %.17g", c[2] + c[4], c[1] + c[5]);
+    /* across the band the fraction rises with y (the kernel weights of the
+     * air grow as the point rises) */
+    for (int k = 1; k < 7; k++)
+        ck_assert_msg(c[k] > c[k - 1], "C(%g) = %g <= C(%g) = %g", air_y[k], c[k],
+                      air_y[k - 1], c[k - 1]);
+}
+
+START_TEST(point_gauge_air_fraction)
+{
+    /* every fluid particle: air_fraction alone */
+    char *dir = run_two_layer("air_fraction", "");
+    double row[1 + AIR_POINTS], all[AIR_POINTS];
+    first_row_of(dir, "points.csv", row, 1 + AIR_POINTS);
+    char *path = NULL, *text = NULL;
+    ck_assert_int_ge(asprintf(&path, "%s/points.csv", dir), 0);
+    text = test_read_file(path);
+    ck_assert_ptr_nonnull(text);
+    ck_assert_msg(strncmp(text, "time,p0_air_fraction,p1_air_fraction,", 37) == 0, "header %.80s",
+                  text);
+    free(text);
+    free(path);
+    free(dir);
+    for (int k = 0; k < AIR_POINTS; k++)
+        all[k] = row[1 + k];
+    check_air_fraction(all, "phase: all");
+
+    /* phase: water with the velocity: the velocity is the water's (1 on the
+     * interface exactly, nan where no water is within the support), the air
+     * fraction still sums over both phases: the same numbers bit for bit */
+    dir = run_two_layer("velocity, air_fraction", ", phase: water");
+    double wrow[1 + 3 * AIR_POINTS], water[AIR_POINTS];
+    first_row_of(dir, "points.csv", wrow, 1 + 3 * AIR_POINTS);
+    ck_assert_int_ge(asprintf(&path, "%s/points.csv", dir), 0);
+    text = test_read_file(path);
+    ck_assert_ptr_nonnull(text);
+    ck_assert_msg(strncmp(text, "time,p0_velocity_x,p0_velocity_y,p0_air_fraction,p1_velocity_x,",
+                          63) == 0,
+                  "header %.80s", text);
+    free(text);
+    free(path);
+    free(dir);
+    for (int k = 0; k < AIR_POINTS; k++)
+        water[k] = wrow[3 + 3 * k];
+    check_air_fraction(water, "phase: water");
+    for (int k = 0; k < AIR_POINTS; k++)
+        ck_assert_msg((isnan(water[k]) && isnan(all[k])) || water[k] == all[k],
+                      "point %d: %.17g under phase: water, %.17g without", k, water[k], all[k]);
+    fprintf(stderr, "phase: water: u = %g at y = 0.15 (C = %.6f), u = %g at y = 0.18 (C = %g)\n",
+            wrow[1 + 3 * 3], water[3], wrow[1 + 3 * 6], water[6]);
+    ck_assert_msg(fabs(wrow[1 + 3 * 3] - 1) <= 1e-12, "water u on the interface %.17g",
+                  wrow[1 + 3 * 3]);
+    ck_assert_msg(isnan(wrow[1 + 3 * 6]) && isnan(wrow[2 + 3 * 6]), "water u in the air %g",
+                  wrow[1 + 3 * 6]);
+}
+END_TEST
+
+/* air_fraction without the two_phase plugin: refused at the gauge's line,
+ * naming the parameter and the plugin. */
+START_TEST(point_gauge_air_fraction_needs_two_phase)
+{
+    char yaml[4096];
+    snprintf(yaml, sizeof yaml, tank_scene,
+             "  point_gauge: {points: [[0.5, 0.1]], fields: \"velocity, air_fraction\"}\n");
+    test_load_refused("air-fraction-single-phase", yaml,
+                      "fields: 'air_fraction' needs the field 'phase' (0 water, 1 air) of the "
+                      "two_phase plugin");
+    char *dir = test_scratch("air-fraction-check");
+    char *path = test_write_file(dir, "scene.yaml", yaml);
+    char *args = NULL, *out = NULL;
+    ck_assert_int_ge(asprintf(&args, "check %s", path), 0);
+    int status = test_sluice(args, &out);
+    ck_assert_msg(status == 2 && strstr(out, "air_fraction") && strstr(out, "scene.yaml:17:"),
+                  "exit %d:\n%s", status, out);
+    free(args);
+    free(out);
+    free(path);
+    free(dir);
+}
+END_TEST
+
 START_TEST(point_gauge_unknown_field)
 {
     char yaml[4096];
@@ -327,6 +519,8 @@ int main(void)
     tcase_add_test(c, point_gauge_phase_filter);
     tcase_add_test(c, surface_gauges_phase_filter);
     tcase_add_test(c, point_gauge_unknown_field);
+    tcase_add_test(c, point_gauge_air_fraction);
+    tcase_add_test(c, point_gauge_air_fraction_needs_two_phase);
     tcase_add_test(c, wall_monitor_lattice_and_crossing);
     suite_add_tcase(s, c);
     return test_run_suite(s);

@@ -12,7 +12,16 @@
  * In a two-phase scene (the field `phase` of the two_phase plugin: 0 water,
  * 1 air) `phase: water` or `phase: air` sums over the particles of that phase
  * only: the dissolved oxygen of the water, or the water's velocity, next to
- * the interface, where the default sums over both. */
+ * the interface, where the default sums over both.
+ *
+ * The pseudo-field `air_fraction` (two-phase scenes; column pK_air_fraction)
+ * is the kernel-weighted volume fraction of air at the point,
+ *   C(x) = sum_{j air} V_j W(x - x_j) / sum_{j fluid} V_j W(x - x_j),
+ * always summed over every fluid particle whatever `phase` says (so that one
+ * gauge with `phase: water` gives the water's velocity and the air fraction
+ * at the same points), and nan where the sum over all fluid particles is
+ * below `min_kernel_sum`. It is 0 where no air particle lies within the
+ * kernel support (2h) of the point and 1 where no water particle does. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -20,6 +29,10 @@
 #include "phase_filter.h"
 
 #define MAX_FIELDS 16
+
+/* The name of the pseudo-field; no plugin may declare a field of that name
+ * for a point gauge to read (the gauge computes it). */
+static const char air_fraction_name[] = "air_fraction";
 
 typedef struct gauge_config {
     sluice_real_list points;
@@ -39,10 +52,21 @@ typedef struct gauge_state {
     char *field_text;
     uint32_t field_count, value_count; /* value_count: columns per point */
     char *names[MAX_FIELDS];
-    sluice_field fields[MAX_FIELDS];
-    sluice_field density, mass, phase;
+    /* the real fields read from the particles (air_fraction excluded), in
+     * the order of `names`; slot[f] is the first sum slot of names[f]
+     * (0 for air_fraction, whose slots are the last two) */
+    uint32_t real_count, real_values;
+    sluice_field real[MAX_FIELDS];
+    uint32_t slot[MAX_FIELDS];
+    int is_air[MAX_FIELDS];
+    int air_fraction; /* 1 when `fields` lists air_fraction */
+    sluice_field density, mass, phase, air_phase;
     int phase_filter; /* SLUICE_PHASE_* (phase_filter.h) */
-    double *sums;   /* per point: kernel sum, then value_count weighted sums */
+    uint32_t stride;  /* sums per point */
+    /* per point: the (phase-filtered) kernel sum, the real_values weighted
+     * sums and, with air_fraction, the kernel sums over all fluid particles
+     * and over the air particles */
+    double *sums;
     double *row;
     sluice_table *table;
     int64_t written;
@@ -52,12 +76,20 @@ static const sluice_param_spec params[] = {
     {"points", SLUICE_PARAM_POINT_LIST, offsetof(gauge_config, points), NULL, 0, 0, 0, "m",
      "where to measure", NULL, 0},
     {"fields", SLUICE_PARAM_STRING, offsetof(gauge_config, fields), "pressure,velocity", 0, 0,
-     0, NULL, "comma-separated names of the real fields to interpolate", NULL, 0},
+     0, NULL,
+     "comma-separated names of the real fields to interpolate; in a two-phase scene also "
+     "air_fraction, the kernel-weighted volume fraction of air sum_{j air} V_j W / sum_{j fluid} "
+     "V_j W (1; column pK_air_fraction), always summed over every fluid particle whatever "
+     "`phase` says, and nan where that sum is below min_kernel_sum; it needs the field 'phase' "
+     "of the two_phase plugin",
+     NULL, 0},
     {"interval", SLUICE_PARAM_REAL, offsetof(gauge_config, interval), "0.01", 0, 0,
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between samples", NULL, 0},
     {"min_kernel_sum", SLUICE_PARAM_REAL, offsetof(gauge_config, min_kernel_sum), "0.5", 0, 1,
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
-     "points whose kernel sum sum_j V_j W is below this are outside the fluid (nan)", NULL, 0},
+     "points whose kernel sum sum_j V_j W (over the particles `phase` selects; for "
+     "air_fraction over every fluid particle) is below this are outside the fluid (nan)",
+     NULL, 0},
     {"file", SLUICE_PARAM_STRING, offsetof(gauge_config, file), "points.csv", 0, 0, 0, NULL,
      "output file in the run directory", NULL, 0},
     SLUICE_PHASE_PARAM(gauge_config, phase),
@@ -140,6 +172,15 @@ static int gauge_create(const sluice_api *api, sluice_host *host, const void *co
         gauge_destroy(s);
         return SLUICE_ERROR;
     }
+    for (uint32_t f = 0; f < s->field_count; f++) {
+        s->is_air[f] = strcmp(s->names[f], air_fraction_name) == 0;
+        if (s->is_air[f] && s->air_fraction) {
+            api->error(host, "fields: '%s' is listed twice", air_fraction_name);
+            gauge_destroy(s);
+            return SLUICE_ERROR;
+        }
+        s->air_fraction |= s->is_air[f];
+    }
     *state = s;
     return SLUICE_OK;
 }
@@ -152,21 +193,52 @@ static int gauge_bind(void *state, sluice_host *host)
         api->field(host, "mass", &s->mass) != SLUICE_OK ||
         sluice_phase_bind(api, host, s->phase_filter, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
+    s->air_phase.column = -1;
+    if (s->air_fraction) {
+        /* the phase written by two_phase (looked up, not declared: a missing
+         * provider is reported here, naming the parameter) */
+        if (!sluice_util_optional_field(api, host, "phase", &s->air_phase)) {
+            api->error(host,
+                       "fields: '%s' needs the field 'phase' (0 water, 1 air) of the two_phase "
+                       "plugin, which this scene does not load (load two_phase, or remove %s "
+                       "from fields)",
+                       air_fraction_name, air_fraction_name);
+            return SLUICE_ERROR;
+        }
+        if (s->air_phase.type != SLUICE_TYPE_UINT8 || s->air_phase.components != 1) {
+            api->error(host, "fields: '%s' needs 'phase' as one uint8 per particle (0 water, 1 "
+                             "air), as two_phase declares it",
+                       air_fraction_name);
+            return SLUICE_ERROR;
+        }
+    }
     s->value_count = 0;
+    s->real_count = 0;
+    s->real_values = 0;
     for (uint32_t f = 0; f < s->field_count; f++) {
-        if (!sluice_util_optional_field(api, host, s->names[f], &s->fields[f])) {
+        if (s->is_air[f]) {
+            s->slot[f] = 0;
+            s->value_count++;
+            continue;
+        }
+        sluice_field field;
+        if (!sluice_util_optional_field(api, host, s->names[f], &field)) {
             api->error(host, "field '%s' is not declared by any loaded plugin (`sluice inspect` "
                              "lists each plugin's fields)",
                        s->names[f]);
             return SLUICE_ERROR;
         }
-        if (s->fields[f].type != SLUICE_TYPE_REAL) {
+        if (field.type != SLUICE_TYPE_REAL) {
             api->error(host, "field '%s' is not a real field", s->names[f]);
             return SLUICE_ERROR;
         }
-        s->value_count += s->fields[f].components;
+        s->real[s->real_count++] = field;
+        s->slot[f] = 1 + s->real_values;
+        s->real_values += field.components;
+        s->value_count += field.components;
     }
-    s->sums = calloc((size_t)s->count * (s->value_count + 1), sizeof *s->sums);
+    s->stride = 1 + s->real_values + (s->air_fraction ? 2 : 0);
+    s->sums = calloc((size_t)s->count * s->stride, sizeof *s->sums);
     s->row = calloc((size_t)s->count * s->value_count + 1, sizeof *s->row);
     if (!s->sums || !s->row) {
         api->error(host, "out of memory");
@@ -187,10 +259,11 @@ static int gauge_initialise(void *state, sluice_host *host)
     static const char axes[] = "xyz";
     used = (size_t)snprintf(header, size, "time");
     for (sluice_index k = 0; k < s->count; k++)
-        for (uint32_t f = 0; f < s->field_count; f++)
-            for (uint32_t c = 0; c < s->fields[f].components; c++) {
+        for (uint32_t f = 0, r = 0; f < s->field_count; f++) {
+            const uint32_t components = s->is_air[f] ? 1 : s->real[r++].components;
+            for (uint32_t c = 0; c < components; c++) {
                 char column[160];
-                int n = s->fields[f].components > 1
+                int n = components > 1
                             ? snprintf(column, sizeof column, ",p%u_%s_%c", k, s->names[f],
                                        c < 3 ? axes[c] : '?')
                             : snprintf(column, sizeof column, ",p%u_%s", k, s->names[f]);
@@ -209,17 +282,19 @@ static int gauge_initialise(void *state, sluice_host *host)
                 memcpy(header + used, column, (size_t)n + 1);
                 used += (size_t)n;
             }
+        }
     s->table = s->api->table_open(host, s->file, header);
     free(header);
     return s->table ? SLUICE_OK : SLUICE_ERROR;
 }
 
+/* The sums of the listed real fields over the neighbours of one batch. */
 static void accumulate(void *context, const sluice_view *v, const sluice_pair_batch *b)
 {
     gauge_state *s = context;
     const sluice_real *rho = sluice_real_column(v, s->density, 0);
     const sluice_real *m = sluice_real_column(v, s->mass, 0);
-    const uint32_t stride = s->value_count + 1;
+    const uint32_t stride = s->stride;
     const uint8_t *phase = sluice_phase_column(v, s->phase);
     const uint8_t wanted = sluice_phase_wanted(s->phase_filter);
     for (sluice_index t = 0; t < b->target_count; t++) {
@@ -233,10 +308,45 @@ static void accumulate(void *context, const sluice_view *v, const sluice_pair_ba
             const double w = (double)m[j] / (double)rho[j] * (double)b->kernel[k];
             sum[0] += w;
             uint32_t slot = 1;
-            for (uint32_t f = 0; f < s->field_count; f++)
-                for (uint32_t c = 0; c < s->fields[f].components; c++)
-                    sum[slot++] += w * (double)sluice_real_column(v, s->fields[f], c)[j];
+            for (uint32_t f = 0; f < s->real_count; f++)
+                for (uint32_t c = 0; c < s->real[f].components; c++)
+                    sum[slot++] += w * (double)sluice_real_column(v, s->real[f], c)[j];
         }
+    }
+}
+
+/* The same with air_fraction: every fluid neighbour adds to the sum over all
+ * fluid particles and, if air, to the sum over the air, before the phase
+ * filter decides whether it enters the field sums. */
+static void accumulate_air(void *context, const sluice_view *v, const sluice_pair_batch *b)
+{
+    gauge_state *s = context;
+    const sluice_real *rho = sluice_real_column(v, s->density, 0);
+    const sluice_real *m = sluice_real_column(v, s->mass, 0);
+    const uint32_t stride = s->stride;
+    const uint8_t *phase = sluice_phase_column(v, s->phase);
+    const uint8_t *air_phase = sluice_phase_column(v, s->air_phase);
+    const uint8_t wanted = sluice_phase_wanted(s->phase_filter);
+    for (sluice_index t = 0; t < b->target_count; t++) {
+        double *sum = s->sums + (size_t)b->target[t] * stride;
+        for (uint32_t c = 0; c < stride; c++)
+            sum[c] = 0;
+        double all = 0, air = 0;
+        for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
+            const sluice_index j = b->neighbour[k];
+            const double w = (double)m[j] / (double)rho[j] * (double)b->kernel[k];
+            all += w;
+            air += air_phase[j] == 1 ? w : 0.0;
+            if (sluice_phase_skips(phase, wanted, j))
+                continue;
+            sum[0] += w;
+            uint32_t slot = 1;
+            for (uint32_t f = 0; f < s->real_count; f++)
+                for (uint32_t c = 0; c < s->real[f].components; c++)
+                    sum[slot++] += w * (double)sluice_real_column(v, s->real[f], c)[j];
+        }
+        sum[stride - 2] = all;
+        sum[stride - 1] = air;
     }
 }
 
@@ -252,19 +362,28 @@ static int gauge_after_step(void *state, sluice_host *host)
     /* pressure and the other derived fields of the current state */
     if (api->evaluate(host) != SLUICE_OK)
         return SLUICE_ERROR;
-    const uint32_t stride = s->value_count + 1;
+    const uint32_t stride = s->stride;
     memset(s->sums, 0, (size_t)s->count * stride * sizeof *s->sums);
     if (api->point_pass(host, s->points, s->count, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
-                        accumulate, s) != SLUICE_OK)
+                        s->air_fraction ? accumulate_air : accumulate, s) != SLUICE_OK)
         return SLUICE_ERROR;
     v = api->view(host);
     s->row[0] = v->time;
     size_t column = 1;
+    const double min_sum = (double)s->min_kernel_sum;
     for (sluice_index k = 0; k < s->count; k++) {
         const double *sum = s->sums + (size_t)k * stride;
-        const int inside = sum[0] >= (double)s->min_kernel_sum;
-        for (uint32_t c = 0; c < s->value_count; c++)
-            s->row[column++] = inside ? sum[1 + c] / sum[0] : NAN;
+        const int inside = sum[0] >= min_sum;
+        for (uint32_t f = 0, r = 0; f < s->field_count; f++) {
+            if (s->is_air[f]) {
+                const double all = sum[stride - 2], air = sum[stride - 1];
+                s->row[column++] = all >= min_sum ? air / all : NAN;
+                continue;
+            }
+            const uint32_t components = s->real[r++].components;
+            for (uint32_t c = 0; c < components; c++)
+                s->row[column++] = inside ? sum[s->slot[f] + c] / sum[0] : NAN;
+        }
     }
     if (api->table_row(s->table, s->row, (uint32_t)column) != SLUICE_OK)
         return SLUICE_ERROR;
@@ -306,4 +425,4 @@ static const sluice_component components[] = {{
     .load_state = gauge_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("point_gauge", "1.1.0", "point gauges", SLUICE_DIMS_ALL, components)
+SLUICE_DEFINE_LIBRARY("point_gauge", "1.2.0", "point gauges", SLUICE_DIMS_ALL, components)

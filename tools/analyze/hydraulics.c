@@ -589,3 +589,99 @@ const char *sluice_hyd_drop_type(const sluice_hyd_drop_state *state, size_t n, d
         return "wave jump";
     return a_family ? "A-wave" : "B-wave";
 }
+
+/* ------------------------------------ aerated flow on a stepped chute */
+
+double sluice_hyd_chute_velocity(double u, double v, double theta)
+{
+    return u * cos(theta) - v * sin(theta);
+}
+
+double sluice_hyd_normal_distance(double px, double py, double ex, double ey, double theta,
+                                  double *offset)
+{
+    const double dx = px - ex, dy = py - ey, s = sin(theta), c = cos(theta);
+    if (offset)
+        *offset = dx * c - dy * s;
+    return dx * s + dy * c;
+}
+
+/* The interpolant on [s, e] inside the segment (y0, c0) - (y1, c1), exactly
+ * integrated (it is linear there). */
+static double segment_integral(double y0, double c0, double y1, double c1, double s, double e)
+{
+    if (!(e > s))
+        return 0.0;
+    const double slope = (c1 - c0) / (y1 - y0);
+    const double fs = c0 + slope * (s - y0), fe = c0 + slope * (e - y0);
+    return 0.5 * (e - s) * (fs + fe);
+}
+
+double sluice_hyd_profile_integral(const double *y, const double *c, size_t n, double a,
+                                   double b)
+{
+    size_t first = 0;
+    while (first < n && !(isfinite(y[first]) && isfinite(c[first])))
+        first++;
+    if (first == n || !(b >= a))
+        return NAN;
+    size_t last = n - 1;
+    while (!(isfinite(y[last]) && isfinite(c[last])))
+        last--;
+    if (b > y[last])
+        return NAN;
+    /* below the first finite point: C held at its value */
+    double sum = fmax(0.0, fmin(b, y[first]) - a) * c[first];
+    size_t prev = first;
+    for (size_t k = first + 1; k <= last; k++) {
+        if (!(isfinite(y[k]) && isfinite(c[k])))
+            continue;
+        sum += segment_integral(y[prev], c[prev], y[k], c[k], fmax(a, y[prev]), fmin(b, y[k]));
+        prev = k;
+    }
+    return sum;
+}
+
+int sluice_hyd_aerated_depths(const double *y, const double *c, size_t n, double level,
+                              double *y90, double *d, double *c_mean)
+{
+    *y90 = *d = *c_mean = NAN;
+    long prev = -1;
+    for (size_t k = 0; k < n; k++) {
+        if (!(isfinite(y[k]) && isfinite(c[k])))
+            continue;
+        if (c[k] >= level) {
+            if (prev < 0)
+                return -1; /* the first finite point is already above the level */
+            const double w = (level - c[prev]) / (c[k] - c[prev]);
+            *y90 = y[prev] + w * (y[k] - y[prev]);
+            break;
+        }
+        prev = (long)k;
+    }
+    if (!(*y90 > 0.0)) {
+        *y90 = NAN;
+        return -1;
+    }
+    /* trapezoids on the points up to Y90, the last one ending at Y90 with
+     * C = level (the interpolant there) */
+    const double integral = sluice_hyd_profile_integral(y, c, n, 0.0, *y90);
+    *d = *y90 - integral;
+    *c_mean = 1.0 - *d / *y90;
+    return 0;
+}
+
+double sluice_hyd_band_mean(const double *y, const double *c, size_t n, double lo, double hi)
+{
+    if (!(hi > lo))
+        return NAN;
+    return sluice_hyd_profile_integral(y, c, n, lo, hi) / (hi - lo);
+}
+
+long sluice_hyd_first_above(const double *x, size_t n, double threshold)
+{
+    for (size_t k = 0; k < n; k++)
+        if (isfinite(x[k]) && x[k] > threshold)
+            return (long)k;
+    return -1;
+}

@@ -231,4 +231,50 @@ const char *sluice_hyd_drop_type(const sluice_hyd_drop_state *state, size_t n, d
                                  double *fraction_a, double *fraction_b, double *fraction_wave,
                                  size_t *wave_episodes);
 
+/* ------------------------------------ aerated flow on a stepped chute */
+
+/* Velocity component along the pseudo-bottom (the line through the step
+ * edges) of a chute descending at the angle theta (rad) in +x, downstream
+ * positive: U = u cos(theta) - v sin(theta). */
+double sluice_hyd_chute_velocity(double u, double v, double theta);
+
+/* Distance of the point (px, py) from the step edge (ex, ey) along the
+ * outward normal of that pseudo-bottom, n = (sin theta, cos theta):
+ * y = (px - ex) sin(theta) + (py - ey) cos(theta); *offset receives the
+ * component along the pseudo-bottom, (px - ex) cos(theta) - (py - ey)
+ * sin(theta) (0 for a point on the normal). */
+double sluice_hyd_normal_distance(double px, double py, double ex, double ey, double theta,
+                                  double *offset);
+
+/* Integral over [a, b] of the piecewise-linear interpolant of the finite
+ * points (y[k], c[k]) (y strictly increasing; NaN points skipped), held at
+ * the first finite value below the first finite point: the trapezoid rule
+ * on the points, exact for a piecewise-linear profile. NaN when b lies
+ * beyond the last finite point, b < a, or no point is finite. */
+double sluice_hyd_profile_integral(const double *y, const double *c, size_t n, double a,
+                                   double b);
+
+/* Aerated depths of one time-mean air-concentration profile c[k] at y[k]
+ * (distance from the pseudo-bottom, strictly increasing; NaN points
+ * skipped), Chanson (2002), The Hydraulics of Stepped Chutes and Spillways:
+ *   Y90: the y where C first reaches `level` (0.9) going up from the bottom,
+ *        by linear interpolation between the last finite point below it and
+ *        the first at or above it; NaN when no point reaches it or the first
+ *        finite point already does (no clear-water region to start from);
+ *   d = integral_0^Y90 (1 - C) dy, the equivalent clear-water depth, by the
+ *        trapezoid rule on the points (sluice_hyd_profile_integral: C held
+ *        at its first finite value below the first point, the last segment
+ *        ending at Y90 where C = level);
+ *   C_mean = 1 - d / Y90, the depth-averaged air concentration.
+ * Returns 0, or -1 (all three NaN) when Y90 does not exist. */
+int sluice_hyd_aerated_depths(const double *y, const double *c, size_t n, double level,
+                              double *y90, double *d, double *c_mean);
+
+/* Mean of the profile over lo <= y <= hi (lo < hi): the integral of
+ * sluice_hyd_profile_integral divided by hi - lo. NaN as that function. */
+double sluice_hyd_band_mean(const double *y, const double *c, size_t n, double lo, double hi);
+
+/* Index of the first finite x[k] > threshold, or -1 when none. */
+long sluice_hyd_first_above(const double *x, size_t n, double threshold);
+
 #endif

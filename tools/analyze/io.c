@@ -365,6 +365,16 @@ int analyze_scene_number(const analyze_scene *scene, const char *plugin, const c
     return scene ? scalar_number(plugin_key(scene, plugin, key), value) : -1;
 }
 
+int analyze_scene_setting(const analyze_scene *scene, const char *section, const char *key,
+                          double *value)
+{
+    if (!scene)
+        return -1;
+    yaml_document_t *d = (yaml_document_t *)&scene->document;
+    yaml_node_t *root = yaml_document_get_root_node(d);
+    return scalar_number(map_get(d, map_get(d, root, section), key), value);
+}
+
 long analyze_scene_numbers(analyze_ctx *cx, const analyze_scene *scene, const char *plugin,
                            const char *key, double **values)
 {

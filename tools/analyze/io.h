@@ -58,6 +58,10 @@ const char *analyze_scene_string(const analyze_scene *scene, const char *plugin,
  * number. */
 int analyze_scene_number(const analyze_scene *scene, const char *plugin, const char *key,
                          double *value);
+/* A top-level setting SECTION.KEY (e.g. particles.spacing) as a number: 0
+ * with *value set, -1 when absent or not a number. */
+int analyze_scene_setting(const analyze_scene *scene, const char *section, const char *key,
+                          double *value);
 /* Whether plugins.<plugin> exists. */
 int analyze_scene_has(const analyze_scene *scene, const char *plugin);
 

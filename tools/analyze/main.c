@@ -11,9 +11,13 @@
  *   sluice-analyze correlate A.csv:COL B.csv:COL
  *   sluice-analyze l2        RUN --reference REF.csv [--time T ...]
  *   sluice-analyze classify  --y1 Y1 --yt YT --v1 V --drop S
+ *   sluice-analyze drop-type RUN --drop-x X [--drop S]
+ *   sluice-analyze step-profiles POINTS.csv --per-line N --edges x,y;.. --theta DEG
+ *                                --dc DC --uc UC
  *
  * Each prints its headline figures as `name = value [unit]` lines, writes a
- * CSV and (gnuplot permitting) a PNG into --out (default RUN/analysis).
+ * CSV and (gnuplot permitting) a PNG into --out (default RUN/analysis);
+ * step-profiles prints its CSV on stdout instead.
  * Exit status: 0 measured, 1 the feature is absent from the data, 2 bad
  * input (one message on stderr). The numbers come from hydraulics.c. */
 #define _GNU_SOURCE
@@ -35,8 +39,8 @@ typedef struct options {
     const char *positional[MAX_POSITIONAL];
     size_t positional_count;
     double d1, v1, fr, g, x, from, to, fraction, x1, bed, drop, y1, yt, min_wet, fmin, fmax,
-        tolerance, drop_x, wave_min;
-    const char *column, *reference, *out, *positions, *points, *field;
+        tolerance, drop_x, wave_min, per_line, theta, dc, uc, threshold, h, first_step;
+    const char *column, *reference, *out, *positions, *points, *field, *edges;
     double times[MAX_TIMES];
     size_t time_count;
     int no_plot;
@@ -68,6 +72,14 @@ static const struct option_spec {
     {"tolerance", OPT_NUMBER, offsetof(options, tolerance)},
     {"drop-x", OPT_NUMBER, offsetof(options, drop_x)},
     {"wave-min", OPT_NUMBER, offsetof(options, wave_min)},
+    {"per-line", OPT_NUMBER, offsetof(options, per_line)},
+    {"theta", OPT_NUMBER, offsetof(options, theta)},
+    {"dc", OPT_NUMBER, offsetof(options, dc)},
+    {"uc", OPT_NUMBER, offsetof(options, uc)},
+    {"threshold", OPT_NUMBER, offsetof(options, threshold)},
+    {"h", OPT_NUMBER, offsetof(options, h)},
+    {"first-step", OPT_NUMBER, offsetof(options, first_step)},
+    {"edges", OPT_STRING, offsetof(options, edges)},
     {"column", OPT_STRING, offsetof(options, column)},
     {"reference", OPT_STRING, offsetof(options, reference)},
     {"out", OPT_STRING, offsetof(options, out)},
@@ -91,6 +103,10 @@ static const char usage[] =
     "  l2        RUN --reference REF.csv [--time]  free-surface L2 error, RMSE (seed 002)\n"
     "  classify  --y1 --yt --v1 --drop S           jump at an abrupt drop (momentum limits)\n"
     "  drop-type RUN --drop-x X [--drop S]         jump type at an abrupt drop from a run\n"
+    "  step-profiles POINTS.csv --per-line N --edges x,y;x,y.. --theta DEG --dc DC --uc UC\n"
+    "            [--first-step 1] [--threshold 0.05] [--h H] [--points x,y;..]\n"
+    "                                              U/Uc, air concentration, Y90, inception\n"
+    "                                              on a stepped chute (CSV on stdout)\n"
     "options: --from T0 --to T1 (window, s), --out DIR (default RUN/analysis), --g 9.81,\n"
     "  --bed B (bed elevation, m), --positions a,b,.. --points x,y;x,y.. (instead of\n"
     "  RUN/scene.resolved.yaml), --field velocity, --min-wet 0.5, --fmin, --fmax,\n"
@@ -1645,6 +1661,373 @@ done:
     return status;
 }
 
+/* ------------------------------------------ stepped chute (seed 001) -- */
+
+/* The smallest Y90 (in units of h) for which the band 0.2 Y90 <= y <= 0.5 Y90
+ * lies more than the kernel support 2h below a sharp, unaerated interface:
+ * C(y) of a flat interface smeared by the Wendland C2 kernel (2D) reaches 0.9
+ * at delta90 = 0.69 h above it, so the interface is at Y90 - 0.69 h and the
+ * band's top 0.5 Y90 is 2h below it when Y90 >= 2 (2 + 0.69) h = 5.4 h
+ * (docs/analysis.md). */
+#define STEP_MIN_Y90_OVER_H 5.4
+
+/* The points' coordinates for step-profiles: --points, else
+ * plugins.point_gauge.points of the scene.resolved.yaml beside FILE (whose
+ * plugins.point_gauge.file must name FILE). */
+static long step_points(analyze_ctx *cx, const options *o, const char *file, double **xs,
+                        double **ys, double *h)
+{
+    *h = o->h;
+    char *dir = analyze_format(cx, "%s", file);
+    if (!dir)
+        return -1;
+    char *slash = strrchr(dir, '/');
+    const char *base = slash ? slash + 1 : file;
+    if (slash)
+        *slash = '\0';
+    char *scene_path = analyze_format(cx, "%s/scene.resolved.yaml", slash ? dir : ".");
+    long n = -1;
+    analyze_scene *scene = NULL;
+    if (!scene_path)
+        goto done;
+    if (analyze_file_exists(scene_path) && analyze_scene_load(cx, scene_path, &scene) != 0)
+        goto done;
+    if (isnan(*h)) {
+        double spacing, ratio;
+        if (analyze_scene_setting(scene, "particles", "spacing", &spacing) == 0 &&
+            analyze_scene_setting(scene, "particles", "smoothing_length_ratio", &ratio) == 0)
+            *h = spacing * ratio;
+    }
+    if (o->points) {
+        n = analyze_parse_points(cx, "--points", o->points, xs, ys);
+        goto done;
+    }
+    if (!scene) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                     "%s not found: give the points of %s with --points", scene_path, file);
+        goto done;
+    }
+    const char *gauge_file = analyze_scene_string(scene, "point_gauge", "file");
+    if (gauge_file && strcmp(gauge_file, base) != 0) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                     "%s: plugins.point_gauge.file is '%s', not '%s': give the points of %s "
+                     "with --points",
+                     scene_path, gauge_file, base, file);
+        goto done;
+    }
+    n = analyze_scene_points(cx, scene, "point_gauge", "points", xs, ys);
+    if (n == 0)
+        n = analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                         "%s has no plugins.point_gauge.points: give them with --points",
+                         scene_path);
+done:
+    analyze_scene_free(scene);
+    free(scene_path);
+    free(dir);
+    return n;
+}
+
+/* Number of consecutive points k = 0, 1, ... with a column p<k>_<suffix>. */
+static size_t count_point_columns(const analyze_table *t, const char *suffix)
+{
+    size_t k = 0;
+    for (;; k++) {
+        char name[128];
+        snprintf(name, sizeof name, "p%zu_%s", k, suffix);
+        if (analyze_table_find(t, name) < 0)
+            return k;
+    }
+}
+
+static long point_column(analyze_ctx *cx, const gauge_table *g, size_t k, const char *suffix)
+{
+    char name[128];
+    snprintf(name, sizeof name, "p%zu_%s", k, suffix);
+    return analyze_table_column(cx, &g->table, name);
+}
+
+static int whole_number(double x)
+{
+    return isfinite(x) && x == floor(x) && fabs(x) < 1e9;
+}
+
+/* Velocity profiles U/Uc against y/dc at step edges, the air concentration,
+ * Y90, the clear-water depth, C_mean and the inception step (docs/analysis.md,
+ * seed 001 Figure 6 and Chanson 2002). */
+static int cmd_step_profiles(analyze_ctx *cx, const options *o)
+{
+    if (o->positional_count != 1)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "step-profiles needs one point_gauge CSV file, POINTS.csv");
+    const char *file = o->positional[0];
+    if (need(cx, o, o->per_line, "per-line", 1) != 0 || need(cx, o, o->theta, "theta", 0) != 0 ||
+        need(cx, o, o->dc, "dc", 1) != 0 || need(cx, o, o->uc, "uc", 1) != 0)
+        return -1;
+    if (!o->edges)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "step-profiles needs --edges x,y;x,y;... (the step edges, one per "
+                            "line of points)");
+    if (!whole_number(o->per_line))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--per-line must be a whole number");
+    if (!(o->theta >= 0.0 && o->theta < 90.0))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "--theta must be in [0, 90) degrees (the chute's slope)");
+    if (!(o->threshold > 0.0 && o->threshold < 1.0))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--threshold must be in (0, 1)");
+    if (!isnan(o->h) && !(o->h > 0.0))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--h must be positive");
+    if (!whole_number(o->first_step))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--first-step must be a whole number");
+    const size_t per_line = (size_t)o->per_line;
+    const double theta = o->theta * M_PI / 180.0;
+
+    int status = -1;
+    gauge_table g;
+    memset(&g, 0, sizeof g);
+    double *ex = NULL, *ey = NULL, *px = NULL, *py = NULL, *y = NULL, *u = NULL, *c = NULL;
+    double *series = NULL, *y90 = NULL, *depth = NULL, *c_mean = NULL, *u_max = NULL;
+    double *c_core = NULL;
+    size_t *order = NULL, *u_count = NULL, *c_count = NULL;
+    long lines = analyze_parse_points(cx, "--edges", o->edges, &ex, &ey);
+    if (lines < 0 || gauge_table_load(cx, o, file, &g) != 0)
+        goto done;
+    /* velocity columns: p<k>_<field>_x and the vertical, _y (2D) or _z (3D) */
+    char suffix_u[96], suffix_v[96];
+    snprintf(suffix_u, sizeof suffix_u, "%s_x", o->field);
+    snprintf(suffix_v, sizeof suffix_v, "%s_y", o->field);
+    {
+        char z[96];
+        snprintf(z, sizeof z, "p0_%s_z", o->field);
+        if (analyze_table_find(&g.table, z) >= 0)
+            snprintf(suffix_v, sizeof suffix_v, "%s_z", o->field);
+    }
+    const size_t K = count_point_columns(&g.table, suffix_u);
+    if (K == 0) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                     "%s has no column p0_%s (a point_gauge output with the field '%s')", file,
+                     suffix_u, o->field);
+        goto done;
+    }
+    if (K != per_line * (size_t)lines) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                     "%s has %zu points (p0 .. p%zu) but --per-line %zu x %ld edges = %zu: each "
+                     "edge needs its line of --per-line points, in the gauge's order",
+                     file, K, K - 1, per_line, lines, per_line * (size_t)lines);
+        goto done;
+    }
+    const size_t air_points = count_point_columns(&g.table, "air_fraction");
+    if (air_points != 0 && air_points != K) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                     "%s has p<k>_air_fraction for %zu of its %zu points", file, air_points, K);
+        goto done;
+    }
+    const int has_air = air_points == K;
+    double h;
+    long point_count = step_points(cx, o, file, &px, &py, &h);
+    if (point_count < 0)
+        goto done;
+    if ((size_t)point_count != K) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                     "%zu point coordinates (%s) for the %zu points of %s", (size_t)point_count,
+                     o->points ? "--points" : "scene.resolved.yaml", K, file);
+        goto done;
+    }
+    const size_t rows = g.last - g.first;
+    y = analyze_alloc(cx, K, sizeof *y);
+    u = analyze_alloc(cx, K, sizeof *u);
+    c = analyze_alloc(cx, K, sizeof *c);
+    order = analyze_alloc(cx, K, sizeof *order);
+    u_count = analyze_alloc(cx, K, sizeof *u_count);
+    c_count = analyze_alloc(cx, K, sizeof *c_count);
+    series = analyze_alloc(cx, rows, sizeof *series);
+    y90 = analyze_alloc(cx, (size_t)lines, sizeof *y90);
+    depth = analyze_alloc(cx, (size_t)lines, sizeof *depth);
+    c_mean = analyze_alloc(cx, (size_t)lines, sizeof *c_mean);
+    u_max = analyze_alloc(cx, (size_t)lines, sizeof *u_max);
+    c_core = analyze_alloc(cx, (size_t)lines, sizeof *c_core);
+    if (!y || !u || !c || !order || !u_count || !c_count || !series || !y90 || !depth ||
+        !c_mean || !u_max || !c_core)
+        goto done;
+    /* time means over the window: U/Uc over the samples where the point is
+     * wet (both components finite), C over its finite samples */
+    for (size_t k = 0; k < K; k++) {
+        long cu = point_column(cx, &g, k, suffix_u), cv = point_column(cx, &g, k, suffix_v);
+        if (cu < 0 || cv < 0)
+            goto done;
+        for (size_t r = 0; r < rows; r++) {
+            const double uu = cell(&g, g.first + r, (size_t)cu);
+            const double vv = cell(&g, g.first + r, (size_t)cv);
+            series[r] = isfinite(uu) && isfinite(vv)
+                            ? sluice_hyd_chute_velocity(uu, vv, theta) / o->uc
+                            : NAN;
+        }
+        double mean, std;
+        u[k] = sluice_hyd_mean_std(series, rows, &mean, &std, &u_count[k]) == 0 ? mean : NAN;
+        c[k] = NAN;
+        c_count[k] = 0;
+        if (has_air) {
+            long cc = point_column(cx, &g, k, "air_fraction");
+            if (cc < 0)
+                goto done;
+            for (size_t r = 0; r < rows; r++)
+                series[r] = cell(&g, g.first + r, (size_t)cc);
+            c[k] = sluice_hyd_mean_std(series, rows, &mean, &std, &c_count[k]) == 0 ? mean : NAN;
+        }
+    }
+    /* each line: y along the normal, sorted; the aerated depths */
+    for (long l = 0; l < lines; l++) {
+        const size_t base = (size_t)l * per_line;
+        double extent = 0.0, worst = 0.0;
+        size_t worst_k = base;
+        for (size_t j = 0; j < per_line; j++) {
+            const size_t k = base + j;
+            double offset;
+            y[k] = sluice_hyd_normal_distance(px[k], py[k], ex[l], ey[l], theta, &offset);
+            extent = fmax(extent, fabs(y[k]));
+            if (fabs(offset) > worst) {
+                worst = fabs(offset);
+                worst_k = k;
+            }
+            order[k] = k;
+        }
+        const double allowed = fmax(o->tolerance, 1e-3 * extent);
+        if (worst > allowed) {
+            analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                         "point %zu (%g, %g) is %g m off the normal to the pseudo-bottom at "
+                         "edge %ld (%g, %g) with --theta %g (allowed %g m): check --edges, "
+                         "--theta and --per-line",
+                         worst_k, px[worst_k], py[worst_k], worst, l + 1, ex[l], ey[l],
+                         o->theta, allowed);
+            goto done;
+        }
+        /* insertion sort of the line's points by y */
+        for (size_t j = 1; j < per_line; j++)
+            for (size_t i = base + j; i > base && y[order[i - 1]] > y[order[i]]; i--) {
+                size_t t = order[i];
+                order[i] = order[i - 1];
+                order[i - 1] = t;
+            }
+        for (size_t j = 1; j < per_line; j++)
+            if (!(y[order[base + j]] > y[order[base + j - 1]])) {
+                analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                             "points %zu and %zu of edge %ld lie at the same distance y = %g m "
+                             "from it",
+                             order[base + j - 1], order[base + j], l + 1,
+                             y[order[base + j]]);
+                goto done;
+            }
+    }
+    /* each line's profile in the order of y */
+    {
+        double *ys = analyze_alloc(cx, per_line, sizeof *ys);
+        double *cs = analyze_alloc(cx, per_line, sizeof *cs);
+        if (!ys || !cs) {
+            free(ys);
+            free(cs);
+            goto done;
+        }
+        for (long l = 0; l < lines; l++) {
+            const size_t base = (size_t)l * per_line;
+            u_max[l] = NAN;
+            for (size_t j = 0; j < per_line; j++) {
+                const size_t k = order[base + j];
+                ys[j] = y[k];
+                cs[j] = c[k];
+                if (isfinite(u[k]) && !(u[k] <= u_max[l]))
+                    u_max[l] = u[k];
+            }
+            y90[l] = depth[l] = c_mean[l] = c_core[l] = NAN;
+            if (has_air &&
+                sluice_hyd_aerated_depths(ys, cs, per_line, 0.9, &y90[l], &depth[l],
+                                          &c_mean[l]) == 0)
+                c_core[l] = sluice_hyd_band_mean(ys, cs, per_line, 0.2 * y90[l], 0.5 * y90[l]);
+        }
+        free(ys);
+        free(cs);
+    }
+    const long inception = has_air ? sluice_hyd_first_above(c_core, (size_t)lines, o->threshold)
+                                   : -1;
+    const long first = (long)o->first_step;
+
+    /* the CSV on stdout: one section per edge, the per-edge summary, the
+     * inception */
+    printf("# step-profiles %s: window [%.10g, %.10g] s, %zu samples; theta = %.10g deg, "
+           "dc = %.10g m, Uc = %.10g m/s (sqrt(g dc) = q/dc = %.6g m/s); %ld edges of %zu "
+           "points; h = %.6g m\n",
+           file, g.time[g.first], g.time[g.last - 1], rows, o->theta, o->dc, o->uc,
+           sqrt(o->g * o->dc), lines, per_line, h);
+    for (long l = 0; l < lines; l++) {
+        printf("\n# step %ld: edge (%.10g, %.10g) m\n", first + l, ex[l], ey[l]);
+        printf("step,point,y,y_dc,U_Uc,U_samples,C,C_samples\n");
+        for (size_t j = 0; j < per_line; j++) {
+            const size_t k = order[(size_t)l * per_line + j];
+            printf("%ld,%zu,%.10g,%.10g,%.10g,%zu,%.10g,%zu\n", first + l, k, y[k],
+                   y[k] / o->dc, u[k], u_count[k], c[k], c_count[k]);
+        }
+    }
+    printf("\n# per edge: Y90 (C = 0.9), d = integral_0^Y90 (1 - C) dy, C_mean = 1 - d/Y90, "
+           "max U/Uc, C_core = mean C over 0.2-0.5 Y90\n");
+    printf("step,edge_x,edge_y,Y90,Y90_dc,d,d_dc,C_mean,U_Uc_max,C_core\n");
+    for (long l = 0; l < lines; l++)
+        printf("%ld,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n", first + l, ex[l],
+               ey[l], y90[l], y90[l] / o->dc, depth[l], depth[l] / o->dc, c_mean[l], u_max[l],
+               c_core[l]);
+    printf("\n# inception of free-surface aeration: the first edge whose C_core exceeds the "
+           "threshold\n");
+    printf("inception_step,edge_x,edge_y,C_core,threshold\n");
+    if (inception >= 0)
+        printf("%ld,%.10g,%.10g,%.10g,%.10g\n", first + inception, ex[inception], ey[inception],
+               c_core[inception], o->threshold);
+    else
+        printf("nan,nan,nan,nan,%.10g\n", o->threshold);
+    fflush(stdout);
+    if (has_air && isfinite(h))
+        for (long l = 0; l < lines; l++)
+            if (y90[l] < STEP_MIN_Y90_OVER_H * h)
+                fprintf(stderr,
+                        "sluice-analyze: warning: step %ld: Y90 = %.4g m < %.1f h = %.4g m: the "
+                        "band 0.2-0.5 Y90 reaches the kernel smear of the free surface, so "
+                        "C_core there is not entrainment alone\n",
+                        first + l, y90[l], STEP_MIN_Y90_OVER_H, STEP_MIN_Y90_OVER_H * h);
+    if (has_air && !isfinite(h))
+        fprintf(stderr, "sluice-analyze: note: h unknown (no --h, no scene.resolved.yaml): the "
+                        "Y90 >= %.1f h check of the inception band is skipped\n",
+                STEP_MIN_Y90_OVER_H);
+    if (!has_air) {
+        fprintf(stderr, "sluice-analyze: note: %s has no p<k>_air_fraction columns (point_gauge "
+                        "fields: velocity, air_fraction in a two_phase scene): no Y90, C_mean "
+                        "or inception\n",
+                file);
+        status = 0;
+    } else if (inception < 0) {
+        analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND,
+                     "no step edge has a mean air concentration above %g over 0.2-0.5 Y90 (no "
+                     "inception of free-surface aeration among these edges)",
+                     o->threshold);
+    } else {
+        status = 0;
+    }
+done:
+    gauge_table_free(&g);
+    free(ex);
+    free(ey);
+    free(px);
+    free(py);
+    free(y);
+    free(u);
+    free(c);
+    free(order);
+    free(u_count);
+    free(c_count);
+    free(series);
+    free(y90);
+    free(depth);
+    free(c_mean);
+    free(u_max);
+    free(c_core);
+    return status;
+}
+
 /* A run made with an `inlet` knows its inflow: when --d1, --v1 and --fr are
  * not given, take d1 and v1 from the inlet's depth and velocity (or
  * discharge / depth) in RUN/scene.resolved.yaml. Options given on the
@@ -1690,6 +2073,9 @@ int main(int argc, char **argv)
     options o = {0};
     o.command = argv[1];
     o.d1 = o.v1 = o.fr = o.x = o.x1 = o.drop = o.y1 = o.yt = o.fmin = o.fmax = o.drop_x = NAN;
+    o.per_line = o.theta = o.dc = o.uc = o.h = NAN;
+    o.threshold = 0.05;
+    o.first_step = 1;
     o.wave_min = 0.1;
     o.g = 9.81;
     o.from = -INFINITY;
@@ -1707,6 +2093,7 @@ int main(int argc, char **argv)
         {"roller", cmd_roller},     {"vmax", cmd_vmax},           {"surface", cmd_surface},
         {"spectrum", cmd_spectrum}, {"correlate", cmd_correlate}, {"l2", cmd_l2},
         {"classify", cmd_classify}, {"drop-type", cmd_drop_type},
+        {"step-profiles", cmd_step_profiles},
     };
     int (*command)(analyze_ctx *, const options *) = NULL;
     for (size_t k = 0; k < sizeof commands / sizeof *commands; k++)
