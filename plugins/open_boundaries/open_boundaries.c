@@ -13,12 +13,30 @@
  * depth d1 (through the scene's equation of state), and with k = 1.5 (I V1)^2
  * and eps = c_mu^(3/4) k^(3/2) / (l_f d1) when a k-epsilon model is loaded
  * (seed 004: I = 10 %, l = 0.5 d1). A particle that passes x = position
- * becomes fluid with that state.
+ * becomes fluid with that state. Fluid that flows back upstream across the
+ * plane (a reservoir's sloshing) is removed: it leaves through the inlet,
+ * a negative mass flux in inlet.csv.
  *   form buffer (seed 004, De Padova et al. 2017): the layer stays `width`
  *     long: a new column enters at its back every dx / V1.
  *   form block (seed 000, Jonsson et al. 2016): the whole inflow of the run
  *     is placed at the start, V1 x end time (+ width) long, upstream of the
  *     inlet (the domain must hold it); nothing is created later.
+ *   Two-phase scenes (the field `phase` of two_phase: 0 water, 1 air): the
+ *   water rows get phase 0; with air_depth = a > 0 every column also has
+ *   rows of air (phase 1, mass rho0_a dx^d) above the water, up to
+ *   bed + d1 + a (round((d1 + a) / dx) rows in all), moving at V1 like the
+ *   water. The pressure is hydrostatic with p_b (two_phase's
+ *   reference_pressure) at the top of the air:
+ *       air    p = p_b + rho0_a g (bed + d1 + a - z),
+ *       water  p = p_b + rho0_a g a + rho0_w g (bed + d1 - z),
+ *   the water's density through the scene's inverse (two_phase's water
+ *   law), the air's through the air's law inverted with two_phase's
+ *   constants: rho = rho0_a ((p - p_b) / B + 1)^(1 / gamma_a),
+ *   B = rho0_a c0_a^2 / gamma_a (= the water's B). air_depth > 0 needs the
+ *   field `phase` (checked at load); two_phase's start leaves the phase of
+ *   open particles alone, so the order of the two in the scene is free.
+ *   Particles the inlet creates have every other field zero (the core's
+ *   rule): dissolved_oxygen gives them their concentration by phase.
  *
  * outlet (x >= position): fluid that passes x = position
  *   form free (seed 002, Lin et al. 2025): is removed;
@@ -27,18 +45,28 @@
  *     outlet or at the domain's edge;
  *   form buffer (seed 004): becomes open with the imposed tailwater velocity
  *     Vt and the hydrostatic density of the tailwater depth yt, moves at Vt,
- *     and is removed `width` past the outlet.
+ *     and is removed `width` past the outlet. In a two-phase scene air that
+ *     enters the buffer takes the air's density at the tailwater column's
+ *     pressure, p_b at its surface bed + yt: p = p_b + rho0_w g (bed + yt -
+ *     z) below it, p_b - rho0_a g (z - bed - yt) above it.
+ *   phase (all|water|air, phase_filter.h): only fluid of that phase crosses
+ *   into the outlet's treatment; the other phase stays ordinary fluid past
+ *   the plane (e.g. the air of a closed box over a channel whose water
+ *   leaves through the outlet).
  *
  * Each boundary writes the mass and x-momentum flux through its plane to a
  * CSV (`inlet.csv`, `outlet.csv`): time, mass_flux (kg s^-1; per metre of
  * width in 2D), discharge (mass_flux / rho0: m^2 s^-1 in 2D, m^3 s^-1 in 3D),
  * momentum_flux (sum of m u_x crossing per second: N, per metre in 2D),
  * mass_total (kg since the start), open_particles (in its buffer), averaged
- * over each `interval`. */
+ * over each `interval`. When the scene has the field `phase` they count the
+ * water only (air crosses, but is not counted), so that discharge is the
+ * water's. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
+#include "phase_filter.h"
 #include "plugin_util.h"
 
 enum { INLET_BUFFER = 0, INLET_BLOCK = 1 };
@@ -51,6 +79,8 @@ typedef struct boundary_config {
     sluice_real turbulence_intensity, mixing_length_factor;
     sluice_real interval;
     const char *file;
+    sluice_real air_depth; /* inlet */
+    int phase;             /* outlet: SLUICE_PHASE_* */
 } boundary_config;
 
 typedef struct boundary_state {
@@ -66,10 +96,17 @@ typedef struct boundary_state {
     sluice_field velocity_field, density_field, mass_field, pressure_field;
     int has_k, has_pressure;
     sluice_field k_field, epsilon_field;
+    /* two-phase scenes: the field `phase` (0 water, 1 air) of two_phase */
+    int has_phase;       /* the field exists: the fluxes count water only */
+    sluice_field phase_field;
+    int phase_filter;    /* outlet: the phase it treats (SLUICE_PHASE_*) */
+    double air_depth;    /* inlet: depth of the air layer above the water */
+    double rho_a, gamma_a, B, air_mass; /* rho0_a, gamma_a, Tait B, rho0_a dx^d */
     /* inlet lattice */
-    uint32_t rows, lanes;   /* vertical rows, lateral lanes (3D) */
+    uint32_t rows, lanes;   /* vertical rows of water, lateral lanes (3D) */
+    uint32_t air_rows;      /* rows of air above the water rows */
     double newest_column;   /* x of the last column created */
-    double *column_density; /* hydrostatic density per row */
+    double *column_density; /* hydrostatic density per row (water, then air) */
     sluice_real *scratch;   /* positions of a new column */
     /* outlet tailwater density by height: computed per particle */
     /* between-step bookkeeping */
@@ -94,6 +131,12 @@ static const sluice_param_spec inlet_params[] = {
      "elevation of the bed under the inlet (vertical axis: the last one)", NULL, 0},
     {"depth", SLUICE_PARAM_REAL, offsetof(boundary_config, depth), NULL, 0, 0,
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "m", "inflow depth d1", NULL, 0},
+    {"air_depth", SLUICE_PARAM_REAL, offsetof(boundary_config, air_depth), "0", 0, 0,
+     SLUICE_PARAM_HAS_MIN, "m",
+     "two-phase scenes (two_phase loaded): rows of air (phase 1) from "
+     "the water's surface up to bed + depth + air_depth, moving at V1, with the air's "
+     "hydrostatic density (the background pressure p_b at their top); 0: water only",
+     NULL, 0},
     {"velocity", SLUICE_PARAM_REAL, offsetof(boundary_config, velocity), NULL, 0, 0,
      SLUICE_PARAM_OPTIONAL | SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "m s^-1",
      "inflow velocity V1 (give this or discharge)", NULL, 0},
@@ -138,6 +181,11 @@ static const sluice_param_spec outlet_params[] = {
      NULL, 0},
     {"span", SLUICE_PARAM_VECTOR, offsetof(boundary_config, span), "[0, 0]", 0, 0, 0, "m",
      "buffer, 3D: the lateral (y) extent [y_min, y_max] of the tailwater layer", NULL, 2},
+    {"phase", SLUICE_PARAM_ENUM, offsetof(boundary_config, phase), "all", 0, 0, 0, NULL,
+     "the phase that crosses into the outlet's treatment (removed, frozen or imposed): all, or "
+     "water or air only (field 'phase' of two_phase, which must then be loaded); the other "
+     "phase stays ordinary fluid past the plane",
+     "all|water|air", 0},
     {"interval", SLUICE_PARAM_REAL, offsetof(boundary_config, interval), "0.05", 0, 0,
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between flux rows", NULL, 0},
     {"file", SLUICE_PARAM_STRING, offsetof(boundary_config, file), "outlet.csv", 0, 0, 0, NULL,
@@ -187,6 +235,7 @@ static int boundary_create(const sluice_api *api, sluice_host *host, const void 
             api->error(host, "a 3D inlet needs 'span: [y_min, y_max]' with y_max > y_min");
             goto fail;
         }
+        s->air_depth = c->air_depth;
         s->turbulence_k = 1.5 * pow(c->turbulence_intensity * s->velocity, 2);
         s->mixing_length = c->mixing_length_factor * s->depth;
         sluice_real x = c->position;
@@ -194,6 +243,11 @@ static int boundary_create(const sluice_api *api, sluice_host *host, const void 
             goto fail;
     } else {
         s->velocity = c->velocity;
+        s->phase_filter = c->phase;
+        /* a filter reads the phase: a scene without two_phase is refused by
+         * the core (the field 'phase' is computed by no loaded plugin) */
+        if (sluice_phase_declare(api, host, s->phase_filter) != SLUICE_OK)
+            goto fail;
         if (s->form == OUTLET_BUFFER && !(c->depth > 0)) {
             api->error(host, "form 'buffer' needs the tailwater 'depth' (yt, m) > 0");
             goto fail;
@@ -233,18 +287,68 @@ static void boundary_destroy(void *state)
     free(s);
 }
 
-/* The density of the hydrostatic pressure at `depth_below` (m, clamped at 0)
- * under a free surface, through the scene's equation of state. */
+/* The density of the hydrostatic pressure p = surface + rho0 g depth_below
+ * (depth_below in m, clamped at 0) through the scene's equation of state
+ * (in a two-phase scene: the water's). */
 static int hydrostatic_density(boundary_state *s, sluice_host *host, sluice_index n,
-                               const double *depth_below, double *density)
+                               const double *depth_below, double surface, double *density)
 {
     for (sluice_index k = 0; k < n; k++) {
-        sluice_real p = (sluice_real)(s->p_ref + s->rho0 * s->g * fmax(depth_below[k], 0.0));
+        sluice_real p = (sluice_real)(surface + s->rho0 * s->g * fmax(depth_below[k], 0.0));
         sluice_real rho;
         if (s->api->density_from_pressure(host, 1, &p, &rho) != SLUICE_OK)
             return SLUICE_ERROR;
         density[k] = rho;
     }
+    return SLUICE_OK;
+}
+
+/* The air's density at the pressure p_b + excess: the inverse of two_phase's
+ * law for the air, rho_a = rho0_a ((p - p_b) / B + 1)^(1 / gamma_a). */
+static double air_density(const boundary_state *s, double excess)
+{
+    return s->rho_a * pow(1 + excess / s->B, 1 / s->gamma_a);
+}
+
+/* The phase, and the air's law from two_phase's constants when the
+ * boundary creates or imposes air (`needs_air`: the reason, or NULL). */
+static int bind_phase(boundary_state *s, sluice_host *host, const char *needs_air)
+{
+    const sluice_api *api = s->api;
+    sluice_field phase;
+    s->has_phase = sluice_util_optional_field(api, host, "phase", &phase);
+    if (!s->has_phase)
+        return SLUICE_OK;
+    if (phase.type != SLUICE_TYPE_UINT8 || phase.components != 1) {
+        api->error(host, "the field 'phase' must be uint8 with one component (0 water, 1 air)");
+        return SLUICE_ERROR;
+    }
+    /* the inlet writes it on the particles it creates, between steps; the
+     * outlet reads it (a filter declared it in create() already) */
+    if (s->inlet || s->phase_filter == SLUICE_PHASE_ALL) {
+        static const sluice_field_spec spec = {
+            "phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_READ, 0, NULL, 0,
+            "phase of a fluid particle: 0 water, 1 air (set on the inflow particles)"};
+        if (api->declare_field(host, &spec) != SLUICE_OK)
+            return SLUICE_ERROR;
+    }
+    if (api->field(host, "phase", &s->phase_field) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (!needs_air)
+        return SLUICE_OK;
+    sluice_real rho_a, c_a, gamma_a;
+    if (api->constant(host, "air_rest_density", &rho_a, 1) < 1 ||
+        api->constant(host, "air_speed_of_sound", &c_a, 1) < 1 ||
+        api->constant(host, "air_gamma", &gamma_a, 1) < 1) {
+        api->error(host, "%s needs the air's equation of state: the constants "
+                         "'air_rest_density', 'air_speed_of_sound' and 'air_gamma' of two_phase",
+                   needs_air);
+        return SLUICE_ERROR;
+    }
+    s->rho_a = rho_a;
+    s->gamma_a = gamma_a;
+    s->B = (double)rho_a * (double)c_a * (double)c_a / (double)gamma_a;
+    s->air_mass = (double)(rho_a * (sluice_real)pow((double)s->dx, (double)s->dims));
     return SLUICE_OK;
 }
 
@@ -291,18 +395,33 @@ static int boundary_bind(void *state, sluice_host *host)
         s->domain_min[d] = lo[d];
         s->domain_max[d] = hi[d];
     }
+    const char *needs_air = NULL;
+    if (s->inlet && s->air_depth > 0)
+        needs_air = "air_depth";
+    else if (!s->inlet && s->form == OUTLET_BUFFER && s->phase_filter != SLUICE_PHASE_WATER)
+        needs_air = "a buffer outlet that takes air (phase: all or air)";
+    if (bind_phase(s, host, needs_air) != SLUICE_OK)
+        return SLUICE_ERROR;
     if (s->inlet) {
+        if (s->air_depth > 0 && !s->has_phase) {
+            api->error(host,
+                       "air_depth = %g m needs the field 'phase' (0 water, 1 air) of the "
+                       "two_phase plugin: load two_phase, or set air_depth: 0",
+                       s->air_depth);
+            return SLUICE_ERROR;
+        }
         /* the inflow's section must lie inside the domain: its plane, the
-         * water column bed .. bed + d1 and, in 3D, the span */
+         * column bed .. bed + d1 (+ the air layer) and, in 3D, the span */
         const int v = (int)s->vertical;
+        const double top = s->bed + s->depth + s->air_depth;
         if (!(s->position >= s->domain_min[0] && s->position < s->domain_max[0]) ||
-            !(s->bed >= s->domain_min[v] && s->bed + s->depth <= s->domain_max[v]) ||
+            !(s->bed >= s->domain_min[v] && top <= s->domain_max[v]) ||
             (s->dims == 3 &&
              !(s->span[0] >= s->domain_min[1] && s->span[1] <= s->domain_max[1]))) {
             api->error(host,
                        "the inflow section (x = %g m, %c from %g to %g m%s) lies outside the "
                        "domain [%g, %g) x [%g, %g) m: move the inlet or enlarge the domain",
-                       s->position, "xyz"[v], s->bed, s->bed + s->depth,
+                       s->position, "xyz"[v], s->bed, top,
                        s->dims == 3 ? ", across the span" : "", s->domain_min[0],
                        s->domain_max[0], s->domain_min[v], s->domain_max[v]);
             return SLUICE_ERROR;
@@ -363,18 +482,29 @@ static int reserve(boundary_state *s, sluice_host *host, sluice_index n)
 
 /* ---------------------------------------------------------------- inlet -- */
 
-/* Sets the imposed state (velocity, hydrostatic density by row, k and eps)
- * of lattice particles [first, first + n). */
+/* Sets the imposed state (velocity, hydrostatic density by row, k and eps;
+ * in a two-phase scene the phase, and the air rows' mass rho0_a dx^d) of
+ * lattice particles [first, first + n). */
 static void impose_lattice_state(boundary_state *s, const sluice_view *v, sluice_index first,
                           sluice_index n)
 {
     sluice_real *rho = sluice_real_column(v, s->density_field, 0);
+    sluice_real *mass = sluice_real_column(v, s->mass_field, 0);
+    uint8_t *phase = s->has_phase ? (uint8_t *)v->columns[s->phase_field.column] : NULL;
     const sluice_real *z = v->position[s->vertical];
+    const uint32_t rows = s->rows + s->air_rows;
     for (sluice_index i = first; i < first + n; i++) {
         for (uint32_t d = 0; d < s->dims; d++)
             sluice_real_column(v, s->velocity_field, d)[i] = d == 0 ? (sluice_real)s->velocity : 0;
         uint32_t row = (uint32_t)floor(((double)z[i] - s->bed) / s->dx);
-        rho[i] = (sluice_real)s->column_density[row < s->rows ? row : s->rows - 1];
+        row = row < rows ? row : rows - 1;
+        rho[i] = (sluice_real)s->column_density[row];
+        if (phase) {
+            const int air = row >= s->rows;
+            phase[i] = (uint8_t)air;
+            if (air)
+                mass[i] = (sluice_real)s->air_mass;
+        }
         if (s->has_k) {
             sluice_real_column(v, s->k_field, 0)[i] = (sluice_real)s->turbulence_k;
             sluice_real_column(v, s->epsilon_field, 0)[i] = (sluice_real)s->turbulence_epsilon;
@@ -385,10 +515,11 @@ static void impose_lattice_state(boundary_state *s, const sluice_view *v, sluice
 /* Adds one column of inflow particles at x. */
 static int add_column(boundary_state *s, sluice_host *host, double x)
 {
-    const sluice_index n = s->rows * s->lanes;
+    const uint32_t rows = s->rows + s->air_rows;
+    const sluice_index n = rows * s->lanes;
     for (uint32_t l = 0; l < s->lanes; l++)
-        for (uint32_t r = 0; r < s->rows; r++) {
-            sluice_real *p = s->scratch + 3 * ((size_t)l * s->rows + r);
+        for (uint32_t r = 0; r < rows; r++) {
+            sluice_real *p = s->scratch + 3 * ((size_t)l * rows + r);
             p[0] = (sluice_real)x;
             p[1] = p[2] = 0;
             p[s->vertical] = (sluice_real)(s->bed + (r + 0.5) * s->dx);
@@ -402,8 +533,11 @@ static int add_column(boundary_state *s, sluice_host *host, double x)
     return SLUICE_OK;
 }
 
-/* The lattice of a buffer: rows up to the depth, lanes across the span (3D),
- * the hydrostatic density of each row. */
+/* The lattice of a buffer: rows of water up to the depth (and of air up to
+ * depth + air_depth), lanes across the span (3D), the hydrostatic density of
+ * each row: water p = p_b + rho0_a g air_depth + rho0 g (depth - z'), air
+ * p = p_b + rho0_a g (depth + air_depth - z'), z' the height above the
+ * bed, each through its phase's law. */
 static int setup_lattice(boundary_state *s, sluice_host *host)
 {
     const sluice_api *api = s->api;
@@ -413,6 +547,19 @@ static int setup_lattice(boundary_state *s, sluice_host *host)
                    s->dx);
         return SLUICE_ERROR;
     }
+    s->air_rows = 0;
+    if (s->air_depth > 0) {
+        const uint32_t total = (uint32_t)floor((s->depth + s->air_depth) / s->dx + 0.5);
+        if (total <= s->rows) {
+            api->error(host,
+                       "air_depth = %g m adds no row of air above the %u rows of water (spacing "
+                       "%g m): give at least half a spacing more",
+                       s->air_depth, s->rows, s->dx);
+            return SLUICE_ERROR;
+        }
+        s->air_rows = total - s->rows;
+    }
+    const uint32_t rows = s->rows + s->air_rows;
     s->lanes = 1;
     if (s->dims == 3) {
         s->lanes = (uint32_t)floor((s->span[1] - s->span[0]) / s->dx + 0.5);
@@ -421,9 +568,9 @@ static int setup_lattice(boundary_state *s, sluice_host *host)
             return SLUICE_ERROR;
         }
     }
-    s->column_density = malloc(s->rows * sizeof *s->column_density);
+    s->column_density = malloc(rows * sizeof *s->column_density);
     double *below = malloc(s->rows * sizeof *below);
-    s->scratch = malloc((size_t)s->rows * s->lanes * 3 * sizeof *s->scratch);
+    s->scratch = malloc((size_t)rows * s->lanes * 3 * sizeof *s->scratch);
     if (!s->column_density || !below || !s->scratch) {
         free(below);
         api->error(host, "out of memory");
@@ -431,8 +578,14 @@ static int setup_lattice(boundary_state *s, sluice_host *host)
     }
     for (uint32_t r = 0; r < s->rows; r++)
         below[r] = s->depth - (r + 0.5) * s->dx;
-    int status = hydrostatic_density(s, host, s->rows, below, s->column_density);
+    /* the air layer's weight on the water (rho0_a g air_depth: p_b at its top) */
+    const double air_weight = s->air_rows ? s->rho_a * s->g * s->air_depth : 0;
+    int status = hydrostatic_density(s, host, s->rows, below, s->p_ref + air_weight,
+                                     s->column_density);
     free(below);
+    for (uint32_t r = s->rows; r < rows; r++)
+        s->column_density[r] =
+            air_density(s, s->rho_a * s->g * fmax(s->depth + s->air_depth - (r + 0.5) * s->dx, 0));
     return status;
 }
 
@@ -449,6 +602,13 @@ static int inlet_initialise(void *state, sluice_host *host)
                      "%g m (discharge %g m^2/s instead of %g)",
                      s->depth, s->rows, effective, s->velocity * effective,
                      s->velocity * s->depth);
+    const double air_effective = s->air_rows * s->dx;
+    if (s->air_rows && fabs(effective + air_effective - s->depth - s->air_depth) >
+                           1e-6 * (s->depth + s->air_depth))
+        api->warning(host,
+                     "depth + air_depth = %g m is not a whole number of spacings: the %u rows of "
+                     "air reach %g m above the bed",
+                     s->depth + s->air_depth, s->air_rows, effective + air_effective);
     double length = s->width;
     if (s->form == INLET_BLOCK) {
         sluice_real end;
@@ -469,13 +629,19 @@ static int inlet_initialise(void *state, sluice_host *host)
         if (add_column(s, host, s->position - length + (m + 0.5) * s->dx) != SLUICE_OK)
             return SLUICE_ERROR;
     s->newest_column = s->position - length + 0.5 * s->dx;
-    s->open_count = columns * s->rows * s->lanes;
+    s->open_count = columns * (s->rows + s->air_rows) * s->lanes;
     api->info(host,
               "%s inflow: V1 = %g m/s, d1 = %g m (%u rows), q = %g m^2/s, Fr1 = %g; %u columns "
               "upstream of x = %g m",
               s->form == INLET_BUFFER ? "buffer" : "block", s->velocity, effective, s->rows,
               s->velocity * effective, s->velocity / sqrt(s->g * effective), columns,
               s->position);
+    if (s->air_rows)
+        api->info(host,
+                  "air layer: %u rows (%g m) above the water, densities %.9g (bottom) to %.9g "
+                  "(top) kg m^-3",
+                  s->air_rows, air_effective, s->column_density[s->rows],
+                  s->column_density[s->rows + s->air_rows - 1]);
     s->table = api->table_open(host, s->file,
                                "time,mass_flux,discharge,momentum_flux,mass_total,open_particles");
     return s->table ? SLUICE_OK : SLUICE_ERROR;
@@ -524,15 +690,33 @@ static int inlet_after_step(void *state, sluice_host *host)
     /* move the inflow particles; those past the plane become fluid */
     sluice_real *x = (sluice_real *)v->position[0];
     const sluice_real *mass = sluice_real_column(v, s->mass_field, 0);
+    const uint8_t *phase = s->has_phase ? (const uint8_t *)v->columns[s->phase_field.column] : NULL;
     const sluice_real shift = (sluice_real)(s->velocity * dt);
     const sluice_real plane = (sluice_real)s->position;
-    sluice_index converted = 0, open = 0;
+    sluice_index converted = 0, open = 0, returned = 0;
     for (sluice_index i = 0; i < v->count; i++) {
-        if (v->kind[i] != SLUICE_KIND_OPEN || !(x[i] < plane))
+        if (!(x[i] < plane))
+            continue;
+        if (v->kind[i] == SLUICE_KIND_FLUID) {
+            /* fluid flowing back upstream across the plane (a reservoir's
+             * sloshing) would run into the lattice: it leaves through the
+             * inlet, a negative flux */
+            s->to_remove[returned++] = i;
+            if (phase && phase[i])
+                continue;
+            const sluice_real *u = sluice_real_column(v, s->velocity_field, 0);
+            s->mass_interval -= mass[i];
+            s->momentum_interval -= mass[i] * u[i];
+            s->mass_total -= mass[i];
+            continue;
+        }
+        if (v->kind[i] != SLUICE_KIND_OPEN)
             continue;
         x[i] += shift;
         if (x[i] >= plane) {
             s->to_convert[converted++] = i;
+            if (phase && phase[i])
+                continue; /* the fluxes are the water's */
             s->mass_interval += mass[i];
             s->momentum_interval += mass[i] * s->velocity;
             s->mass_total += mass[i];
@@ -542,6 +726,8 @@ static int inlet_after_step(void *state, sluice_host *host)
     }
     if (api->set_kind(host, s->to_convert, converted, SLUICE_KIND_FLUID) != SLUICE_OK)
         return SLUICE_ERROR;
+    if (returned && api->remove_particles(host, s->to_remove, returned) != SLUICE_OK)
+        return SLUICE_ERROR;
     s->open_count = open;
     s->newest_column += s->velocity * dt;
     if (s->form == INLET_BUFFER) {
@@ -550,7 +736,7 @@ static int inlet_after_step(void *state, sluice_host *host)
             s->newest_column -= s->dx;
             if (add_column(s, host, s->newest_column) != SLUICE_OK)
                 return SLUICE_ERROR;
-            s->open_count += s->rows * s->lanes;
+            s->open_count += (s->rows + s->air_rows) * s->lanes;
         }
     }
     return flux_rows(s, host, v->time);
@@ -590,6 +776,9 @@ static int outlet_after_step(void *state, sluice_host *host)
     const double end = s->position + s->width;
     const sluice_real *mass = sluice_real_column(v, s->mass_field, 0);
     sluice_real *rho = sluice_real_column(v, s->density_field, 0);
+    const uint8_t *phase = s->has_phase ? (const uint8_t *)v->columns[s->phase_field.column] : NULL;
+    const int filtered = s->phase_filter != SLUICE_PHASE_ALL;
+    const uint8_t wanted = sluice_phase_wanted(s->phase_filter);
     sluice_real *u[3] = {NULL, NULL, NULL};
     sluice_real *pos[3] = {NULL, NULL, NULL};
     for (uint32_t d = 0; d < s->dims; d++) {
@@ -620,9 +809,15 @@ static int outlet_after_step(void *state, sluice_host *host)
         }
         if (v->kind[i] != SLUICE_KIND_FLUID)
             continue;
-        s->mass_interval += mass[i];
-        s->momentum_interval += mass[i] * u[0][i];
-        s->mass_total += mass[i];
+        /* the other phase stays fluid (a filter implies the field) */
+        if (filtered && phase[i] != wanted)
+            continue;
+        const int air = phase && phase[i];
+        if (!air) { /* the fluxes are the water's */
+            s->mass_interval += mass[i];
+            s->momentum_interval += mass[i] * u[0][i];
+            s->mass_total += mass[i];
+        }
         if (s->form == OUTLET_FREE) {
             s->to_remove[removed++] = i;
             continue;
@@ -634,8 +829,14 @@ static int outlet_after_step(void *state, sluice_host *host)
                 u[d][i] = d == 0 ? (sluice_real)s->velocity : 0;
             const double below = s->bed + s->depth - (double)pos[s->vertical][i];
             double density;
-            if (hydrostatic_density(s, host, 1, &below, &density) != SLUICE_OK)
+            if (air) {
+                /* the tailwater column's pressure at its height, p_b at the
+                 * surface (two_phase's start), through the air's law */
+                density = air_density(s, below > 0 ? s->rho0 * s->g * below
+                                                   : s->rho_a * s->g * below);
+            } else if (hydrostatic_density(s, host, 1, &below, s->p_ref, &density) != SLUICE_OK) {
                 return SLUICE_ERROR;
+            }
             rho[i] = (sluice_real)density;
         }
     }

@@ -26,6 +26,12 @@
  *      / rho_i acts on every particle, so p_b is kept as small as the air
  *      allows (docs/physics.md). It is published as 'reference_pressure',
  *      so that the core's hydrostatic start puts p_b at the water's surface.
+ *      Published constants: speed_of_sound (c0_w), air_speed_of_sound
+ *      (c0_a), air_rest_density (rho0_a), air_gamma (gamma_a) and
+ *      reference_pressure (p_b): with them another plugin inverts the air's
+ *      law, rho_a(p) = rho0_a ((p - p_b) / B + 1)^(1 / gamma_a) with
+ *      B = rho0_a c0_a^2 / gamma_a (the inlet's air layer); the API's
+ *      density_from_pressure is the water's inverse.
  *    - initial air density: hydrostatic in the air, p = p_b - rho_a g (z -
  *      z_s), inverted exactly through the air's Tait law, with z_s the top
  *      of the highest water particle (its centre + dx/2): the pressure is
@@ -253,6 +259,7 @@ static int phase_create(const sluice_api *api, sluice_host *host, const void *co
     if (api->publish_constant(host, "speed_of_sound", &s->c_w, 1, "m s^-1") != SLUICE_OK ||
         api->publish_constant(host, "air_speed_of_sound", &s->c_a, 1, "m s^-1") != SLUICE_OK ||
         api->publish_constant(host, "air_rest_density", &s->rho_a, 1, "kg m^-3") != SLUICE_OK ||
+        api->publish_constant(host, "air_gamma", &s->gamma_a, 1, "1") != SLUICE_OK ||
         api->publish_constant(host, "reference_pressure", &s->background, 1, "Pa") !=
             SLUICE_OK) {
         phase_destroy(s);
@@ -334,9 +341,11 @@ static int phase_initialise(void *state, sluice_host *host)
     sluice_index air = 0, water = 0;
     sluice_real top = -(sluice_real)INFINITY, bottom = (sluice_real)INFINITY;
     for (sluice_index i = 0; i < v->count; i++) {
-        phase[i] = PHASE_WATER;
+        /* walls are water (zero-filled by the core); open particles keep
+         * the phase their boundary gave them (an inlet's air rows) */
         if (v->kind[i] != SLUICE_KIND_FLUID)
             continue;
+        phase[i] = PHASE_WATER;
         sluice_real x[3] = {0, 0, 0};
         for (uint32_t d = 0; d < dims; d++)
             x[d] = v->position[d][i];
@@ -365,7 +374,7 @@ static int phase_initialise(void *state, sluice_host *host)
     const sluice_real weight = gravity >= dims ? -g[up] * s->rho_a : 0; /* rho_a g, Pa/m */
     const sluice_real volume = (sluice_real)pow((double)s->dx, (double)dims);
     for (sluice_index i = 0; i < v->count; i++) {
-        if (phase[i] != PHASE_AIR)
+        if (phase[i] != PHASE_AIR || v->kind[i] != SLUICE_KIND_FLUID)
             continue;
         mass[i] = s->rho_a * volume;
         const sluice_real excess = weight * (surface - v->position[up][i]); /* p - p_b */
