@@ -339,6 +339,129 @@ START_TEST(geometry_errors)
 }
 END_TEST
 
+/* ------------------------------------------------------------ variants -- */
+
+static const char *variants_block =
+    "variants:\n"                                                                 /* 25 */
+    "  inviscid:\n"                                                               /* 26 */
+    "    description: without artificial viscosity\n"                             /* 27 */
+    "    remove: [plugins.artificial_viscosity]\n"                                /* 28 */
+    "  stiffer:\n"                                                                /* 29 */
+    "    set: {plugins.tait.speed_of_sound: 40, geometry.fluid.0.max: [0.5, 0.4]}\n"; /* 30 */
+
+/* Runs `sluice run` on the scene with the variants block and returns the
+ * text of DIR/out/scene.resolved.yaml. */
+static char *run_variant(const char *args)
+{
+    char *text = scene_text(0, NULL, variants_block);
+    outcome o = run_case(text, args);
+    ck_assert_msg(o.status == 0, "%s: status %d:\n%s", args, o.status, o.output);
+    char *path = NULL;
+    ck_assert_int_ge(asprintf(&path, "%s/out/scene.resolved.yaml", o.dir), 0);
+    char *resolved = test_read_file(path);
+    ck_assert_ptr_nonnull(resolved);
+    free(path);
+    done(&o);
+    free(text);
+    return resolved;
+}
+
+START_TEST(variants_run_and_are_listed)
+{
+    /* sluice check lists the variants with their descriptions */
+    char *text = scene_text(0, NULL, variants_block);
+    char *dir = test_scratch("variants");
+    char *scene = test_write_file(dir, "scene.yaml", text);
+    char *args = NULL, *output = NULL;
+    ck_assert_int_ge(asprintf(&args, "check %s", scene), 0);
+    ck_assert_int_eq(test_sluice(args, &output), 0);
+    fprintf(stderr, "%s", output);
+    ck_assert_msg(strstr(output, "valid 2D scene, 296 particles (100 fluid, 196 wall)") &&
+                      strstr(output, "variants (sluice check|run SCENE --variant NAME):\n"
+                                     "  inviscid  without artificial viscosity\n"
+                                     "  stiffer\n"),
+                  "%s", output);
+    free(args);
+    free(output);
+    /* checking a variant: the fluid box 0.5 m x 0.4 m at dx = 0.05 m holds 80 particles */
+    ck_assert_int_ge(asprintf(&args, "check %s --variant stiffer", scene), 0);
+    ck_assert_int_eq(test_sluice(args, &output), 0);
+    ck_assert_msg(strstr(output, "valid 2D scene (variant 'stiffer'), 276 particles (80 fluid"),
+                  "%s", output);
+    ck_assert_msg(!strstr(output, "variants ("), "%s", output);
+    free(args);
+    free(output);
+    unlink(scene);
+    rmdir(dir);
+    free(scene);
+    free(dir);
+    free(text);
+
+    /* the resolved scene shows the variant: the plugin removed, the record */
+    char *resolved = run_variant("--variant inviscid --quiet");
+    ck_assert_msg(!strstr(resolved, "artificial_viscosity") && strstr(resolved, "tait:") &&
+                      strstr(resolved, "\nvariant: inviscid\n") && !strstr(resolved, "variants"),
+                  "%s", resolved);
+    free(resolved);
+    /* --set after the variant: it wins over the variant's setting */
+    resolved = run_variant("--variant=stiffer --set plugins.tait.speed_of_sound=30 --quiet");
+    ck_assert_msg(strstr(resolved, "speed_of_sound: 30\n") &&
+                      strstr(resolved, "max: [0.5, 0.4]\n") &&
+                      strstr(resolved, "\nvariant: stiffer\n"),
+                  "%s", resolved);
+    free(resolved);
+    /* no --variant: the base scene, without `variants` or a record */
+    resolved = run_variant("--quiet");
+    ck_assert_msg(strstr(resolved, "artificial_viscosity") &&
+                      strstr(resolved, "speed_of_sound: 20\n") && !strstr(resolved, "variant"),
+                  "%s", resolved);
+    free(resolved);
+}
+END_TEST
+
+START_TEST(variant_errors)
+{
+    char *text = scene_text(0, NULL, variants_block);
+    outcome o = run_case(text, "--variant invscid");
+    expect_error(&o, 25, 1, "unknown variant 'invscid'; did you mean 'inviscid'? (the scene "
+                            "defines: inviscid, stiffer)");
+    done(&o);
+    o = run_case(text, "--variant inviscid --variant stiffer");
+    ck_assert_int_eq(o.status, 2);
+    ck_assert_msg(strstr(o.output, "--variant is given twice"), "%s", o.output);
+    done(&o);
+    free(text);
+
+    text = scene_text(0, NULL, NULL);
+    o = run_case(text, "--variant inviscid");
+    expect_error(&o, 1, 1, "--variant 'inviscid': the scene defines no variants");
+    done(&o);
+    free(text);
+
+    text = scene_text(0, NULL,
+                      "variants:\n"                                       /* 25 */
+                      "  no_gravity:\n"                                   /* 26 */
+                      "    remove:\n"                                     /* 27 */
+                      "      - plugins.gravity\n"                         /* 28 */
+                      "      - plugins.gravty\n");                        /* 29 */
+    o = run_case(text, "--variant no_gravity");
+    expect_error(&o, 29, 9, "variant 'no_gravity': cannot remove 'plugins.gravty': plugins has "
+                            "no key 'gravty'; did you mean 'gravity'?");
+    done(&o);
+    free(text);
+
+    /* a malformed variant stops the base scene too */
+    text = scene_text(0, NULL,
+                      "variants:\n"                                       /* 25 */
+                      "  no_gravity: {remvoe: [plugins.gravity]}\n");     /* 26 */
+    o = run_case(text, NULL);
+    expect_error(&o, 26, 16, "unknown key 'remvoe' in variants.no_gravity; did you mean "
+                             "'remove'?");
+    done(&o);
+    free(text);
+}
+END_TEST
+
 /* ------------------------------------------------ invalid combinations -- */
 /* Plugins that load one by one but cannot work together: refused at load
  * with one message at the plugin that makes the combination invalid. */
@@ -478,6 +601,8 @@ int main(void)
     tcase_add_test(tc, unreadable_scene_files);
     tcase_add_test(tc, bad_command_line_override);
     tcase_add_test(tc, geometry_errors);
+    tcase_add_test(tc, variants_run_and_are_listed);
+    tcase_add_test(tc, variant_errors);
     suite_add_tcase(s, tc);
     TCase *combinations = tcase_create("invalid combinations");
     tcase_set_timeout(combinations, 300);

@@ -7,6 +7,8 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "scene.h"
+#include "test_util.h"
 #include "yaml_tree.h"
 
 /* ------------------------------------------------------------- helpers -- */
@@ -659,7 +661,8 @@ START_TEST(override_errors)
                           "of range, geometry.fluid has 1 item");
     expect_override_error("geometry.fluid.first=1",
                           "--set #2:1:16: error: cannot set 'geometry.fluid.first': geometry.fluid "
-                          "is a list, so 'first' must be a numeric index (it has 1 item)");
+                          "is a list, so 'first' must be a numeric index or the name of an item "
+                          "(it has 1 item, none named)");
     /* value syntax errors: column inside the whole argument */
     expect_override_error("time.end=[1, 2", "--set #2:1:15: error: YAML syntax error: did not find "
                                             "expected ',' or ']' (while parsing a flow sequence "
@@ -671,6 +674,506 @@ START_TEST(override_errors)
                           "--set #2:1:10: error: the value for time.end must be a scalar or a flow "
                           "collection such as [1, 2] or {a: 1}; quote text that contains ': ' or "
                           "starts with '- '");
+}
+END_TEST
+
+/* A tree with named and unnamed list items, for paths by name and index. */
+static const char *named_text = "geometry:\n"                                       /* 1 */
+                                "  fluid:\n"                                        /* 2 */
+                                "    - {shape: box, name: water}\n"                 /* 3 */
+                                "    - {shape: box, name: air}\n"                   /* 4 */
+                                "    - {shape: polygon}\n"                          /* 5 */
+                                "  walls:\n"                                        /* 6 */
+                                "    - {shape: tank, name: left}\n"                 /* 7 */
+                                "    - {shape: box, name: left}\n"                  /* 8 */
+                                "plugins:\n"                                        /* 9 */
+                                "  tait: {speed_of_sound: 20}\n"                    /* 10 */
+                                "  two_phase: {air_density: 1.2}\n"                 /* 11 */
+                                "  empty:\n"                                        /* 12 */
+                                "edits:\n"                                          /* 13 */
+                                "  remove: [plugins.two_phase, geometry.fluid.air,\n" /* 14 */
+                                "           geometry.fluid.2, geometry.fluid.air.shape,\n" /* 15 */
+                                "           plugins.two_phase]\n"                   /* 16 */
+                                "  set:\n"                                          /* 17 */
+                                "    plugins.tait.speed_of_sound: 28\n"             /* 18 */
+                                "    plugins.empty.a.b: [1, 2]\n"                   /* 19 */
+                                "    geometry.fluid.water: {shape: box, name: w2}\n" /* 20 */
+                                "    geometry.walls.1.min: [0, 0]\n";               /* 21 */
+
+START_TEST(path_edits_by_name_and_index)
+{
+    sluice_node *root = parse_ok(named_text);
+    sluice_node *edits = sluice_node_get(root, "edits");
+    sluice_diag *diag = sluice_diag_create();
+    /* every remove path addresses the tree as it was: geometry.fluid.2 is the
+     * polygon even though 'air' (item 1) goes too; a path inside a removed
+     * node and a repeated path are harmless */
+    ck_assert_int_eq(sluice_yaml_remove(root, sluice_node_get(edits, "remove"), "edits", diag), 0);
+    const sluice_node *set = sluice_node_get(edits, "set");
+    for (size_t i = 0; i < set->count; i++)
+        ck_assert_int_eq(sluice_yaml_set(root, set->keys[i]->value,
+                                         sluice_node_clone(set->items[i]), set->keys[i], "edits",
+                                         diag),
+                         0);
+    ck_assert_uint_eq(sluice_diag_count(diag), 0);
+    char *text = sluice_yaml_emit(root);
+    ck_assert_str_eq(text, "geometry:\n"
+                           "  fluid:\n"
+                           "    - shape: box\n"
+                           "      name: w2\n"
+                           "  walls:\n"
+                           "    - shape: tank\n"
+                           "      name: left\n"
+                           "    - shape: box\n"
+                           "      name: left\n"
+                           "      min: [0, 0]\n"
+                           "plugins:\n"
+                           "  tait:\n"
+                           "    speed_of_sound: 28\n"
+                           "  empty:\n"
+                           "    a:\n"
+                           "      b: [1, 2]\n"
+                           "edits:\n"
+                           "  remove: [plugins.two_phase, geometry.fluid.air, geometry.fluid.2, "
+                           "geometry.fluid.air.shape, plugins.two_phase]\n"
+                           "  set:\n"
+                           "    plugins.tait.speed_of_sound: 28\n"
+                           "    plugins.empty.a.b: [1, 2]\n"
+                           "    geometry.fluid.water:\n"
+                           "      shape: box\n"
+                           "      name: w2\n"
+                           "    geometry.walls.1.min: [0, 0]\n");
+    free(text);
+    /* a value keeps its own position; keys made on the way are at the entry */
+    sluice_node *plugins = sluice_node_get(root, "plugins");
+    expect_position(sluice_node_get(sluice_node_get(plugins, "tait"), "speed_of_sound"), 18, 34);
+    sluice_node *empty = sluice_node_get(plugins, "empty");
+    expect_position(empty, 12, 9); /* `empty:` became a mapping where it was */
+    expect_position(sluice_node_get_key(empty, "a"), 19, 5);
+    expect_position(sluice_node_get(empty, "a"), 19, 5);
+    expect_position(sluice_node_get_key(sluice_node_get(empty, "a"), "b"), 19, 5);
+    expect_position(sluice_node_get(sluice_node_get(empty, "a"), "b"), 19, 24);
+    sluice_diag_destroy(diag);
+    sluice_node_free(root);
+}
+END_TEST
+
+/* Removes the paths of a one-line YAML list (parsed as file "v.yaml") from
+ * named_text; expects exactly the messages given (NULL-terminated) and the
+ * tree unchanged. */
+static void expect_remove_errors(const char *list, const char *const *expected)
+{
+    sluice_node *root = parse_ok(named_text);
+    char *before = sluice_yaml_emit(root);
+    sluice_diag *diag = sluice_diag_create();
+    sluice_node *paths = sluice_yaml_parse_string(list, strlen(list), "v.yaml", diag);
+    ck_assert_ptr_nonnull(paths);
+    size_t count = 0;
+    while (expected[count])
+        count++;
+    ck_assert_int_eq(sluice_yaml_remove(root, paths, "variant 'v'", diag), (int)count);
+    ck_assert_uint_eq(sluice_diag_count(diag), count);
+    for (size_t i = 0; i < count; i++)
+        ck_assert_str_eq(sluice_diag_message(diag, i), expected[i]);
+    char *after = sluice_yaml_emit(root);
+    ck_assert_str_eq(after, before); /* nothing removed when one path is wrong */
+    free(before);
+    free(after);
+    sluice_node_free(paths);
+    sluice_diag_destroy(diag);
+    sluice_node_free(root);
+}
+
+START_TEST(path_edit_errors)
+{
+    static const char *const missing[] = {
+        "v.yaml:1:21: error: variant 'v': cannot remove 'plugins.tiat': plugins has no key "
+        "'tiat'; did you mean 'tait'?",
+        "v.yaml:1:35: error: variant 'v': cannot remove 'physics': the top level has no key "
+        "'physics'",
+        NULL};
+    expect_remove_errors("[plugins.two_phase, plugins.tiat, physics]", missing);
+    static const char *const lists[] = {
+        "v.yaml:1:2: error: variant 'v': cannot remove 'geometry.fluid.3': index 3 is out of "
+        "range, geometry.fluid has 3 items",
+        "v.yaml:1:20: error: variant 'v': cannot remove 'geometry.fluid.oil': geometry.fluid has "
+        "no item named 'oil' (names: 'water', 'air'; or an index below 3)",
+        "v.yaml:1:40: error: variant 'v': cannot remove 'geometry.walls.left': items 0 and 1 of "
+        "geometry.walls are both named 'left'; address one by its index",
+        NULL};
+    expect_remove_errors("[geometry.fluid.3, geometry.fluid.oil, geometry.walls.left]", lists);
+    static const char *const scalars[] = {
+        "v.yaml:1:2: error: variant 'v': cannot remove 'plugins.tait.speed_of_sound.x': "
+        "plugins.tait.speed_of_sound is a scalar, not a mapping or a list",
+        "v.yaml:1:33: error: variant 'v': cannot remove 'plugins.empty.x': plugins.empty is "
+        "empty, not a mapping or a list",
+        "v.yaml:1:50: error: variant 'v': cannot remove 'plugins..tait': the path has an empty "
+        "key",
+        "v.yaml:1:65: error: variant 'v': each entry of 'remove' must be a dotted path such as "
+        "plugins.two_phase",
+        NULL};
+    expect_remove_errors(
+        "[plugins.tait.speed_of_sound.x, plugins.empty.x, plugins..tait, {a: 1}]", scalars);
+
+    /* settings: a list item must exist; nothing is changed by a failure */
+    sluice_node *root = parse_ok(named_text);
+    char *before = sluice_yaml_emit(root);
+    sluice_diag *diag = sluice_diag_create();
+    sluice_node *at = sluice_node_new_scalar("x", 1, "v.yaml", 7, 9);
+    static const char *const paths[] = {"geometry.fluid.oil.shape", "geometry.walls.5",
+                                        "plugins.tait.speed_of_sound.x", "geometry.fluid.air."};
+    static const char *const messages[] = {
+        "v.yaml:7:9: error: variant 'v': cannot set 'geometry.fluid.oil.shape': geometry.fluid "
+        "has no item named 'oil' (names: 'water', 'air'; or an index below 3)",
+        "v.yaml:7:9: error: variant 'v': cannot set 'geometry.walls.5': index 5 is out of range, "
+        "geometry.walls has 2 items",
+        "v.yaml:7:9: error: variant 'v': cannot set 'plugins.tait.speed_of_sound.x': "
+        "plugins.tait.speed_of_sound is a scalar, not a mapping or a list",
+        "v.yaml:7:9: error: variant 'v': cannot set 'geometry.fluid.air.': the path has an empty "
+        "key"};
+    for (size_t i = 0; i < 4; i++) {
+        sluice_node *value = sluice_node_new_scalar("1", 1, "v.yaml", 7, 12);
+        ck_assert_int_eq(sluice_yaml_set(root, paths[i], value, at, "variant 'v'", diag), -1);
+        ck_assert_uint_eq(sluice_diag_count(diag), i + 1);
+        ck_assert_str_eq(sluice_diag_message(diag, i), messages[i]);
+    }
+    char *after = sluice_yaml_emit(root);
+    ck_assert_str_eq(after, before);
+    free(before);
+    free(after);
+    sluice_node_free(at);
+    sluice_diag_destroy(diag);
+    sluice_node_free(root);
+}
+END_TEST
+
+START_TEST(override_addresses_items_by_name)
+{
+    sluice_node *root = parse_ok(named_text);
+    sluice_diag *diag = sluice_diag_create();
+    ck_assert_int_eq(sluice_yaml_override(root, "geometry.fluid.air.shape=polygon", "--set #1",
+                                          diag),
+                     0);
+    ck_assert_uint_eq(sluice_diag_count(diag), 0);
+    sluice_node *fluid = sluice_node_get(sluice_node_get(root, "geometry"), "fluid");
+    sluice_node *shape = sluice_node_get(fluid->items[1], "shape");
+    ck_assert_str_eq(shape->value, "polygon");
+    ck_assert_str_eq(shape->file, "--set #1");
+    expect_position(shape, 1, 26);
+    ck_assert_str_eq(sluice_node_get(fluid->items[0], "shape")->value, "box");
+    /* the same names, the same messages as a variant's paths */
+    ck_assert_int_eq(sluice_yaml_override(root, "geometry.walls.left.min=0", "--set #2", diag),
+                     -1);
+    ck_assert_int_eq(sluice_yaml_override(root, "geometry.fluid.oil.min=0", "--set #3", diag), -1);
+    ck_assert_uint_eq(sluice_diag_count(diag), 2);
+    ck_assert_str_eq(sluice_diag_message(diag, 0),
+                     "--set #2:1:16: error: cannot set 'geometry.walls.left.min': items 0 and 1 "
+                     "of geometry.walls are both named 'left'; address one by its index");
+    ck_assert_str_eq(sluice_diag_message(diag, 1),
+                     "--set #3:1:16: error: cannot set 'geometry.fluid.oil.min': geometry.fluid "
+                     "has no item named 'oil' (names: 'water', 'air'; or an index below 3)");
+    sluice_diag_destroy(diag);
+    sluice_node_free(root);
+}
+END_TEST
+
+/* ------------------------------------------------------------- variants -- */
+
+/* A scene with variants (only the core's sections are validated here: the
+ * plugins are not loaded). Line numbers matter. */
+#define VARIANT_HEAD                                                                   \
+    "dimensions: 2\n"                                                    /* 1 */      \
+    "particles: {spacing: 0.05}\n"                                       /* 2 */      \
+    "time: {end: 1}\n"                                                   /* 3 */      \
+    "domain: {min: [-0.2, -0.2], max: [1.2, 1.2]}\n"                     /* 4 */      \
+    "geometry:\n"                                                        /* 5 */      \
+    "  fluid:\n"                                                         /* 6 */      \
+    "    - {shape: box, min: [0, 0], max: [0.5, 0.5], name: water}\n"    /* 7 */      \
+    "    - {shape: box, min: [0.5, 0.6], max: [0.9, 0.9], name: air}\n"  /* 8 */      \
+    "  walls:\n"                                                         /* 9 */      \
+    "    - {shape: tank, min: [0, 0], max: [1, 1]}\n"                    /* 10 */     \
+    "    - {shape: box, min: [0.6, 0], max: [0.7, 0.2], name: sill}\n"   /* 11 */     \
+    "plugins:\n"                                                         /* 12 */     \
+    "  tait: {speed_of_sound: 20}\n"                                     /* 13 */     \
+    "  two_phase: {air_density: 1.2}\n"                                  /* 14 */     \
+    "  gravity: {}\n"                                                    /* 15 */
+#define VARIANT_TAIL "initial: {density: rest}\n"
+
+static const char *variant_scene = VARIANT_HEAD
+    "variants:\n"                                                        /* 16 */
+    "  single_phase:\n"                                                  /* 17 */
+    "    description: water only, no air\n"                              /* 18 */
+    "    remove: [plugins.two_phase, geometry.fluid.air]\n"              /* 19 */
+    "  no_sill:\n"                                                       /* 20 */
+    "    remove: [geometry.walls.1]\n"                                   /* 21 */
+    "    set:\n"                                                         /* 22 */
+    "      plugins.tait: {speed_of_sound: 28}\n"                         /* 23 */
+    "      plugins.xsph.epsilon: 0.5\n"                                  /* 24 */
+    "      geometry.fluid.water.max: [0.5, 0.4]\n"                       /* 25 */
+    "      geometry.walls.0.name: tank\n"                                /* 26 */
+    "  unchanged:\n"                                                     /* 27 */
+    VARIANT_TAIL;                                                        /* 28 */
+
+/* Writes text as scene.yaml in a scratch directory; returns its path. */
+static char *write_scene(const char *tag, const char *text)
+{
+    char *dir = test_scratch(tag);
+    ck_assert_ptr_nonnull(dir);
+    char *path = test_write_file(dir, "scene.yaml", text);
+    ck_assert_ptr_nonnull(path);
+    free(dir);
+    return path;
+}
+
+/* Deletes a scene written by write_scene, and its directory. */
+static void remove_scene(char *path)
+{
+    unlink(path);
+    char *slash = strrchr(path, '/');
+    if (slash) {
+        *slash = '\0';
+        rmdir(path);
+    }
+    free(path);
+}
+
+/* Loads text with a variant and overrides; the load must succeed. */
+static void load_scene(sluice_scene *scene, const char *text, const char *variant,
+                       const char *const *sets, size_t set_count)
+{
+    char *path = write_scene("variant", text);
+    sluice_diag *diag = sluice_diag_create();
+    int errors = sluice_scene_load_variant(scene, path, variant, sets, set_count, diag);
+    for (size_t i = 0; i < sluice_diag_count(diag); i++)
+        fprintf(stderr, "%s\n", sluice_diag_message(diag, i));
+    ck_assert_int_eq(errors, 0);
+    ck_assert_uint_eq(sluice_diag_error_count(diag), 0);
+    sluice_diag_destroy(diag);
+    remove_scene(path);
+}
+
+/* The resolved tree of text loaded with a variant equals that of `expected`
+ * (the same scene edited by hand) loaded as it is. */
+static void expect_variant_tree(const char *variant, const char *expected)
+{
+    sluice_scene a, b;
+    load_scene(&a, variant_scene, variant, NULL, 0);
+    load_scene(&b, expected, NULL, NULL, 0);
+    char *ta = sluice_yaml_emit(a.root), *tb = sluice_yaml_emit(b.root);
+    ck_assert_msg(strcmp(ta, tb) == 0, "variant %s gives:\n%s\nexpected:\n%s",
+                  variant ? variant : "(none)", ta, tb);
+    free(ta);
+    free(tb);
+    sluice_scene_free(&a);
+    sluice_scene_free(&b);
+}
+
+START_TEST(variants_change_exactly_the_named_keys)
+{
+    /* without --variant: the base scene, `variants` taken out */
+    expect_variant_tree(NULL, VARIANT_HEAD VARIANT_TAIL);
+    expect_variant_tree("single_phase",
+                        "dimensions: 2\n"
+                        "particles: {spacing: 0.05}\n"
+                        "time: {end: 1}\n"
+                        "domain: {min: [-0.2, -0.2], max: [1.2, 1.2]}\n"
+                        "geometry:\n"
+                        "  fluid:\n"
+                        "    - {shape: box, min: [0, 0], max: [0.5, 0.5], name: water}\n"
+                        "  walls:\n"
+                        "    - {shape: tank, min: [0, 0], max: [1, 1]}\n"
+                        "    - {shape: box, min: [0.6, 0], max: [0.7, 0.2], name: sill}\n"
+                        "plugins:\n"
+                        "  tait: {speed_of_sound: 20}\n"
+                        "  gravity: {}\n"
+                        "variant: single_phase\n" VARIANT_TAIL);
+    expect_variant_tree("no_sill",
+                        "dimensions: 2\n"
+                        "particles: {spacing: 0.05}\n"
+                        "time: {end: 1}\n"
+                        "domain: {min: [-0.2, -0.2], max: [1.2, 1.2]}\n"
+                        "geometry:\n"
+                        "  fluid:\n"
+                        "    - {shape: box, min: [0, 0], max: [0.5, 0.4], name: water}\n"
+                        "    - {shape: box, min: [0.5, 0.6], max: [0.9, 0.9], name: air}\n"
+                        "  walls:\n"
+                        "    - {shape: tank, min: [0, 0], max: [1, 1], name: tank}\n"
+                        "plugins:\n"
+                        "  tait: {speed_of_sound: 28}\n"
+                        "  two_phase: {air_density: 1.2}\n"
+                        "  gravity: {}\n"
+                        "  xsph: {epsilon: 0.5}\n"
+                        "variant: no_sill\n" VARIANT_TAIL);
+    expect_variant_tree("unchanged", VARIANT_HEAD "variant: unchanged\n" VARIANT_TAIL);
+
+    /* what the loaded scene records */
+    sluice_scene scene;
+    load_scene(&scene, variant_scene, "no_sill", NULL, 0);
+    ck_assert_str_eq(scene.variant, "no_sill");
+    ck_assert_uint_eq(scene.variant_count, 3);
+    ck_assert_str_eq(scene.variants[0].name, "single_phase");
+    ck_assert_str_eq(scene.variants[0].description, "water only, no air");
+    ck_assert_str_eq(scene.variants[1].name, "no_sill");
+    ck_assert_str_eq(scene.variants[1].description, "");
+    ck_assert_str_eq(scene.variants[2].name, "unchanged");
+    ck_assert_uint_eq(scene.fluid_count, 2);
+    ck_assert_uint_eq(scene.wall_count, 1);
+    ck_assert_str_eq(scene.fluids[0].name, "water");
+    ck_assert_str_eq(scene.fluids[1].name, "air");
+    ck_assert_str_eq(scene.walls[0].name, "tank");
+    ck_assert_double_eq(scene.fluids[0].region.max[1], (sluice_real)0.4);
+    /* values set by the variant keep their place in the file for messages */
+    sluice_node *plugins = sluice_node_get(scene.root, "plugins");
+    expect_position(sluice_node_get_key(plugins, "xsph"), 24, 7);
+    expect_position(sluice_node_get(sluice_node_get(plugins, "xsph"), "epsilon"), 24, 29);
+    expect_position(sluice_node_get(plugins, "tait"), 23, 21);
+    expect_position(sluice_node_get_key(scene.root, "variant"), 16, 1);
+    sluice_scene_free(&scene);
+
+    load_scene(&scene, variant_scene, NULL, NULL, 0);
+    ck_assert_ptr_null(scene.variant);
+    ck_assert_uint_eq(scene.variant_count, 3);
+    ck_assert_uint_eq(scene.fluid_count, 2);
+    ck_assert_uint_eq(scene.wall_count, 2);
+    ck_assert_ptr_null(sluice_node_get(scene.root, "variant"));
+    ck_assert_ptr_null(sluice_node_get(scene.root, "variants"));
+    sluice_scene_free(&scene);
+}
+END_TEST
+
+START_TEST(variant_then_overrides)
+{
+    /* --set applies after the variant: it can change what the variant set or
+     * created, and the variant sees the file as written */
+    static const char *const sets[] = {"geometry.fluid.water.max=[0.5, 0.45]",
+                                       "plugins.xsph.epsilon=0.25",
+                                       "geometry.walls.tank.scheme=dbc"};
+    sluice_scene scene;
+    load_scene(&scene, variant_scene, "no_sill", sets, 3);
+    ck_assert_double_eq(scene.fluids[0].region.max[1], (sluice_real)0.45);
+    const sluice_node *epsilon = sluice_node_get(
+        sluice_node_get(sluice_node_get(scene.root, "plugins"), "xsph"), "epsilon");
+    ck_assert_str_eq(epsilon->value, "0.25");
+    ck_assert_str_eq(epsilon->file, "--set #2");
+    ck_assert_str_eq(scene.walls[0].scheme, "dbc"); /* the name the variant gave */
+    sluice_scene_free(&scene);
+}
+END_TEST
+
+/* Loads text with a variant and overrides; expects exactly one error,
+ * "<path or origin>:line:column: error: message". `origin` NULL: the scene. */
+static void expect_variant_error(const char *text, const char *variant, const char *set,
+                                 const char *origin, int line, int column, const char *message)
+{
+    char *path = write_scene("variant-error", text);
+    sluice_diag *diag = sluice_diag_create();
+    sluice_scene scene;
+    int errors = sluice_scene_load_variant(&scene, path, variant, &set, set ? 1 : 0, diag);
+    for (size_t i = 0; i < sluice_diag_count(diag); i++)
+        fprintf(stderr, "%s\n", sluice_diag_message(diag, i));
+    ck_assert_int_eq(errors, 1);
+    ck_assert_uint_eq(sluice_diag_count(diag), 1);
+    char *expected = NULL;
+    ck_assert_int_ge(asprintf(&expected, "%s:%d:%d: error: %s", origin ? origin : path, line,
+                              column, message),
+                     0);
+    ck_assert_str_eq(sluice_diag_message(diag, 0), expected);
+    free(expected);
+    sluice_scene_free(&scene);
+    sluice_diag_destroy(diag);
+    remove_scene(path);
+}
+
+START_TEST(variant_errors)
+{
+    expect_variant_error(variant_scene, "singel_phase", NULL, NULL, 16, 1,
+                         "unknown variant 'singel_phase'; did you mean 'single_phase'? (the "
+                         "scene defines: single_phase, no_sill, unchanged)");
+    expect_variant_error(variant_scene, "coarse", NULL, NULL, 16, 1,
+                         "unknown variant 'coarse' (the scene defines: single_phase, no_sill, "
+                         "unchanged)");
+    expect_variant_error(VARIANT_HEAD VARIANT_TAIL, "coarse", NULL, NULL, 1, 1,
+                         "--variant 'coarse': the scene defines no variants (a top-level "
+                         "'variants' mapping)");
+    expect_variant_error(VARIANT_HEAD "variants: {}\n", "coarse", NULL, NULL, 16, 1,
+                         "--variant 'coarse': the scene defines no variants (a top-level "
+                         "'variants' mapping)");
+    /* a path to remove that does not exist: at its entry */
+    expect_variant_error(VARIANT_HEAD "variants:\n"
+                                      "  v:\n"
+                                      "    remove:\n"
+                                      "      - plugins.two_phase\n"
+                                      "      - geometry.fluid.oil\n",
+                         "v", NULL, NULL, 20, 9,
+                         "variant 'v': cannot remove 'geometry.fluid.oil': geometry.fluid has no "
+                         "item named 'oil' (names: 'water', 'air'; or an index below 2)");
+    expect_variant_error(VARIANT_HEAD "variants:\n"
+                                      "  v: {remove: [plugins.tiat]}\n",
+                         "v", NULL, NULL, 17, 16,
+                         "variant 'v': cannot remove 'plugins.tiat': plugins has no key 'tiat'; "
+                         "did you mean 'tait'?");
+    expect_variant_error(VARIANT_HEAD "variants:\n"
+                                      "  v:\n"
+                                      "    set: {geometry.walls.2.name: x}\n",
+                         "v", NULL, NULL, 18, 11,
+                         "variant 'v': cannot set 'geometry.walls.2.name': index 2 is out of "
+                         "range, geometry.walls has 2 items");
+
+    /* malformed entries: refused on every load, with or without --variant */
+    const char *variants[] = {NULL, "v"};
+    for (int k = 0; k < 2; k++) {
+        const char *v = variants[k];
+        expect_variant_error(VARIANT_HEAD "variants:\n"
+                                          "  v:\n"
+                                          "    remvoe: [plugins.two_phase]\n",
+                             v, NULL, NULL, 18, 5,
+                             "unknown key 'remvoe' in variants.v; did you mean 'remove'?");
+        expect_variant_error(VARIANT_HEAD "variants:\n"
+                                          "  v: {drop: [plugins.two_phase]}\n",
+                             v, NULL, NULL, 17, 7,
+                             "unknown key 'drop' in variants.v (valid keys: description, remove, "
+                             "set)");
+        expect_variant_error(VARIANT_HEAD "variants:\n"
+                                          "  v: {description: [a, b]}\n",
+                             v, NULL, NULL, 17, 20, "variants.v.description must be a string");
+        expect_variant_error(VARIANT_HEAD "variants:\n"
+                                          "  v: {remove: plugins.two_phase}\n",
+                             v, NULL, NULL, 17, 15,
+                             "variants.v.remove must be a list of dotted paths, e.g. "
+                             "[plugins.two_phase, geometry.fluid.air]");
+        expect_variant_error(VARIANT_HEAD "variants:\n"
+                                          "  v: {remove: [{plugins: two_phase}]}\n",
+                             v, NULL, NULL, 17, 16,
+                             "each entry of variants.v.remove must be a dotted path such as "
+                             "plugins.two_phase");
+        expect_variant_error(VARIANT_HEAD "variants:\n"
+                                          "  v: {set: [plugins.tait.speed_of_sound, 28]}\n",
+                             v, NULL, NULL, 17, 12,
+                             "variants.v.set must be a mapping from dotted paths to values, e.g. "
+                             "{plugins.tait.speed_of_sound: 28}");
+        expect_variant_error(VARIANT_HEAD "variants:\n"
+                                          "  v: [plugins.two_phase]\n",
+                             v, NULL, NULL, 17, 6,
+                             "variants.v must be a mapping with the optional keys description, "
+                             "remove and set");
+        expect_variant_error(VARIANT_HEAD "variants: [v]\n", v, NULL, NULL, 16, 11,
+                             "'variants' must be a mapping from variant names to their changes "
+                             "(description, remove, set)");
+        /* a record of a resolved scene beside variants */
+        expect_variant_error(VARIANT_HEAD "variants: {v: {}}\nvariant: v\n", v, NULL, NULL, 17, 1,
+                             "'variant' records the variant a resolved scene was made from and "
+                             "cannot stand beside 'variants': choose a variant with --variant "
+                             "NAME");
+    }
+    /* variants cannot come from an override */
+    expect_variant_error(variant_scene, NULL, "variants.v.remove=[plugins.tait]", "--set #1", 1,
+                         1,
+                         "'variants' can only be written in the scene file: it is taken out "
+                         "before a variant and the --set overrides are applied");
+    /* a resolved scene's record is a string */
+    expect_variant_error(VARIANT_HEAD "variant: [a]\n", NULL, NULL, NULL, 16, 10,
+                         "variant must be a string (it records the variant a resolved scene was "
+                         "made from)");
 }
 END_TEST
 
@@ -741,7 +1244,15 @@ int main(void)
     TCase *override = tcase_create("override");
     tcase_add_test(override, override_creates_and_replaces);
     tcase_add_test(override, override_errors);
+    tcase_add_test(override, path_edits_by_name_and_index);
+    tcase_add_test(override, path_edit_errors);
+    tcase_add_test(override, override_addresses_items_by_name);
     suite_add_tcase(s, override);
+    TCase *variants = tcase_create("variants");
+    tcase_add_test(variants, variants_change_exactly_the_named_keys);
+    tcase_add_test(variants, variant_then_overrides);
+    tcase_add_test(variants, variant_errors);
+    suite_add_tcase(s, variants);
     TCase *suggest = tcase_create("suggest");
     tcase_add_test(suggest, edit_distance);
     tcase_add_test(suggest, closest_candidate);

@@ -13,15 +13,18 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "usage:\n"
-            "  sluice run SCENE.yaml --out DIR [--set key=value ...] [--threads N]\n"
-            "             [--restart CHECKPOINT.h5] [--progress | --no-progress] [--quiet]\n"
-            "  sluice check SCENE.yaml [--set key=value ...]\n"
+            "  sluice run SCENE.yaml --out DIR [--variant NAME] [--set key=value ...]\n"
+            "             [--threads N] [--restart CHECKPOINT.h5] [--progress | --no-progress]\n"
+            "             [--quiet]\n"
+            "  sluice check SCENE.yaml [--variant NAME] [--set key=value ...]\n"
             "  sluice inspect [PLUGIN] [--markdown]\n"
             "  sluice version\n"
             "\n"
             "--set overrides any scene key by its dotted path, e.g. --set time.end=0.2 or\n"
             "--set plugins.tait.speed_of_sound=60. Plugins are searched in the scene's\n"
             "plugin_path, SLUICE_PLUGIN_PATH, then next to the program.\n"
+            "--variant applies one of the scene's named variants (its top-level 'variants':\n"
+            "keys removed and set) before the --set overrides; 'sluice check SCENE' lists them.\n"
             "--restart continues the run of SCENE from a checkpoint (DIR/checkpoint_*.h5,\n"
             "written every checkpoint.interval s and when SIGINT or SIGTERM stops a run).\n"
             "Exit status: 0 success, 2 bad input, 3 the run went unstable, 4 other failure,\n"
@@ -29,7 +32,7 @@ static void usage(FILE *out)
 }
 
 typedef struct arguments {
-    const char *scene, *out, *plugin, *restart;
+    const char *scene, *out, *plugin, *restart, *variant;
     const char **sets;
     size_t set_count;
     int threads, progress, quiet, markdown;
@@ -53,6 +56,20 @@ static int parse(int argc, char **argv, int first, arguments *a, int allow_out)
             a->sets[a->set_count++] = argv[++i];
         } else if (strncmp(arg, "--set=", 6) == 0) {
             a->sets[a->set_count++] = arg + 6;
+        } else if (strcmp(arg, "--variant") == 0 || strncmp(arg, "--variant=", 10) == 0) {
+            const char *name = arg[9] == '=' ? arg + 10 : i + 1 < argc ? argv[++i] : NULL;
+            if (!name || !*name) {
+                fprintf(stderr, "sluice: error: --variant needs the name of one of the scene's "
+                                "variants\n");
+                return -1;
+            }
+            if (a->variant) {
+                fprintf(stderr, "sluice: error: --variant is given twice ('%s' and '%s'); a run "
+                                "applies at most one variant\n",
+                        a->variant, name);
+                return -1;
+            }
+            a->variant = name;
         } else if (allow_out && (strcmp(arg, "--out") == 0 || strcmp(arg, "-o") == 0)) {
             if (i + 1 >= argc) {
                 fprintf(stderr, "sluice: error: --out needs a directory\n");
@@ -108,7 +125,7 @@ static sluice_sim *load(const arguments *a, int check_only)
         return NULL;
     }
     sluice_load_options options = {a->sets, a->set_count, a->threads, check_only, 0};
-    sluice_sim *sim = sluice_sim_load(a->scene, &options, diag);
+    sluice_sim *sim = sluice_sim_load_variant(a->scene, a->variant, &options, diag);
     sluice_diag_print(diag, stderr);
     sluice_diag_destroy(diag);
     return sim;
@@ -157,9 +174,10 @@ static int command_run(int argc, char **argv)
                     (long long)sluice_sim_steps(sim), sluice_sim_time(sim), v->count, a.out);
     } else if (status == SLUICE_RUN_INTERRUPTED) {
         fprintf(stderr, "sluice: stopped by a signal after step %lld, t = %.9g s; continue with "
-                        "--restart %s/checkpoint_%09lld.h5\n",
+                        "--restart %s/checkpoint_%09lld.h5%s%s\n",
                 (long long)sluice_sim_steps(sim), sluice_sim_time(sim), a.out,
-                (long long)sluice_sim_steps(sim));
+                (long long)sluice_sim_steps(sim), a.variant ? " --variant " : "",
+                a.variant ? a.variant : "");
     } else {
         fprintf(stderr, "sluice: error: %s\n", sluice_sim_failure(sim));
         if (status == SLUICE_RUN_UNSTABLE)
@@ -192,9 +210,25 @@ static int command_check(int argc, char **argv)
     char open[64] = "";
     if (kinds[SLUICE_KIND_OPEN])
         snprintf(open, sizeof open, ", %u open-boundary", kinds[SLUICE_KIND_OPEN]);
-    printf("%s: valid %uD scene, %u particles (%u fluid, %u wall%s), end time %g s\n", a.scene,
-           v->dimensions, v->count, kinds[SLUICE_KIND_FLUID], kinds[SLUICE_KIND_WALL], open,
-           sluice_sim_end_time(sim));
+    char variant[256] = "";
+    if (sluice_sim_variant(sim))
+        snprintf(variant, sizeof variant, " (variant '%.200s')", sluice_sim_variant(sim));
+    printf("%s: valid %uD scene%s, %u particles (%u fluid, %u wall%s), end time %g s\n", a.scene,
+           v->dimensions, variant, v->count, kinds[SLUICE_KIND_FLUID], kinds[SLUICE_KIND_WALL],
+           open, sluice_sim_end_time(sim));
+    /* the base scene was checked: list its variants */
+    if (!sluice_sim_variant(sim) && sluice_sim_scene_variant(sim, 0, NULL)) {
+        const char *name, *description;
+        int width = 0;
+        for (size_t i = 0; (name = sluice_sim_scene_variant(sim, i, NULL)); i++)
+            width = (int)strlen(name) > width ? (int)strlen(name) : width;
+        printf("variants (sluice check|run SCENE --variant NAME):\n");
+        for (size_t i = 0; (name = sluice_sim_scene_variant(sim, i, &description)); i++)
+            if (*description)
+                printf("  %-*s  %s\n", width, name, description);
+            else
+                printf("  %s\n", name);
+    }
     sluice_sim_free(sim);
     return 0;
 }

@@ -137,6 +137,7 @@ typedef struct {
     sluice_real velocity[3];
     sluice_real surface;
     sluice_real lattice_origin[3];
+    const char *name;
 } fluid_config;
 
 #define FLUID_SHAPES "box|polygon|profile"
@@ -156,6 +157,12 @@ typedef struct {
             "this region's lattice: points at lattice_origin + (k + 1/2) dx (default: "         \
             "particles.lattice_origin); align a region with its own bed",                      \
             NULL, SLUICE_LENGTH_DIM                                                             \
+    },                                                                                          \
+    {                                                                                           \
+        "name", SLUICE_PARAM_STRING, OFF(fluid_config, name), NULL, 0, 0,                       \
+            SLUICE_PARAM_OPTIONAL, NULL,                                                        \
+            "label of the region (a path in --set or a variant may address it by name)", NULL,  \
+            0                                                                                   \
     }
 
 static const sluice_param_spec fluid_box_specs[] = {
@@ -349,7 +356,7 @@ static const sluice_param_spec piece_steps_specs[] = {
 static const char *const top_level_keys[] = {
     "title",    "description", "dimensions", "particles", "time",       "domain",
     "geometry", "initial",     "neighbour_search", "watchdog", "plugins", "plugin_path",
-    "checkpoint",
+    "checkpoint", "variants", "variant",
 };
 
 const char *sluice_node_file(const sluice_node *node, const sluice_scene *scene)
@@ -863,6 +870,7 @@ static int load_fluids(sluice_scene *scene, sluice_node *geometry, sluice_diag *
         memcpy(f->velocity, c.velocity, sizeof f->velocity);
         f->has_surface = sluice_node_get(item, "surface") != NULL;
         f->surface = c.surface;
+        f->name = c.name ? c.name : "";
         f->has_lattice_origin = sluice_node_get(item, "lattice_origin") != NULL;
         memcpy(f->lattice_origin,
                f->has_lattice_origin ? c.lattice_origin : scene->particles.lattice_origin,
@@ -1112,10 +1120,215 @@ static int load_plugin_path(sluice_scene *scene, sluice_diag *diag)
     return 0;
 }
 
+/* ------------------------------------------------------------ variants -- */
+
+static int empty_value(const sluice_node *node)
+{
+    return node->kind == SLUICE_NODE_SCALAR && node->plain && !*node->value;
+}
+
+/* Checks the form of every variant (the paths of the one applied are checked
+ * as it is applied) and records their names and descriptions. */
+static int check_variants(sluice_scene *scene, const sluice_node *variants, sluice_diag *diag)
+{
+    if (empty_value(variants))
+        return 0;
+    if (variants->kind != SLUICE_NODE_MAPPING) {
+        error_at(diag, scene, variants,
+                 "'variants' must be a mapping from variant names to their changes "
+                 "(description, remove, set)");
+        return 1;
+    }
+    scene->variants = sluice_arena_alloc(scene->arena, (variants->count ? variants->count : 1) *
+                                                           sizeof *scene->variants);
+    if (!scene->variants) {
+        error_at(diag, scene, variants, "out of memory");
+        return 1;
+    }
+    static const char *const keys[] = {"description", "remove", "set"};
+    int errors = 0;
+    for (size_t i = 0; i < variants->count; i++) {
+        const char *name = variants->keys[i]->value;
+        const sluice_node *variant = variants->items[i];
+        sluice_scene_variant *record = &scene->variants[scene->variant_count++];
+        record->name = sluice_arena_strdup(scene->arena, name);
+        record->description = "";
+        if (!record->name) {
+            error_at(diag, scene, variant, "out of memory");
+            return errors + 1;
+        }
+        if (!*name) {
+            error_at(diag, scene, variants->keys[i], "a variant needs a name");
+            errors++;
+            continue;
+        }
+        if (empty_value(variant))
+            continue;
+        if (variant->kind != SLUICE_NODE_MAPPING) {
+            error_at(diag, scene, variant,
+                     "variants.%s must be a mapping with the optional keys description, remove "
+                     "and set",
+                     name);
+            errors++;
+            continue;
+        }
+        for (size_t k = 0; k < variant->count; k++) {
+            const char *key = variant->keys[k]->value;
+            const sluice_node *value = variant->items[k];
+            if (strcmp(key, "description") == 0) {
+                if (value->kind != SLUICE_NODE_SCALAR) {
+                    error_at(diag, scene, value, "variants.%s.description must be a string",
+                             name);
+                    errors++;
+                } else if (!(record->description =
+                                 sluice_arena_strdup(scene->arena, value->value))) {
+                    error_at(diag, scene, value, "out of memory");
+                    return errors + 1;
+                }
+            } else if (strcmp(key, "remove") == 0) {
+                if (empty_value(value))
+                    continue;
+                if (value->kind != SLUICE_NODE_SEQUENCE) {
+                    error_at(diag, scene, value,
+                             "variants.%s.remove must be a list of dotted paths, e.g. "
+                             "[plugins.two_phase, geometry.fluid.air]",
+                             name);
+                    errors++;
+                    continue;
+                }
+                for (size_t j = 0; j < value->count; j++) {
+                    const sluice_node *path = value->items[j];
+                    if (path->kind != SLUICE_NODE_SCALAR || !*path->value) {
+                        error_at(diag, scene, path,
+                                 "each entry of variants.%s.remove must be a dotted path such "
+                                 "as plugins.two_phase",
+                                 name);
+                        errors++;
+                    }
+                }
+            } else if (strcmp(key, "set") == 0) {
+                if (!empty_value(value) && value->kind != SLUICE_NODE_MAPPING) {
+                    error_at(diag, scene, value,
+                             "variants.%s.set must be a mapping from dotted paths to values, "
+                             "e.g. {plugins.tait.speed_of_sound: 28}",
+                             name);
+                    errors++;
+                }
+            } else {
+                const char *close = sluice_closest(key, keys, SLUICE_COUNT(keys));
+                if (close)
+                    error_at(diag, scene, variant->keys[k],
+                             "unknown key '%s' in variants.%s; did you mean '%s'?", key, name,
+                             close);
+                else
+                    error_at(diag, scene, variant->keys[k],
+                             "unknown key '%s' in variants.%s (valid keys: description, remove, "
+                             "set)",
+                             key, name);
+                errors++;
+            }
+        }
+    }
+    return errors;
+}
+
+/* Takes `variants` out of the tree, checks it and applies the variant `name`
+ * (NULL: none): its removals, then its settings in order. The applied
+ * variant is recorded as `variant: NAME` where `variants` was. */
+static int apply_variant(sluice_scene *scene, const char *name, sluice_diag *diag)
+{
+    sluice_node *root = scene->root;
+    const sluice_node *record = sluice_node_get_key(root, "variant");
+    detached_key d = detach(root, "variants");
+    int errors = 0;
+    if (d.key && record) {
+        error_at(diag, scene, record,
+                 "'variant' records the variant a resolved scene was made from and cannot "
+                 "stand beside 'variants': choose a variant with --variant NAME");
+        errors++;
+    }
+    if (d.key)
+        errors += check_variants(scene, d.value, diag);
+    if (errors || !name)
+        goto done;
+    if (scene->variant_count == 0) {
+        error_at(diag, scene, d.key,
+                 "--variant '%s': the scene defines no variants (a top-level 'variants' "
+                 "mapping)",
+                 name);
+        errors++;
+        goto done;
+    }
+    size_t chosen = 0;
+    while (chosen < d.value->count && strcmp(d.value->keys[chosen]->value, name) != 0)
+        chosen++;
+    if (chosen == d.value->count) {
+        char defined[512] = "";
+        size_t used = 0;
+        for (size_t i = 0; i < scene->variant_count && used < sizeof defined; i++)
+            used += (size_t)snprintf(defined + used, sizeof defined - used, "%s%s",
+                                     i ? ", " : "", scene->variants[i].name);
+        const char **names =
+            sluice_arena_alloc(scene->arena, scene->variant_count * sizeof *names);
+        for (size_t i = 0; names && i < scene->variant_count; i++)
+            names[i] = scene->variants[i].name;
+        const char *close = names ? sluice_closest(name, names, scene->variant_count) : NULL;
+        if (close)
+            error_at(diag, scene, d.key,
+                     "unknown variant '%s'; did you mean '%s'? (the scene defines: %s)", name,
+                     close, defined);
+        else
+            error_at(diag, scene, d.key, "unknown variant '%s' (the scene defines: %s)", name,
+                     defined);
+        errors++;
+        goto done;
+    }
+    const sluice_node *variant = d.value->items[chosen];
+    if (variant->kind == SLUICE_NODE_MAPPING) {
+        char context[256];
+        snprintf(context, sizeof context, "variant '%.200s'", name);
+        errors += sluice_yaml_remove(root, sluice_node_get(variant, "remove"), context, diag);
+        /* then the settings, in order, on the scene without the removed keys; a setting
+         * that fails changes nothing, so the later ones are still checked */
+        const sluice_node *set = errors ? NULL : sluice_node_get(variant, "set");
+        for (size_t i = 0; set && set->kind == SLUICE_NODE_MAPPING && i < set->count; i++)
+            if (sluice_yaml_set(root, set->keys[i]->value, sluice_node_clone(set->items[i]),
+                                set->keys[i], context, diag) != 0)
+                errors++;
+    }
+    if (errors)
+        goto done;
+    const sluice_node *at = d.value->keys[chosen];
+    sluice_node *key = sluice_node_new_scalar("variant", 1, d.key->file, d.key->line,
+                                              d.key->column);
+    sluice_node *value = sluice_node_new_scalar(name, 1, at->file, at->line, at->column);
+    scene->variant = sluice_arena_strdup(scene->arena, name);
+    if (!key || !value || !scene->variant) {
+        sluice_node_free(key);
+        sluice_node_free(value);
+        error_at(diag, scene, d.key, "out of memory");
+        errors++;
+    } else if (reattach(root, (detached_key){d.index, key, value}) != 0) { /* frees both */
+        error_at(diag, scene, d.key, "out of memory");
+        errors++;
+    }
+done:
+    sluice_node_free(d.key);
+    sluice_node_free(d.value);
+    return errors;
+}
+
 /* ---------------------------------------------------------------- load -- */
 
 int sluice_scene_load(sluice_scene *scene, const char *path, const char *const *overrides,
                       size_t override_count, sluice_diag *diag)
+{
+    return sluice_scene_load_variant(scene, path, NULL, overrides, override_count, diag);
+}
+
+int sluice_scene_load_variant(sluice_scene *scene, const char *path, const char *variant,
+                              const char *const *overrides, size_t override_count,
+                              sluice_diag *diag)
 {
     memset(scene, 0, sizeof *scene);
     scene->arena = sluice_arena_create();
@@ -1142,7 +1355,10 @@ int sluice_scene_load(sluice_scene *scene, const char *path, const char *const *
         error_at(diag, scene, scene->root, "a scene must be a mapping of sections");
         return 1;
     }
-    int errors = 0;
+    /* the variant first, then the overrides */
+    int errors = apply_variant(scene, variant, diag);
+    if (errors)
+        return errors;
     for (size_t i = 0; i < override_count; i++) {
         char origin[32];
         snprintf(origin, sizeof origin, "--set #%zu", i + 1);
@@ -1151,6 +1367,13 @@ int sluice_scene_load(sluice_scene *scene, const char *path, const char *const *
     }
     if (errors)
         return errors;
+    const sluice_node *late = sluice_node_get_key(scene->root, "variants");
+    if (late) {
+        error_at(diag, scene, late,
+                 "'variants' can only be written in the scene file: it is taken out before a "
+                 "variant and the --set overrides are applied");
+        return 1;
+    }
 
     /* unknown top-level sections */
     for (size_t i = 0; i < scene->root->count; i++) {
@@ -1168,7 +1391,7 @@ int sluice_scene_load(sluice_scene *scene, const char *path, const char *const *
             error_at(diag, scene, scene->root->keys[i],
                      "unknown key '%s' at the top level (valid keys: title, description, "
                      "dimensions, particles, time, domain, geometry, initial, neighbour_search, "
-                     "watchdog, checkpoint, plugins, plugin_path)",
+                     "watchdog, checkpoint, plugins, plugin_path, variants, variant)",
                      key);
         errors++;
     }
@@ -1185,6 +1408,13 @@ int sluice_scene_load(sluice_scene *scene, const char *path, const char *const *
     sluice_node *description = sluice_node_get(scene->root, "description");
     if (description && description->kind != SLUICE_NODE_SCALAR) {
         error_at(diag, scene, description, "description must be a string");
+        errors++;
+    }
+    sluice_node *record = sluice_node_get(scene->root, "variant");
+    if (record && record->kind != SLUICE_NODE_SCALAR) {
+        error_at(diag, scene, record,
+                 "variant must be a string (it records the variant a resolved scene was made "
+                 "from)");
         errors++;
     }
 

@@ -22,6 +22,7 @@ typedef struct sluice_scene_fluid {
     sluice_real surface; /* free-surface level along the vertical (last) axis */
     int has_lattice_origin;
     sluice_real lattice_origin[3]; /* the region's lattice (particles.lattice_origin unless set) */
+    const char *name; /* "" when the region has none */
     const sluice_node *node;
 } sluice_scene_fluid;
 
@@ -38,6 +39,12 @@ typedef struct sluice_scene_plugin {
     sluice_node *key;      /* the key node in `plugins` (position for messages) */
     sluice_node **section; /* slot of its parameter mapping in the tree */
 } sluice_scene_plugin;
+
+/* A variant the scene defines (top-level `variants`). */
+typedef struct sluice_scene_variant {
+    const char *name;
+    const char *description; /* "" when none */
+} sluice_scene_variant;
 
 typedef struct sluice_scene {
     char *path;      /* as given */
@@ -82,6 +89,9 @@ typedef struct sluice_scene {
     size_t wall_count;
     sluice_scene_plugin *plugins;
     size_t plugin_count;
+    const char *variant; /* the variant applied; NULL: the base scene */
+    sluice_scene_variant *variants; /* every variant the file defines, in file order */
+    size_t variant_count;
 } sluice_scene;
 
 /* Parses the file, applies the overrides ("dotted.key=value") and validates
@@ -89,6 +99,14 @@ typedef struct sluice_scene {
  * on error the scene may be partly filled and must still be freed. */
 int sluice_scene_load(sluice_scene *scene, const char *path, const char *const *overrides,
                       size_t override_count, sluice_diag *diag);
+/* The same with a variant: `variant` (NULL: the base scene) names an entry of
+ * the file's top-level `variants`, applied before the overrides; the
+ * `variants` key is taken out of the tree before validation and, when a
+ * variant is applied, a top-level `variant: NAME` records it in its place
+ * (docs/scene-format.md, Variants). */
+int sluice_scene_load_variant(sluice_scene *scene, const char *path, const char *variant,
+                              const char *const *overrides, size_t override_count,
+                              sluice_diag *diag);
 void sluice_scene_free(sluice_scene *scene);
 
 /* Position helpers for messages about a node. */

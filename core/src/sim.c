@@ -1820,12 +1820,14 @@ static int check_scene_size(sluice_sim *sim, double limit)
     return 0;
 }
 
-static int load(sluice_sim *sim, const char *scene_path, const sluice_load_options *options)
+static int load(sluice_sim *sim, const char *scene_path, const char *variant,
+                const sluice_load_options *options)
 {
     sluice_scene *scene = &sim->scene;
     sluice_diag *diag = sim->diag;
-    int errors = sluice_scene_load(scene, scene_path, options ? options->overrides : NULL,
-                                   options ? options->override_count : 0, diag);
+    int errors = sluice_scene_load_variant(scene, scene_path, variant,
+                                           options ? options->overrides : NULL,
+                                           options ? options->override_count : 0, diag);
     if (errors || !scene->root)
         return errors ? errors : 1;
     if (check_scene_size(sim, options ? options->max_particles : 0) != 0)
@@ -2236,6 +2238,12 @@ static int load(sluice_sim *sim, const char *scene_path, const sluice_load_optio
 sluice_sim *sluice_sim_load(const char *scene_path, const sluice_load_options *options,
                             sluice_diag *diag)
 {
+    return sluice_sim_load_variant(scene_path, NULL, options, diag);
+}
+
+sluice_sim *sluice_sim_load_variant(const char *scene_path, const char *variant,
+                                    const sluice_load_options *options, sluice_diag *diag)
+{
     sluice_sim *sim = calloc(1, sizeof *sim);
     if (!sim) {
         sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, scene_path, 0, 0, "out of memory");
@@ -2252,7 +2260,7 @@ sluice_sim *sluice_sim_load(const char *scene_path, const sluice_load_options *o
     sim->check_only = options ? options->check_only : 0;
     if (options && options->threads > 0)
         omp_set_num_threads(options->threads);
-    int errors = load(sim, scene_path, options);
+    int errors = load(sim, scene_path, variant, options);
     if (errors || sluice_diag_error_count(diag)) {
         if (!sluice_diag_error_count(diag))
             sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, scene_path, 0, 0,
@@ -2361,6 +2369,21 @@ uint32_t sluice_sim_dimensions(const sluice_sim *sim)
 const char *sluice_sim_resolved_scene(const sluice_sim *sim)
 {
     return sim->resolved_scene;
+}
+
+const char *sluice_sim_variant(const sluice_sim *sim)
+{
+    return sim->scene.variant;
+}
+
+const char *sluice_sim_scene_variant(const sluice_sim *sim, size_t index,
+                                     const char **description)
+{
+    if (index >= sim->scene.variant_count)
+        return NULL;
+    if (description)
+        *description = sim->scene.variants[index].description;
+    return sim->scene.variants[index].name;
 }
 
 uint32_t sluice_sim_field_count(const sluice_sim *sim)

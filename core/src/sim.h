@@ -40,6 +40,10 @@ typedef enum sluice_run_status {
  * state. On failure returns NULL with the messages in diag. */
 sluice_sim *sluice_sim_load(const char *scene_path, const sluice_load_options *options,
                             sluice_diag *diag);
+/* The same with the scene's variant `variant` (NULL: the base scene),
+ * applied before the overrides (docs/scene-format.md, Variants). */
+sluice_sim *sluice_sim_load_variant(const char *scene_path, const char *variant,
+                                    const sluice_load_options *options, sluice_diag *diag);
 void sluice_sim_free(sluice_sim *sim);
 
 /* Runs to the end time. Returns a sluice_run_status. */
@@ -78,6 +82,12 @@ double sluice_sim_end_time(const sluice_sim *sim);
 int64_t sluice_sim_steps(const sluice_sim *sim);
 uint32_t sluice_sim_dimensions(const sluice_sim *sim);
 const char *sluice_sim_resolved_scene(const sluice_sim *sim);
+/* The variant applied (NULL: the base scene); the variants the scene defines:
+ * the name of the index-th (NULL past the last) and its description ("" when
+ * none). */
+const char *sluice_sim_variant(const sluice_sim *sim);
+const char *sluice_sim_scene_variant(const sluice_sim *sim, size_t index,
+                                     const char **description);
 /* Fields in declaration order: name and first column (for layout checks). */
 uint32_t sluice_sim_field_count(const sluice_sim *sim);
 const char *sluice_sim_field_name(const sluice_sim *sim, uint32_t index);

@@ -876,6 +876,66 @@ static int empty_plain(const sluice_node *node)
            !node->value[0];
 }
 
+/* The item of a list that a path segment addresses: by its 0-based index
+ * (all digits) or by the value of its `name` key. Returns the index, or -1
+ * with the reason in why[]. The list's own dotted path is the first
+ * list_length characters of list_path. */
+static long list_item(const sluice_node *list, const char *segment, const char *list_path,
+                      int list_length, char *why, size_t size)
+{
+    size_t n = list->count;
+    const char *plural = n == 1 ? "" : "s";
+    if (all_digits(segment)) {
+        errno = 0;
+        unsigned long long index = strtoull(segment, NULL, 10);
+        if (errno != ERANGE && index < n)
+            return (long)index;
+        snprintf(why, size, "index %s is out of range, %.*s has %zu item%s", segment,
+                 list_length, list_path, n, plural);
+        return -1;
+    }
+    long found = -1, second = -1;
+    size_t named = 0;
+    for (size_t i = 0; i < n; i++) {
+        const sluice_node *name = sluice_node_get(list->items[i], "name");
+        if (!name || name->kind != SLUICE_NODE_SCALAR)
+            continue;
+        named++;
+        if (strcmp(name->value, segment) != 0)
+            continue;
+        if (found < 0)
+            found = (long)i;
+        else if (second < 0)
+            second = (long)i;
+    }
+    if (found >= 0 && second < 0)
+        return found;
+    if (found >= 0) {
+        snprintf(why, size, "items %ld and %ld of %.*s are both named '%s'; address one by its "
+                 "index", found, second, list_length, list_path, segment);
+        return -1;
+    }
+    if (named == 0) {
+        snprintf(why, size, "%.*s is a list, so '%s' must be a numeric index or the name of "
+                 "an item (it has %zu item%s, none named)", list_length, list_path, segment, n,
+                 plural);
+        return -1;
+    }
+    size_t used = (size_t)snprintf(why, size, "%.*s has no item named '%s' (names:",
+                                   list_length, list_path, segment);
+    const char *separator = " ";
+    for (size_t i = 0; i < n && used < size; i++) {
+        const sluice_node *name = sluice_node_get(list->items[i], "name");
+        if (!name || name->kind != SLUICE_NODE_SCALAR)
+            continue;
+        used += (size_t)snprintf(why + used, size - used, "%s'%s'", separator, name->value);
+        separator = ", ";
+    }
+    if (used < size)
+        snprintf(why + used, size - used, "; or an index below %zu)", n);
+    return -1;
+}
+
 /* Parses the value of an override: one scalar or flow collection. */
 static sluice_node *override_value(const char *text, size_t base, const char *path,
                                    const char *origin, sluice_diag *diag)
@@ -986,23 +1046,14 @@ int sluice_yaml_override(sluice_node *root, const char *assignment, const char *
                 current = *slot;
             }
         } else if (current->kind == SLUICE_NODE_SEQUENCE) {
-            if (!all_digits(segment)) {
-                override_error(diag, origin, column,
-                               "cannot set '%s': %.*s is a list, so '%s' must be a numeric "
-                               "index (it has %zu item%s)",
-                               path, (int)(start ? start - 1 : 0), path, segment, current->count,
-                               current->count == 1 ? "" : "s");
+            char why[768];
+            long found = list_item(current, segment, path, (int)(start ? start - 1 : 0), why,
+                                   sizeof why);
+            if (found < 0) {
+                override_error(diag, origin, column, "cannot set '%s': %s", path, why);
                 goto done;
             }
-            errno = 0;
-            unsigned long long index = strtoull(segment, NULL, 10);
-            if (errno == ERANGE || index >= current->count) {
-                override_error(diag, origin, column,
-                               "cannot set '%s': index %s is out of range, %.*s has %zu item%s",
-                               path, segment, (int)(start ? start - 1 : 0), path, current->count,
-                               current->count == 1 ? "" : "s");
-                goto done;
-            }
+            size_t index = (size_t)found;
             if (last) {
                 sluice_node_free(current->items[index]);
                 current->items[index] = value;
@@ -1027,6 +1078,254 @@ oom:
 done:
     sluice_node_free(value);
     free(path);
+    free(segment);
+    return rc;
+}
+
+/* ----------------------------------------------------------- path edits -- */
+
+static void path_error(sluice_diag *diag, const sluice_node *at, const char *format, ...)
+    SLUICE_PRINTF(3, 4);
+static void path_error(sluice_diag *diag, const sluice_node *at, const char *format, ...)
+{
+    char text[1024];
+    va_list ap;
+    va_start(ap, format);
+    vsnprintf(text, sizeof text, format, ap);
+    va_end(ap);
+    int line = at && at->line > 0 ? at->line : 1;
+    int column = at && at->line > 0 ? at->column : 1;
+    sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, at ? at->file : NULL, line, column, "%s", text);
+}
+
+/* Why a mapping has no child `segment` (with the closest key as a
+ * suggestion). The mapping's dotted path is the first length characters of
+ * path (none: the top level). */
+static void missing_key(const sluice_node *mapping, const char *segment, const char *path,
+                        int length, char *why, size_t size)
+{
+    const char *close = NULL;
+    const char **names = mapping->count ? malloc(mapping->count * sizeof *names) : NULL;
+    if (names) {
+        for (size_t i = 0; i < mapping->count; i++)
+            names[i] = mapping->keys[i]->value;
+        close = sluice_closest(segment, names, mapping->count);
+    }
+    int used = length ? snprintf(why, size, "%.*s has no key '%s'", length, path, segment)
+                      : snprintf(why, size, "the top level has no key '%s'", segment);
+    if (close && used >= 0 && (size_t)used < size)
+        snprintf(why + used, size - (size_t)used, "; did you mean '%s'?", close);
+    free(names);
+}
+
+/* Finds the node that `path` addresses under root: *parent and *index
+ * locate it. 0, or -1 with the reason in why[]. */
+static int path_locate(sluice_node *root, const char *path, sluice_node **parent, size_t *index,
+                       char *why, size_t size)
+{
+    size_t n = strlen(path);
+    char *segment = malloc(n + 1);
+    if (!segment) {
+        snprintf(why, size, "out of memory");
+        return -1;
+    }
+    sluice_node *node = root;
+    size_t start = 0;
+    int rc = -1;
+    for (;;) {
+        size_t end = start;
+        while (end < n && path[end] != '.')
+            end++;
+        if (end == start) {
+            snprintf(why, size, "the path has an empty key");
+            break;
+        }
+        memcpy(segment, path + start, end - start);
+        segment[end - start] = '\0';
+        int length = (int)(start ? start - 1 : 0);
+        long i = -1;
+        if (node->kind == SLUICE_NODE_MAPPING)
+            i = find_key(node, segment);
+        if (node->kind == SLUICE_NODE_MAPPING && i < 0)
+            missing_key(node, segment, path, length, why, size);
+        else if (node->kind == SLUICE_NODE_SEQUENCE)
+            i = list_item(node, segment, path, length, why, size);
+        else if (node->kind == SLUICE_NODE_SCALAR)
+            snprintf(why, size, "%.*s is %s, not a mapping or a list", length, path,
+                     empty_plain(node) ? "empty" : "a scalar");
+        if (i < 0)
+            break;
+        if (end == n) {
+            *parent = node;
+            *index = (size_t)i;
+            rc = 0;
+            break;
+        }
+        node = node->items[i];
+        start = end + 1;
+    }
+    free(segment);
+    return rc;
+}
+
+/* Drops the entries of a collection whose value is NULL. */
+static void drop_empty_slots(sluice_node *node)
+{
+    size_t kept = 0;
+    for (size_t i = 0; i < node->count; i++) {
+        if (!node->items[i]) {
+            if (node->keys)
+                sluice_node_free(node->keys[i]);
+            continue;
+        }
+        if (node->keys)
+            node->keys[kept] = node->keys[i];
+        node->items[kept++] = node->items[i];
+    }
+    node->count = kept;
+}
+
+int sluice_yaml_remove(sluice_node *root, const sluice_node *paths, const char *context,
+                       sluice_diag *diag)
+{
+    if (!paths || paths->kind != SLUICE_NODE_SEQUENCE || paths->count == 0)
+        return 0;
+    size_t n = paths->count;
+    sluice_node **parents = calloc(n, sizeof *parents);
+    size_t *indices = calloc(n, sizeof *indices);
+    sluice_node **removed = calloc(n, sizeof *removed);
+    int errors = 0;
+    if (!parents || !indices || !removed) {
+        path_error(diag, paths, "%s: out of memory", context);
+        errors = 1;
+        goto done;
+    }
+    /* every path addresses the tree as it is: all are found before any is
+     * removed, so indices do not shift under later entries */
+    for (size_t i = 0; i < n; i++) {
+        const sluice_node *path = paths->items[i];
+        char why[768];
+        if (path->kind != SLUICE_NODE_SCALAR) {
+            path_error(diag, path, "%s: each entry of 'remove' must be a dotted path such as "
+                       "plugins.two_phase", context);
+            errors++;
+        } else if (!root || root->kind != SLUICE_NODE_MAPPING) {
+            path_error(diag, path, "%s: cannot remove '%s': the document is not a mapping",
+                       context, path->value);
+            errors++;
+        } else if (path_locate(root, path->value, &parents[i], &indices[i], why,
+                               sizeof why) != 0) {
+            path_error(diag, path, "%s: cannot remove '%s': %s", context, path->value, why);
+            errors++;
+        }
+    }
+    if (errors)
+        goto done;
+    /* detach every node before any is freed: one may lie inside another
+     * (then its parent is compacted before being freed with it) */
+    for (size_t i = 0; i < n; i++) {
+        removed[i] = parents[i]->items[indices[i]];
+        parents[i]->items[indices[i]] = NULL;
+    }
+    for (size_t i = 0; i < n; i++)
+        drop_empty_slots(parents[i]);
+    for (size_t i = 0; i < n; i++)
+        sluice_node_free(removed[i]);
+done:
+    free(parents);
+    free(indices);
+    free(removed);
+    return errors;
+}
+
+int sluice_yaml_set(sluice_node *root, const char *path, sluice_node *value,
+                    const sluice_node *at, const char *context, sluice_diag *diag)
+{
+    if (!value) {
+        path_error(diag, at, "%s: out of memory", context);
+        return -1;
+    }
+    if (!root || root->kind != SLUICE_NODE_MAPPING) {
+        path_error(diag, at, "%s: cannot set '%s': the document is not a mapping", context,
+                   path);
+        sluice_node_free(value);
+        return -1;
+    }
+    const char *file = at ? at->file : NULL;
+    int line = at ? at->line : 0, column = at ? at->column : 0;
+    size_t n = strlen(path);
+    char *segment = malloc(n + 1);
+    if (!segment) {
+        path_error(diag, at, "%s: out of memory", context);
+        sluice_node_free(value);
+        return -1;
+    }
+    char why[768];
+    sluice_node *current = root;
+    sluice_node **slot = NULL;
+    size_t start = 0;
+    int rc = -1;
+    for (;;) {
+        size_t end = start;
+        while (end < n && path[end] != '.')
+            end++;
+        if (end == start) {
+            path_error(diag, at, "%s: cannot set '%s': the path has an empty key", context, path);
+            goto done;
+        }
+        memcpy(segment, path + start, end - start);
+        segment[end - start] = '\0';
+        int last = end == n, length = (int)(start ? start - 1 : 0);
+        if (slot && empty_plain(current)) {
+            /* `key:` with nothing is an empty mapping */
+            sluice_node *mapping =
+                sluice_node_new_mapping(current->file, current->line, current->column);
+            if (!mapping)
+                goto oom;
+            sluice_node_free(current);
+            *slot = current = mapping;
+        }
+        long i;
+        if (current->kind == SLUICE_NODE_MAPPING) {
+            i = find_key(current, segment);
+            if (i < 0) {
+                sluice_node *key = sluice_node_new_scalar(segment, 1, file, line, column);
+                sluice_node *child = last ? value : sluice_node_new_mapping(file, line, column);
+                if (last)
+                    value = NULL;
+                if (mapping_add(current, key, child) != 0)
+                    goto oom;
+                i = (long)current->count - 1;
+                if (last)
+                    break;
+            }
+        } else if (current->kind == SLUICE_NODE_SEQUENCE) {
+            i = list_item(current, segment, path, length, why, sizeof why);
+            if (i < 0) {
+                path_error(diag, at, "%s: cannot set '%s': %s", context, path, why);
+                goto done;
+            }
+        } else {
+            path_error(diag, at, "%s: cannot set '%s': %.*s is a scalar, not a mapping or a list",
+                       context, path, length, path);
+            goto done;
+        }
+        if (last) {
+            sluice_node_free(current->items[i]);
+            current->items[i] = value;
+            value = NULL;
+            break;
+        }
+        slot = &current->items[i];
+        current = *slot;
+        start = end + 1;
+    }
+    rc = 0;
+    goto done;
+oom:
+    path_error(diag, at, "%s: out of memory", context);
+done:
+    sluice_node_free(value);
     free(segment);
     return rc;
 }

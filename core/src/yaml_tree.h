@@ -55,12 +55,32 @@ sluice_node *sluice_node_clone(const sluice_node *node);
 
 /* Applies a command-line override "dotted.key=value" to the tree: the value is
  * parsed as YAML (a scalar or a flow sequence/mapping such as [0, -9.81]);
- * missing intermediate mappings are created; an all-digit segment indexes an
- * existing sequence item; a path through a scalar is an error. Nodes created
+ * missing intermediate mappings are created; in a sequence a segment
+ * addresses an existing item by its 0-based index or by the value of its
+ * `name` key; a path through a scalar is an error. Nodes created
  * from it carry file = origin and column = position in the argument. `origin` names the argument in messages, e.g.
  * "--set #2". Returns 0 or -1 (message in diag). */
 int sluice_yaml_override(sluice_node *root, const char *assignment, const char *origin,
                          sluice_diag *diag);
+
+/* Edits by dotted path (scene variants, docs/scene-format.md). A segment
+ * addresses a mapping key, or an item of a list by its 0-based index or by
+ * the value of the item's `name` key (as in sluice_yaml_override). Messages
+ * are positioned at the node naming the path and start with `context`
+ * (e.g. "variant 'no_air'").
+ *
+ * sluice_yaml_remove deletes the node each scalar of the sequence `paths`
+ * addresses. Every path must exist; all are found in the tree as it is before
+ * any is removed (list indices do not shift between entries), and nothing is
+ * removed when one is missing. Returns the number of errors.
+ *
+ * sluice_yaml_set puts `value` (owned, also on failure) at `path`, replacing
+ * what is there and creating missing mapping keys (positioned at `at`); a
+ * list item must exist. Returns 0 or -1. */
+int sluice_yaml_remove(sluice_node *root, const sluice_node *paths, const char *context,
+                       sluice_diag *diag);
+int sluice_yaml_set(sluice_node *root, const char *path, sluice_node *value,
+                    const sluice_node *at, const char *context, sluice_diag *diag);
 
 /* Block-style YAML text of a tree, re-parsable, keys in tree order, scalars
  * quoted when needed. malloc'd; NULL on OOM. */
