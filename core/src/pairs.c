@@ -303,8 +303,11 @@ static sluice_index fill_reach(sluice_pair_engine *engine, const sluice_pair_pas
     c[0] = (int64_t)(cell % (uint32_t)grid->cells[0]);
     c[1] = (int64_t)((cell / (uint32_t)grid->cells[0]) % (uint32_t)grid->cells[1]);
     c[2] = (int64_t)(cell / ((uint32_t)grid->cells[0] * (uint32_t)grid->cells[1]));
-    for (uint32_t d = 0; d < dims; d++)
+    int closed = 1;
+    for (uint32_t d = 0; d < dims; d++) {
         range[d] = reach_cells(grid, pass->reach, d);
+        closed &= !grid->periodic[d];
+    }
     /* candidates: every particle of the cells in range */
     sluice_index candidates = 0;
     for (int pass_over = 0; pass_over < 2; pass_over++) {
@@ -328,6 +331,48 @@ static sluice_index fill_reach(sluice_pair_engine *engine, const sluice_pair_pas
         }
         const double xi[3] = {(double)view->position[0][i], (double)view->position[1][i],
                               dims == 3 ? (double)view->position[2][i] : 0.0};
+        if (closed) {
+            /* no periodic side: the cells of a row of the range are
+             * consecutive, and so are their particles (sorted by cell) */
+            const int64_t x0 = c[0] - range[0] > 0 ? c[0] - range[0] : 0;
+            const int64_t x1 =
+                c[0] + range[0] < grid->cells[0] - 1 ? c[0] + range[0] : grid->cells[0] - 1;
+            const int64_t y0 = c[1] - range[1] > 0 ? c[1] - range[1] : 0;
+            const int64_t y1 =
+                c[1] + range[1] < grid->cells[1] - 1 ? c[1] + range[1] : grid->cells[1] - 1;
+            const int64_t z0 = c[2] - range[2] > 0 ? c[2] - range[2] : 0;
+            const int64_t z1 =
+                c[2] + range[2] < grid->cells[2] - 1 ? c[2] + range[2] : grid->cells[2] - 1;
+            const sluice_real *restrict px = view->position[0], *restrict py = view->position[1];
+            const sluice_real *restrict pz = dims == 3 ? view->position[2] : NULL;
+            const uint8_t *restrict kinds = view->kind;
+            for (int64_t cz = z0; cz <= z1; cz++)
+                for (int64_t cy = y0; cy <= y1; cy++) {
+                    const size_t row = ((size_t)cz * (size_t)grid->cells[1] + (size_t)cy) *
+                                       (size_t)grid->cells[0];
+                    const sluice_index j0 = grid->cell_start[row + (size_t)x0];
+                    const sluice_index j1 = grid->cell_start[row + (size_t)x1 + 1];
+                    if (pass_over == 0) {
+                        candidates += j1 - j0;
+                        continue;
+                    }
+                    for (sluice_index j = j0; j < j1; j++) {
+                        const double e0 = xi[0] - (double)px[j], e1 = xi[1] - (double)py[j];
+                        const double e2 = pz ? xi[2] - (double)pz[j] : 0.0;
+                        const double s2 = e0 * e0 + e1 * e1 + e2 * e2;
+                        if (!(s2 < reach2) || j == i || !((mask >> kinds[j]) & 1u))
+                            continue;
+                        w->neighbour[np] = j;
+                        w->offset[0][np] = (sluice_real)e0;
+                        w->offset[1][np] = (sluice_real)e1;
+                        if (dims == 3)
+                            w->offset[2][np] = (sluice_real)e2;
+                        w->distance_squared[np] = (sluice_real)s2;
+                        np++;
+                    }
+                }
+            continue;
+        }
         for (int64_t dz = -range[2]; dz <= range[2]; dz++) {
             const int64_t cz = wrap_cell(c[2] + dz, grid->cells[2], grid->periodic[2]);
             if (cz < 0)
