@@ -12,10 +12,14 @@
  * V1 (given, or q / d1 from the discharge q) with the hydrostatic density of
  * depth d1 (through the scene's equation of state), and with k = 1.5 (I V1)^2
  * and eps = c_mu^(3/4) k^(3/2) / (l_f d1) when a k-epsilon model is loaded
- * (seed 004: I = 10 %, l = 0.5 d1). A particle that passes x = position
+ * (seed 004: I = 10 %, l = 0.5 d1); with `submergence` s > 0 the inflow is
+ * submerged under a gate (a reservoir fed below its surface) and the
+ * hydrostatic density is that of depth d1 + s. A particle that passes x = position
  * becomes fluid with that state. Fluid that flows back upstream across the
- * plane (a reservoir's sloshing) is removed: it leaves through the inlet,
- * a negative mass flux in inlet.csv.
+ * plane within the inflow's section (below its top row's top; a reservoir's
+ * sloshing) is removed: it leaves through the inlet, a negative mass flux in
+ * inlet.csv. Above the section it is removed once dx/2 upstream of the
+ * plane (less is fluid touching a gate's face).
  *   form buffer (seed 004, De Padova et al. 2017): the layer stays `width`
  *     long: a new column enters at its back every dx / V1.
  *   form block (seed 000, Jonsson et al. 2016): the whole inflow of the run
@@ -79,7 +83,7 @@ typedef struct boundary_config {
     sluice_real turbulence_intensity, mixing_length_factor;
     sluice_real interval;
     const char *file;
-    sluice_real air_depth; /* inlet */
+    sluice_real air_depth, submergence; /* inlet */
     int phase;             /* outlet: SLUICE_PHASE_* */
 } boundary_config;
 
@@ -101,6 +105,7 @@ typedef struct boundary_state {
     sluice_field phase_field;
     int phase_filter;    /* outlet: the phase it treats (SLUICE_PHASE_*) */
     double air_depth;    /* inlet: depth of the air layer above the water */
+    double submergence;  /* inlet: water standing above the inflow's top */
     double rho_a, gamma_a, B, air_mass; /* rho0_a, gamma_a, Tait B, rho0_a dx^d */
     /* inlet lattice */
     uint32_t rows, lanes;   /* vertical rows of water, lateral lanes (3D) */
@@ -136,6 +141,12 @@ static const sluice_param_spec inlet_params[] = {
      "two-phase scenes (two_phase loaded): rows of air (phase 1) from "
      "the water's surface up to bed + depth + air_depth, moving at V1, with the air's "
      "hydrostatic density (the background pressure p_b at their top); 0: water only",
+     NULL, 0},
+    {"submergence", SLUICE_PARAM_REAL, offsetof(boundary_config, submergence), "0", 0, 0,
+     SLUICE_PARAM_HAS_MIN, "m",
+     "a submerged inflow under a gate (a reservoir fed from below its surface): the depth of "
+     "water standing above the inflow's top, which sets the lattice's hydrostatic density; "
+     "0: the inflow has a free surface",
      NULL, 0},
     {"velocity", SLUICE_PARAM_REAL, offsetof(boundary_config, velocity), NULL, 0, 0,
      SLUICE_PARAM_OPTIONAL | SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "m s^-1",
@@ -236,6 +247,12 @@ static int boundary_create(const sluice_api *api, sluice_host *host, const void 
             goto fail;
         }
         s->air_depth = c->air_depth;
+        s->submergence = c->submergence;
+        if (s->submergence > 0 && s->air_depth > 0) {
+            api->error(host, "give submergence (water above a gated inflow) or air_depth (air "
+                             "above a free inflow), not both");
+            goto fail;
+        }
         s->turbulence_k = 1.5 * pow(c->turbulence_intensity * s->velocity, 2);
         s->mixing_length = c->mixing_length_factor * s->depth;
         sluice_real x = c->position;
@@ -577,7 +594,7 @@ static int setup_lattice(boundary_state *s, sluice_host *host)
         return SLUICE_ERROR;
     }
     for (uint32_t r = 0; r < s->rows; r++)
-        below[r] = s->depth - (r + 0.5) * s->dx;
+        below[r] = s->depth + s->submergence - (r + 0.5) * s->dx;
     /* the air layer's weight on the water (rho0_a g air_depth: p_b at its top) */
     const double air_weight = s->air_rows ? s->rho_a * s->g * s->air_depth : 0;
     int status = hydrostatic_density(s, host, s->rows, below, s->p_ref + air_weight,
@@ -694,13 +711,19 @@ static int inlet_after_step(void *state, sluice_host *host)
     const sluice_real shift = (sluice_real)(s->velocity * dt);
     const sluice_real plane = (sluice_real)s->position;
     sluice_index converted = 0, open = 0, returned = 0;
+    const sluice_real section_top = (sluice_real)(s->bed + (s->rows + s->air_rows) * s->dx);
+    const sluice_real half_dx = (sluice_real)(0.5 * s->dx);
     for (sluice_index i = 0; i < v->count; i++) {
         if (!(x[i] < plane))
             continue;
         if (v->kind[i] == SLUICE_KIND_FLUID) {
-            /* fluid flowing back upstream across the plane (a reservoir's
-             * sloshing) would run into the lattice: it leaves through the
-             * inlet, a negative flux */
+            /* fluid flowing back upstream across the plane within the
+             * inflow's section (a reservoir's sloshing) would run into the
+             * lattice: it leaves through the inlet, a negative flux. Above
+             * the section it leaves once dx/2 upstream: less is fluid
+             * touching a gate's face, which dbc lets it do. */
+            if (!(v->position[s->vertical][i] < section_top) && !(x[i] < plane - half_dx))
+                continue;
             s->to_remove[returned++] = i;
             if (phase && phase[i])
                 continue;

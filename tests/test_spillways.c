@@ -1,0 +1,217 @@
+/* Seed 001's stepped-spillway scenes end to end, through the plugin sets of
+ * the full scenes (configs/stepped_chute_chanson.yaml,
+ * configs/stepped_spillway_cheng.yaml), in their `reduced` variants run for
+ * a few thousand steps (the CI's budget; the validations are long runs,
+ * docs/validation.md):
+ *  - the run completes: two phases with one Tait B, cohesion pairs reaching
+ *    2H = 4h, an inlet under a gate, a drain that takes the water only;
+ *  - the particles balance exactly, phase by phase: the air's box is closed,
+ *    so the air count never changes; the water now = the water at the start
+ *    + the inlet's net inflow - the outlet's outflow, in whole particles of
+ *    mass rho0 dx^2 (mass_total of inlet.csv and outlet.csv; in the CI's
+ *    few thousand steps no inflow column has crossed yet: the crossings'
+ *    accounting is tested in the suite open_boundaries);
+ *  - no fluid lies upstream of the inlet's plane after any step (the inlet
+ *    removes it within the inflow's section; above it the gate, a dbc wall,
+ *    holds it within the watchdog's dx/2);
+ *  - Cheng: dissolved oxygen stays within [Cu, Cs] in the water (diffusion
+ *    with positive weights and the source's relaxation towards Cs, each
+ *    stable at the plugin's time step, keep it there) and is 0 in the air;
+ *    the water touching the air has gained oxygen (max C > Cu);
+ *  - the single-phase variants load from the same files: no field `phase`,
+ *    the water particles only, and they run. */
+#include <math.h>
+
+#include "sim_util.h"
+
+static sluice_sim *load_variant(const char *config, const char *variant,
+                                const char *const *sets, size_t set_count)
+{
+    char *path = test_config(config);
+    ck_assert_ptr_nonnull(path);
+    sluice_diag *diag = sluice_diag_create();
+    sluice_load_options options = {sets, set_count, 0, 0, 0};
+    sluice_sim *sim = sluice_sim_load_variant(path, variant, &options, diag);
+    if (!sim)
+        for (size_t i = 0; i < sluice_diag_count(diag); i++)
+            fprintf(stderr, "%s\n", sluice_diag_message(diag, i));
+    ck_assert_msg(sim != NULL, "%s --variant %s failed to load", config, variant);
+    sluice_diag_destroy(diag);
+    free(path);
+    return sim;
+}
+
+typedef struct census {
+    long water, air;
+} census;
+
+static census count_phases(sluice_sim *sim)
+{
+    sluice_field f;
+    ck_assert_int_eq(sluice_sim_field(sim, "phase", &f), SLUICE_OK);
+    const sluice_view *v = sluice_sim_view(sim);
+    const uint8_t *phase = v->columns[f.column];
+    census c = {0, 0};
+    for (sluice_index i = 0; i < v->count; i++)
+        if (v->kind[i] == SLUICE_KIND_FLUID)
+            phase[i] ? c.air++ : c.water++;
+    return c;
+}
+
+static double last_value(const char *dir, const char *file, int column)
+{
+    char *path = NULL;
+    ck_assert_int_ge(asprintf(&path, "%s/%s", dir, file), 0);
+    FILE *f = fopen(path, "r");
+    ck_assert_msg(f != NULL, "no %s", path);
+    char line[4096];
+    double value = NAN;
+    while (fgets(line, sizeof line, f)) {
+        if (line[0] < '0' || line[0] > '9')
+            continue;
+        char *p = line;
+        for (int c = 0; c < column && p; c++) {
+            p = strchr(p, ',');
+            if (p)
+                p++;
+        }
+        if (p)
+            value = strtod(p, NULL);
+    }
+    fclose(f);
+    free(path);
+    return value;
+}
+
+/* Runs `config` --variant reduced with `sets`; checks the balances after
+ * every step; with `oxygen`, the concentration's bounds. */
+static void run_reduced(const char *config, const char *tag, const char *const *sets,
+                        size_t set_count, double dx, int oxygen)
+{
+    sluice_sim *sim = load_variant(config, "reduced", sets, set_count);
+    char *dir = test_scratch(tag);
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    const census start = count_phases(sim);
+    ck_assert_int_gt(start.water, 0);
+    ck_assert_int_gt(start.air, 0);
+    const double cu = 1.29, cs = 10.48;
+    double c_max = 0, c_min = INFINITY;
+    int status;
+    while ((status = sluice_sim_step(sim)) == SLUICE_RUN_COMPLETE &&
+           sluice_sim_time(sim) < sluice_sim_end_time(sim) - 1e-12) {
+        const census now = count_phases(sim);
+        ck_assert_int_eq(now.air, start.air);
+        const sluice_view *v = sluice_sim_view(sim);
+        for (sluice_index i = 0; i < v->count; i++)
+            ck_assert_msg(v->kind[i] != SLUICE_KIND_FLUID || v->position[0][i] >= -dx / 2,
+                          "fluid at x = %g m, upstream of the inlet and the gate",
+                          (double)v->position[0][i]);
+        if (oxygen) {
+            sluice_field f;
+            ck_assert_int_eq(sluice_sim_field(sim, "phase", &f), SLUICE_OK);
+            const uint8_t *phase = v->columns[f.column];
+            const sluice_real *c = test_column(sim, "dissolved_oxygen", 0);
+            for (sluice_index i = 0; i < v->count; i++) {
+                if (v->kind[i] != SLUICE_KIND_FLUID)
+                    continue;
+                if (phase[i]) {
+                    ck_assert_msg(c[i] == 0, "air particle with C = %g", (double)c[i]);
+                    continue;
+                }
+                ck_assert_msg(c[i] >= cu - 1e-12 && c[i] <= cs + 1e-12,
+                              "water particle with C = %.17g outside [Cu, Cs]", (double)c[i]);
+                c_max = fmax(c_max, c[i]);
+                c_min = fmin(c_min, c[i]);
+            }
+        }
+    }
+    ck_assert_msg(status == SLUICE_RUN_COMPLETE, "%s stopped: %s", tag, sluice_sim_failure(sim));
+    const census final = count_phases(sim);
+    const long long steps = (long long)sluice_sim_steps(sim);
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    const double particle = 1000 * dx * dx;
+    const double in = last_value(dir, "inlet.csv", 4) / particle;
+    const double out = last_value(dir, "outlet.csv", 4) / particle;
+    fprintf(stderr,
+            "%s: %lld steps; water %ld -> %ld (inflow %.6g, outflow %.6g particles), air %ld -> "
+            "%ld",
+            tag, steps, start.water, final.water, in, out, start.air, final.air);
+    if (oxygen)
+        fprintf(stderr, "; water C in [%.6g, %.6g] mg/L", c_min, c_max);
+    fprintf(stderr, "\n");
+    ck_assert_msg(fabs(in - nearbyint(in)) < 1e-6 && fabs(out - nearbyint(out)) < 1e-6,
+                  "fluxes are not whole particles: %g in, %g out", in, out);
+    ck_assert_int_eq(final.air, start.air);
+    ck_assert_int_eq(final.water, start.water + llround(in) - llround(out));
+    if (oxygen)
+        ck_assert_msg(c_max > cu, "no reaeration anywhere: max C = %g", c_max);
+    sluice_sim_free(sim);
+    free(dir);
+}
+
+START_TEST(chanson_reduced)
+{
+    run_reduced("stepped_chute_chanson.yaml", "chanson-reduced", NULL, 0, 0.02, 0);
+}
+END_TEST
+
+START_TEST(cheng_reduced)
+{
+    run_reduced("stepped_spillway_cheng.yaml", "cheng-reduced", NULL, 0, 0.0125, 1);
+}
+END_TEST
+
+/* The single-phase variant: the same file without two_phase and
+ * air_cohesion: no field phase, the water region only, and it runs. */
+static void single_phase(const char *config, const char *spacing)
+{
+    const char *const sets[] = {spacing, "time.end=0.01"};
+    sluice_sim *two = load_variant(config, "reduced", sets, 1);
+    const census both = count_phases(two);
+    sluice_sim_free(two);
+    sluice_sim *sim = load_variant(config, "single_phase", sets, 2);
+    sluice_field f;
+    ck_assert_int_ne(sluice_sim_field(sim, "phase", &f), SLUICE_OK);
+    const sluice_view *v = sluice_sim_view(sim);
+    long fluid = 0;
+    for (sluice_index i = 0; i < v->count; i++)
+        fluid += v->kind[i] == SLUICE_KIND_FLUID;
+    ck_assert_int_eq(fluid, both.water);
+    ck_assert_int_eq(sluice_sim_begin(sim, NULL), SLUICE_RUN_COMPLETE);
+    int status;
+    long steps = 0;
+    while ((status = sluice_sim_step(sim)) == SLUICE_RUN_COMPLETE &&
+           sluice_sim_time(sim) < sluice_sim_end_time(sim) - 1e-12)
+        steps++;
+    ck_assert_msg(status == SLUICE_RUN_COMPLETE, "single phase stopped: %s",
+                  sluice_sim_failure(sim));
+    fprintf(stderr, "%s single phase: %ld water particles (the two-phase scene's water), %ld "
+                    "steps to 0.01 s\n",
+            config, fluid, steps);
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    sluice_sim_free(sim);
+}
+
+START_TEST(single_phase_variants)
+{
+    single_phase("stepped_chute_chanson.yaml", "particles.spacing=0.02");
+    single_phase("stepped_spillway_cheng.yaml", "particles.spacing=0.0125");
+}
+END_TEST
+
+static Suite *spillway_suite(void)
+{
+    Suite *s = suite_create("spillways");
+    TCase *c = tcase_create("reduced");
+    tcase_set_timeout(c, 600);
+    tcase_add_test(c, chanson_reduced);
+    tcase_add_test(c, cheng_reduced);
+    tcase_add_test(c, single_phase_variants);
+    suite_add_tcase(s, c);
+    return s;
+}
+
+int main(void)
+{
+    return test_run_suite(spillway_suite());
+}
