@@ -845,20 +845,7 @@ sluice_node *sluice_yaml_parse_file(const char *path, sluice_diag *diag)
     return root;
 }
 
-/* ------------------------------------------------------------ overrides -- */
-
-static void override_error(sluice_diag *diag, const char *origin, size_t column,
-                           const char *format, ...) SLUICE_PRINTF(4, 5);
-static void override_error(sluice_diag *diag, const char *origin, size_t column,
-                           const char *format, ...)
-{
-    char text[1024];
-    va_list ap;
-    va_start(ap, format);
-    vsnprintf(text, sizeof text, format, ap);
-    va_end(ap);
-    sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, origin, 1, clamp_int(column), "%s", text);
-}
+/* ----------------------------------------------------------- path walk -- */
 
 static int all_digits(const char *s)
 {
@@ -936,6 +923,169 @@ static long list_item(const sluice_node *list, const char *segment, const char *
     return -1;
 }
 
+/* Why a mapping has no child `segment` (with the closest key as a
+ * suggestion). The mapping's dotted path is the first length characters of
+ * path (none: the top level). */
+static void missing_key(const sluice_node *mapping, const char *segment, const char *path,
+                        int length, char *why, size_t size)
+{
+    const char *close = NULL;
+    const char **names = mapping->count ? malloc(mapping->count * sizeof *names) : NULL;
+    if (names) {
+        for (size_t i = 0; i < mapping->count; i++)
+            names[i] = mapping->keys[i]->value;
+        close = sluice_closest(segment, names, mapping->count);
+    }
+    int used = length ? snprintf(why, size, "%.*s has no key '%s'", length, path, segment)
+                      : snprintf(why, size, "the top level has no key '%s'", segment);
+    if (close && used >= 0 && (size_t)used < size)
+        snprintf(why + used, size - (size_t)used, "; did you mean '%s'?", close);
+    free(names);
+}
+
+/* One walk down a dotted path, shared by --set (sluice_yaml_override) and a
+ * variant's `set` and `remove` (sluice_yaml_set, sluice_yaml_remove). */
+typedef struct path_walk {
+    const char *path;
+    /* What to put at the path (owned, freed on failure). NULL: only find the
+     * node the path addresses, which must exist: parent->items[index]. */
+    sluice_node *value;
+    /* Where the keys and mappings the walk creates are positioned. A variant's
+     * setting: file, line, column of its YAML key. --set (argument nonzero):
+     * file names the argument, line 1, column of the segment in it. */
+    const char *file;
+    int line, column;
+    int argument;
+    sluice_node *parent;
+    size_t index;
+    size_t failed; /* on failure: offset in path of the segment at fault */
+    char why[768]; /* on failure: the reason, to end the caller's message */
+} path_walk;
+
+enum { WALK_FAILED = -1, WALK_OUT_OF_MEMORY = -2 };
+
+/* Walks w->path from root (a mapping), segment by segment: a segment is a
+ * key of a mapping or an item of a list, by its index or by its `name`
+ * (list_item). With a value, puts it at the path, replacing what is there:
+ * missing keys are created (intermediate ones as empty mappings), an empty
+ * `key:` on the way becomes a mapping, list items must exist. Without, finds
+ * the node. Returns 0, WALK_FAILED or WALK_OUT_OF_MEMORY, with the reason in
+ * w->why. A failure changes nothing, except when an empty segment or an
+ * allocation failure comes after keys were created. */
+static int walk_path(sluice_node *root, path_walk *w)
+{
+    const char *path = w->path;
+    const int edit = w->value != NULL;
+    size_t n = strlen(path);
+    char *segment = malloc(n + 1);
+    if (!segment) {
+        snprintf(w->why, sizeof w->why, "out of memory");
+        sluice_node_free(w->value);
+        w->value = NULL;
+        return WALK_OUT_OF_MEMORY;
+    }
+    sluice_node *current = root;
+    sluice_node **slot = NULL;
+    size_t start = 0;
+    int rc = WALK_FAILED;
+    for (;;) {
+        size_t end = start;
+        while (end < n && path[end] != '.')
+            end++;
+        w->failed = start;
+        /* only a variant's paths get here with an empty key: --set rejects
+         * them, with its own message, before it parses its value */
+        if (end == start) {
+            snprintf(w->why, sizeof w->why, "the path has an empty key");
+            break;
+        }
+        memcpy(segment, path + start, end - start);
+        segment[end - start] = '\0';
+        int last = end == n, length = (int)(start ? start - 1 : 0);
+        if (edit && slot && empty_plain(current)) {
+            /* `key:` with nothing is an empty mapping */
+            sluice_node *mapping =
+                sluice_node_new_mapping(current->file, current->line, current->column);
+            if (!mapping) {
+                rc = WALK_OUT_OF_MEMORY;
+                break;
+            }
+            sluice_node_free(current);
+            *slot = current = mapping;
+        }
+        long i = -1;
+        if (current->kind == SLUICE_NODE_MAPPING) {
+            i = find_key(current, segment);
+            if (i < 0 && !edit) {
+                missing_key(current, segment, path, length, w->why, sizeof w->why);
+            } else if (i < 0) {
+                const char *file = w->file;
+                int line = w->argument ? 1 : w->line;
+                int column = w->argument ? clamp_int(start + 1) : w->column;
+                sluice_node *key = sluice_node_new_scalar(segment, 1, file, line, column);
+                sluice_node *child = last ? w->value : sluice_node_new_mapping(file, line, column);
+                if (last)
+                    w->value = NULL;
+                if (mapping_add(current, key, child) != 0) {
+                    rc = WALK_OUT_OF_MEMORY;
+                    break;
+                }
+                if (last) {
+                    rc = 0;
+                    break;
+                }
+                i = (long)current->count - 1;
+            }
+        } else if (current->kind == SLUICE_NODE_SEQUENCE) {
+            i = list_item(current, segment, path, length, w->why, sizeof w->why);
+        } else {
+            /* only removal meets an empty `key:` here (an edit made it a
+             * mapping); --set's message has always named mappings only */
+            snprintf(w->why, sizeof w->why, "%.*s is %s, not %s", length, path,
+                     empty_plain(current) ? "empty" : "a scalar",
+                     w->argument ? "a mapping" : "a mapping or a list");
+        }
+        if (i < 0)
+            break;
+        if (last) {
+            if (edit) {
+                sluice_node_free(current->items[i]);
+                current->items[i] = w->value;
+                w->value = NULL;
+            } else {
+                w->parent = current;
+                w->index = (size_t)i;
+            }
+            rc = 0;
+            break;
+        }
+        slot = &current->items[i];
+        current = *slot;
+        start = end + 1;
+    }
+    if (rc == WALK_OUT_OF_MEMORY)
+        snprintf(w->why, sizeof w->why, "out of memory");
+    sluice_node_free(w->value);
+    w->value = NULL;
+    free(segment);
+    return rc;
+}
+
+/* ------------------------------------------------------------ overrides -- */
+
+static void override_error(sluice_diag *diag, const char *origin, size_t column,
+                           const char *format, ...) SLUICE_PRINTF(4, 5);
+static void override_error(sluice_diag *diag, const char *origin, size_t column,
+                           const char *format, ...)
+{
+    char text[1024];
+    va_list ap;
+    va_start(ap, format);
+    vsnprintf(text, sizeof text, format, ap);
+    va_end(ap);
+    sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, origin, 1, clamp_int(column), "%s", text);
+}
+
 /* Parses the value of an override: one scalar or flow collection. */
 static sluice_node *override_value(const char *text, size_t base, const char *path,
                                    const char *origin, sluice_diag *diag)
@@ -987,99 +1137,26 @@ int sluice_yaml_override(sluice_node *root, const char *assignment, const char *
         return -1;
     }
     char *path = copy_text(assignment, path_length);
-    char *segment = malloc(path_length + 1);
-    if (!path || !segment) {
-        free(path);
-        free(segment);
+    if (!path) {
         sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, origin, 0, 0,
                         "out of memory while applying an override");
         return -1;
     }
-    int rc = -1;
     sluice_node *value = override_value(eq + 1, path_length + 1, path, origin, diag);
-    if (!value)
-        goto done;
-
-    sluice_node *current = root;
-    sluice_node **slot = NULL;
-    size_t start = 0;
-    while (start < path_length) {
-        size_t end = start;
-        while (end < path_length && path[end] != '.')
-            end++;
-        memcpy(segment, path + start, end - start);
-        segment[end - start] = '\0';
-        int last = end == path_length;
-        size_t column = start + 1;
-
-        if (slot && empty_plain(current)) {
-            /* `key:` with nothing is an empty mapping */
-            sluice_node *mapping =
-                sluice_node_new_mapping(current->file, current->line, current->column);
-            if (!mapping)
-                goto oom;
-            sluice_node_free(current);
-            *slot = current = mapping;
-        }
-        if (current->kind == SLUICE_NODE_MAPPING) {
-            long i = find_key(current, segment);
-            if (i >= 0 && last) {
-                sluice_node_free(current->items[i]);
-                current->items[i] = value;
-                value = NULL;
-                break;
-            }
-            if (i >= 0) {
-                slot = &current->items[i];
-                current = *slot;
-            } else {
-                sluice_node *key = sluice_node_new_scalar(segment, 1, origin, 1, clamp_int(column));
-                sluice_node *child =
-                    last ? value : sluice_node_new_mapping(origin, 1, clamp_int(column));
-                if (last)
-                    value = NULL;
-                if (mapping_add(current, key, child) != 0)
-                    goto oom;
-                if (last)
-                    break;
-                slot = &current->items[current->count - 1];
-                current = *slot;
-            }
-        } else if (current->kind == SLUICE_NODE_SEQUENCE) {
-            char why[768];
-            long found = list_item(current, segment, path, (int)(start ? start - 1 : 0), why,
-                                   sizeof why);
-            if (found < 0) {
-                override_error(diag, origin, column, "cannot set '%s': %s", path, why);
-                goto done;
-            }
-            size_t index = (size_t)found;
-            if (last) {
-                sluice_node_free(current->items[index]);
-                current->items[index] = value;
-                value = NULL;
-                break;
-            }
-            slot = &current->items[index];
-            current = *slot;
-        } else {
-            override_error(diag, origin, column,
-                           "cannot set '%s': %.*s is a scalar, not a mapping", path,
-                           (int)(start ? start - 1 : 0), path);
-            goto done;
-        }
-        start = end + 1;
+    if (!value) {
+        free(path);
+        return -1;
     }
-    rc = 0;
-    goto done;
-oom:
-    sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, origin, 0, 0,
-                    "out of memory while applying an override");
-done:
-    sluice_node_free(value);
+    path_walk w = {.path = path, .value = value, .file = origin, .argument = 1};
+    int rc = walk_path(root, &w);
+    /* errors sit on line 1 of the argument, at the column of the segment */
+    if (rc == WALK_FAILED)
+        override_error(diag, origin, w.failed + 1, "cannot set '%s': %s", path, w.why);
+    else if (rc == WALK_OUT_OF_MEMORY)
+        sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, origin, 0, 0,
+                        "out of memory while applying an override");
     free(path);
-    free(segment);
-    return rc;
+    return rc == 0 ? 0 : -1;
 }
 
 /* ----------------------------------------------------------- path edits -- */
@@ -1096,76 +1173,6 @@ static void path_error(sluice_diag *diag, const sluice_node *at, const char *for
     int line = at && at->line > 0 ? at->line : 1;
     int column = at && at->line > 0 ? at->column : 1;
     sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, at ? at->file : NULL, line, column, "%s", text);
-}
-
-/* Why a mapping has no child `segment` (with the closest key as a
- * suggestion). The mapping's dotted path is the first length characters of
- * path (none: the top level). */
-static void missing_key(const sluice_node *mapping, const char *segment, const char *path,
-                        int length, char *why, size_t size)
-{
-    const char *close = NULL;
-    const char **names = mapping->count ? malloc(mapping->count * sizeof *names) : NULL;
-    if (names) {
-        for (size_t i = 0; i < mapping->count; i++)
-            names[i] = mapping->keys[i]->value;
-        close = sluice_closest(segment, names, mapping->count);
-    }
-    int used = length ? snprintf(why, size, "%.*s has no key '%s'", length, path, segment)
-                      : snprintf(why, size, "the top level has no key '%s'", segment);
-    if (close && used >= 0 && (size_t)used < size)
-        snprintf(why + used, size - (size_t)used, "; did you mean '%s'?", close);
-    free(names);
-}
-
-/* Finds the node that `path` addresses under root: *parent and *index
- * locate it. 0, or -1 with the reason in why[]. */
-static int path_locate(sluice_node *root, const char *path, sluice_node **parent, size_t *index,
-                       char *why, size_t size)
-{
-    size_t n = strlen(path);
-    char *segment = malloc(n + 1);
-    if (!segment) {
-        snprintf(why, size, "out of memory");
-        return -1;
-    }
-    sluice_node *node = root;
-    size_t start = 0;
-    int rc = -1;
-    for (;;) {
-        size_t end = start;
-        while (end < n && path[end] != '.')
-            end++;
-        if (end == start) {
-            snprintf(why, size, "the path has an empty key");
-            break;
-        }
-        memcpy(segment, path + start, end - start);
-        segment[end - start] = '\0';
-        int length = (int)(start ? start - 1 : 0);
-        long i = -1;
-        if (node->kind == SLUICE_NODE_MAPPING)
-            i = find_key(node, segment);
-        if (node->kind == SLUICE_NODE_MAPPING && i < 0)
-            missing_key(node, segment, path, length, why, size);
-        else if (node->kind == SLUICE_NODE_SEQUENCE)
-            i = list_item(node, segment, path, length, why, size);
-        else if (node->kind == SLUICE_NODE_SCALAR)
-            snprintf(why, size, "%.*s is %s, not a mapping or a list", length, path,
-                     empty_plain(node) ? "empty" : "a scalar");
-        if (i < 0)
-            break;
-        if (end == n) {
-            *parent = node;
-            *index = (size_t)i;
-            rc = 0;
-            break;
-        }
-        node = node->items[i];
-        start = end + 1;
-    }
-    free(segment);
-    return rc;
 }
 
 /* Drops the entries of a collection whose value is NULL. */
@@ -1204,7 +1211,7 @@ int sluice_yaml_remove(sluice_node *root, const sluice_node *paths, const char *
      * removed, so indices do not shift under later entries */
     for (size_t i = 0; i < n; i++) {
         const sluice_node *path = paths->items[i];
-        char why[768];
+        path_walk w = {.path = path->value};
         if (path->kind != SLUICE_NODE_SCALAR) {
             path_error(diag, path, "%s: each entry of 'remove' must be a dotted path such as "
                        "plugins.two_phase", context);
@@ -1213,10 +1220,13 @@ int sluice_yaml_remove(sluice_node *root, const sluice_node *paths, const char *
             path_error(diag, path, "%s: cannot remove '%s': the document is not a mapping",
                        context, path->value);
             errors++;
-        } else if (path_locate(root, path->value, &parents[i], &indices[i], why,
-                               sizeof why) != 0) {
-            path_error(diag, path, "%s: cannot remove '%s': %s", context, path->value, why);
+        } else if (walk_path(root, &w) != 0) {
+            /* errors sit on the path's own node (an allocation failure too) */
+            path_error(diag, path, "%s: cannot remove '%s': %s", context, path->value, w.why);
             errors++;
+        } else {
+            parents[i] = w.parent;
+            indices[i] = w.index;
         }
     }
     if (errors)
@@ -1251,83 +1261,18 @@ int sluice_yaml_set(sluice_node *root, const char *path, sluice_node *value,
         sluice_node_free(value);
         return -1;
     }
-    const char *file = at ? at->file : NULL;
-    int line = at ? at->line : 0, column = at ? at->column : 0;
-    size_t n = strlen(path);
-    char *segment = malloc(n + 1);
-    if (!segment) {
+    /* created keys, and every error, sit at the setting's YAML key `at` */
+    path_walk w = {.path = path,
+                   .value = value,
+                   .file = at ? at->file : NULL,
+                   .line = at ? at->line : 0,
+                   .column = at ? at->column : 0};
+    int rc = walk_path(root, &w);
+    if (rc == WALK_FAILED)
+        path_error(diag, at, "%s: cannot set '%s': %s", context, path, w.why);
+    else if (rc == WALK_OUT_OF_MEMORY)
         path_error(diag, at, "%s: out of memory", context);
-        sluice_node_free(value);
-        return -1;
-    }
-    char why[768];
-    sluice_node *current = root;
-    sluice_node **slot = NULL;
-    size_t start = 0;
-    int rc = -1;
-    for (;;) {
-        size_t end = start;
-        while (end < n && path[end] != '.')
-            end++;
-        if (end == start) {
-            path_error(diag, at, "%s: cannot set '%s': the path has an empty key", context, path);
-            goto done;
-        }
-        memcpy(segment, path + start, end - start);
-        segment[end - start] = '\0';
-        int last = end == n, length = (int)(start ? start - 1 : 0);
-        if (slot && empty_plain(current)) {
-            /* `key:` with nothing is an empty mapping */
-            sluice_node *mapping =
-                sluice_node_new_mapping(current->file, current->line, current->column);
-            if (!mapping)
-                goto oom;
-            sluice_node_free(current);
-            *slot = current = mapping;
-        }
-        long i;
-        if (current->kind == SLUICE_NODE_MAPPING) {
-            i = find_key(current, segment);
-            if (i < 0) {
-                sluice_node *key = sluice_node_new_scalar(segment, 1, file, line, column);
-                sluice_node *child = last ? value : sluice_node_new_mapping(file, line, column);
-                if (last)
-                    value = NULL;
-                if (mapping_add(current, key, child) != 0)
-                    goto oom;
-                i = (long)current->count - 1;
-                if (last)
-                    break;
-            }
-        } else if (current->kind == SLUICE_NODE_SEQUENCE) {
-            i = list_item(current, segment, path, length, why, sizeof why);
-            if (i < 0) {
-                path_error(diag, at, "%s: cannot set '%s': %s", context, path, why);
-                goto done;
-            }
-        } else {
-            path_error(diag, at, "%s: cannot set '%s': %.*s is a scalar, not a mapping or a list",
-                       context, path, length, path);
-            goto done;
-        }
-        if (last) {
-            sluice_node_free(current->items[i]);
-            current->items[i] = value;
-            value = NULL;
-            break;
-        }
-        slot = &current->items[i];
-        current = *slot;
-        start = end + 1;
-    }
-    rc = 0;
-    goto done;
-oom:
-    path_error(diag, at, "%s: out of memory", context);
-done:
-    sluice_node_free(value);
-    free(segment);
-    return rc;
+    return rc == 0 ? 0 : -1;
 }
 
 /* ------------------------------------------------------------- emitting -- */
