@@ -996,6 +996,189 @@ START_TEST(air_layer_refused)
 }
 END_TEST
 
+/* (e) The air vent. A closed box 0.6 x 0.4 m: water 0.2 m deep fed at
+ * q = 0.04 m^2/s by an inlet under a gate (x = 0, the lower 0.1 m,
+ * submerged 0.1 m), air above. In 0.4 s the inflow adds dV = 0.016 m^2 of
+ * water to the box's A = 0.12 m^2 of air.
+ *  - Without a vent (the control) the air is compressed: its mean pressure
+ *    rises towards B ((A / (A - dV))^gamma_a - 1) above p_b (dV the
+ *    water that came in; the water's sloshing rides on it); the test asks
+ *    for half of that.
+ *  - With the vent (a box in the air's top right corner) the mean air
+ *    pressure ends within 20 % of that rise of p_b. From 0.2 s on (the
+ *    start's sloshing, with c0 = 10 m/s, pushes air into the vent's lattice
+ *    at rest: measured 0.0126 kg of air, 3.2 times the water's volume, in
+ *    the first 0.1 s) the air that leaves through the vent (air_vent.csv's
+ *    mass_total / rho0_a) is the water's volume that comes in (inlet.csv's
+ *    mass_total / rho0_w), within what the change of the air's mean
+ *    pressure over that time holds (A |dp| / (gamma_a B)) plus 3 particles
+ *    (a particle leaves whole). Air mass balance is exact: the air now plus
+ *    the air the vent took is the air at the start; no water reaches the
+ *    vent. */
+#define VENT_END 0.4
+static char *vent_scene(int with_vent)
+{
+    char *text = NULL;
+    ck_assert_int_ge(
+        asprintf(&text,
+                 "dimensions: 2\n"
+                 "particles: {spacing: 0.02, smoothing_length_ratio: 1.5, rest_density: 1000}\n"
+                 "time: {end: %g}\n"
+                 "domain: {min: [-0.1, -0.1], max: [0.7, 0.5]}\n"
+                 "geometry:\n"
+                 "  fluid:\n"
+                 "    - {shape: box, min: [0, 0], max: [0.6, 0.2]}\n"
+                 "    - {shape: box, min: [0, 0.2], max: [0.6, 0.4]}\n"
+                 "  walls:\n"
+                 "    - {shape: polyline, name: box, points: [[-0.1, 0], [0.6, 0], [0.6, 0.4], "
+                 "[0, 0.4], [0, 0.1]]}\n"
+                 "initial: {density: hydrostatic}\n"
+                 "plugins:\n"
+                 "  wendland_c2: {}\n"
+                 "  two_phase: {speed_of_sound: 10, background_pressure: 100, "
+                 "air_above: [[0, 0.2]]}\n"
+                 "  continuity: {form: volume}\n"
+                 "  pressure_gradient: {form: density_product}\n"
+                 "  artificial_viscosity: {alpha: 0.1}\n"
+                 "  gravity: {}\n"
+                 "  dbc: {}\n"
+                 "  time_step: {courant: 0.25}\n"
+                 "  symplectic: {}\n"
+                 "  inlet: {position: 0, depth: 0.1, submergence: 0.1, discharge: 0.04, "
+                 "interval: 0.1}\n"
+                 "%s",
+                 VENT_END,
+                 with_vent ? "  air_vent: {box_min: [0.4, 0.3], box_max: [0.6, 0.4], "
+                             "interval: 0.1}\n"
+                           : ""),
+        0);
+    return text;
+}
+
+static void air_state(sluice_sim *sim, int *count, double *mean_pressure)
+{
+    const sluice_view *v = sluice_sim_view(sim);
+    const uint8_t *phase = phase_of(sim);
+    const sluice_real *p = test_column(sim, "pressure", 0);
+    double sum = 0;
+    int n = 0;
+    for (sluice_index i = 0; i < v->count; i++)
+        if (v->kind[i] == SLUICE_KIND_FLUID && phase[i]) {
+            sum += (double)p[i];
+            n++;
+        }
+    *count = n;
+    *mean_pressure = n ? sum / n : 0;
+}
+
+START_TEST(air_vent_holds_the_atmosphere)
+{
+    const double area = 0.6 * 0.2, gamma_a = 1.4;
+    double closed_rise = 0;
+    double rise[2] = {0, 0};
+    for (int with_vent = 0; with_vent < 2; with_vent++) {
+        char *yaml = vent_scene(with_vent);
+        sluice_sim *sim = test_load(with_vent ? "air-vent" : "air-vent-control", yaml, NULL, 0);
+        free(yaml);
+        char *dir = test_scratch(with_vent ? "air-vent-run" : "air-vent-control-run");
+        ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+        int air_start, air_middle = 0;
+        double p_start, p_middle = 0;
+        air_state(sim, &air_start, &p_start);
+        while (sluice_sim_time(sim) < VENT_END - 1e-12) {
+            ck_assert_msg(sluice_sim_step(sim) == SLUICE_RUN_COMPLETE, "step failed: %s",
+                          sluice_sim_failure(sim));
+            if (air_middle == 0 && sluice_sim_time(sim) > VENT_END / 2 - 1e-12)
+                air_state(sim, &air_middle, &p_middle);
+        }
+        int air_end;
+        double p_end;
+        air_state(sim, &air_end, &p_end);
+        ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+        sluice_sim_free(sim);
+        rise[with_vent] = p_end - TP_PB;
+        char path[4096];
+        double inflow[16];
+        snprintf(path, sizeof path, "%s/inlet.csv", dir);
+        const int inlet_rows = csv_column(path, 4, inflow, 16);
+        ck_assert_int_gt(inlet_rows, 1);
+        const double water_in = inflow[inlet_rows - 1] / TP_RHO_W;
+        if (!with_vent) {
+            closed_rise = TP_B * (pow(area / (area - water_in), gamma_a) - 1);
+            fprintf(stderr,
+                    "air vent control (closed box): %.4g m^2 of water in, air %d -> %d "
+                    "particles, mean air pressure %.1f Pa at the end (p_b %g; closed-box rise "
+                    "%.1f Pa)\n",
+                    water_in, air_start, air_end, p_end, TP_PB, closed_rise);
+            ck_assert_int_eq(air_end, air_start);
+            ck_assert_double_gt(rise[0], 0.5 * closed_rise);
+            free(dir);
+            continue;
+        }
+        double vented[16], water[16];
+        snprintf(path, sizeof path, "%s/air_vent.csv", dir);
+        const int rows = csv_column(path, 3, vented, 16);
+        ck_assert_int_eq(csv_column(path, 4, water, 16), rows);
+        ck_assert_int_gt(rows, 1);
+        const double air_particle = TP_RHO_A * TP_DX * TP_DX;
+        const double out_particles = vented[rows - 1] / air_particle;
+        /* the rows at 0.2 s and at the end (interval 0.1 s) */
+        const int middle = rows / 2;
+        const double air_out = (vented[rows - 1] - vented[middle]) / TP_RHO_A;
+        const double water_later = (inflow[inlet_rows - 1] - inflow[inlet_rows / 2]) / TP_RHO_W;
+        const double tolerance =
+            area * fabs(p_end - p_middle) / (gamma_a * TP_B) + 3 * TP_DX * TP_DX;
+        fprintf(stderr,
+                "air vent: %.4g m^2 of water in, %.6f air particles out (%.4g kg in the first "
+                "0.1 s); from 0.2 s: %.4g m^2 of water in, %.4g m^2 of air out (tolerance "
+                "%.3g m^2); air %d -> %d particles, mean air pressure %.1f Pa at 0.2 s, %.1f Pa "
+                "at the end (p_b %g; closed box %.1f Pa above it)\n",
+                water_in, out_particles, vented[1], water_later, air_out, tolerance, air_start,
+                air_end, p_middle, p_end, TP_PB, closed_rise);
+        ck_assert_msg(fabs(rise[1]) < 0.2 * closed_rise,
+                      "the air is %.1f Pa from p_b with the vent (closed box: %.1f)", rise[1],
+                      closed_rise);
+        ck_assert_msg(fabs(air_out - water_later) < tolerance,
+                      "%.5g m^2 of air left for %.5g m^2 of water", air_out, water_later);
+        ck_assert_msg(fabs(out_particles - nearbyint(out_particles)) < 1e-6,
+                      "the vent counted %.9g air particles", out_particles);
+        ck_assert_int_eq(air_start - air_end, (int)nearbyint(out_particles));
+        ck_assert_double_eq(water[rows - 1], 0);
+        free(dir);
+    }
+}
+END_TEST
+
+/* (f) The vent needs the phase, and lies between the inlet and the outlet. */
+START_TEST(air_vent_refused)
+{
+    char *yaml = vent_scene(1);
+    char *single = NULL;
+    ck_assert_int_ge(asprintf(&single, "%s", yaml), 0);
+    char *at = strstr(single, "  two_phase:");
+    ck_assert_ptr_nonnull(at);
+    char *end = strchr(at, '\n');
+    memmove(at, end + 1, strlen(end + 1) + 1);
+    char *with_tait = NULL;
+    ck_assert_int_ge(asprintf(&with_tait, "%s  tait: {speed_of_sound: 10}\n", single), 0);
+    test_load_refused("air-vent-single-phase", with_tait, "phase");
+    char *upstream = NULL;
+    ck_assert_int_ge(asprintf(&upstream, "%s", yaml), 0);
+    char *box = strstr(upstream, "box_min: [0.4, 0.3]");
+    ck_assert_ptr_nonnull(box);
+    memcpy(box, "box_min: [-.1, 0.3]", 19);
+    test_load_refused("air-vent-upstream", upstream, "upstream of the inlet");
+    char *downstream = NULL;
+    ck_assert_int_ge(asprintf(&downstream, "%s  outlet: {position: 0.5}\n", yaml), 0);
+    test_load_refused("air-vent-downstream", downstream, "downstream of the outlet");
+    free(yaml);
+    free(single);
+    free(with_tait);
+    free(upstream);
+    free(downstream);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("open_boundaries");
@@ -1026,10 +1209,12 @@ int main(void)
     tcase_add_loop_test(two_phase, outlet_phase_filter, 0, 2);
     tcase_add_test(two_phase, outlet_buffer_air_density);
     tcase_add_test(two_phase, inlet_air_layer_dissolved_oxygen);
+    tcase_add_test(two_phase, air_vent_holds_the_atmosphere);
     suite_add_tcase(s, two_phase);
     TCase *input = tcase_create("bad_input");
     tcase_add_test(input, bad_input_refused);
     tcase_add_test(input, air_layer_refused);
+    tcase_add_test(input, air_vent_refused);
     suite_add_tcase(s, input);
     return test_run_suite(s);
 }

@@ -58,6 +58,19 @@
  *   the plane (e.g. the air of a closed box over a channel whose water
  *   leaves through the outlet).
  *
+ * air_vent (two-phase scenes): the atmosphere for air in a box. The fluid
+ *   in its box becomes open air at rest with the air's density at p_b (at
+ *   the box's bottom face, hydrostatic within), where it stands. After each
+ *   step fluid whose centre is in the box leaves the domain, and so does air
+ *   within dx/2 of the box while the air's mean pressure (over every air
+ *   particle, averaged exponentially over response_time) exceeds p_b: air
+ *   the water displaces leaves, and the box's air stays near p_b. One way:
+ *   no air is drawn in. It lies between the inlet's and the outlet's planes
+ *   (each moves the open particles on its side). air_vent.csv: time,
+ *   mass_flux, volume_flux (/ rho0_a), mass_total, water_mass_total (water
+ *   that reached it, warned of), air_pressure_near and air_particles_near
+ *   (the air within the kernel support of the box).
+ *
  * Each boundary writes the mass and x-momentum flux through its plane to a
  * CSV (`inlet.csv`, `outlet.csv`): time, mass_flux (kg s^-1; per metre of
  * width in 2D), discharge (mass_flux / rho0: m^2 s^-1 in 2D, m^3 s^-1 in 3D),
@@ -85,6 +98,8 @@ typedef struct boundary_config {
     const char *file;
     sluice_real air_depth, submergence; /* inlet */
     int phase;             /* outlet: SLUICE_PHASE_* */
+    sluice_real box_min[3], box_max[3]; /* air_vent */
+    sluice_real response_time;          /* air_vent */
 } boundary_config;
 
 typedef struct boundary_state {
@@ -123,6 +138,13 @@ typedef struct boundary_state {
     int64_t written;
     sluice_index open_count;
     sluice_table *table;
+    /* air_vent: its box, the water that reached it, and the mean pressure
+     * of the air next to it at the last row */
+    double box_min[3], box_max[3];
+    int vent;
+    double response_time, air_pressure; /* the air's mean pressure, filtered */
+    double water_total;
+    int water_warned;
 } boundary_state;
 
 static const sluice_param_spec inlet_params[] = {
@@ -203,6 +225,23 @@ static const sluice_param_spec outlet_params[] = {
      "flux time series in the run directory", NULL, 0},
 };
 
+static const sluice_param_spec vent_params[] = {
+    {"box_min", SLUICE_PARAM_VECTOR, offsetof(boundary_config, box_min), NULL, 0, 0, 0, "m",
+     "lower corner of the vent's box (in the air, against the box's walls)", NULL,
+     SLUICE_LENGTH_DIM},
+    {"box_max", SLUICE_PARAM_VECTOR, offsetof(boundary_config, box_max), NULL, 0, 0, 0, "m",
+     "upper corner of the vent's box", NULL, SLUICE_LENGTH_DIM},
+    {"response_time", SLUICE_PARAM_REAL, offsetof(boundary_config, response_time), "0.05", 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s",
+     "time over which the air's mean pressure is averaged before the vent lets air out "
+     "(longer than the air box's acoustic period, length / c0_air)",
+     NULL, 0},
+    {"interval", SLUICE_PARAM_REAL, offsetof(boundary_config, interval), "0.05", 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between rows", NULL, 0},
+    {"file", SLUICE_PARAM_STRING, offsetof(boundary_config, file), "air_vent.csv", 0, 0, 0, NULL,
+     "air outflow time series in the run directory", NULL, 0},
+};
+
 static const sluice_field_spec boundary_fields[] = {
     {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", SLUICE_READ,
      SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity (imposed on open particles)"},
@@ -261,6 +300,9 @@ static int boundary_create(const sluice_api *api, sluice_host *host, const void 
     } else {
         s->velocity = c->velocity;
         s->phase_filter = c->phase;
+        sluice_real x = c->position;
+        if (api->publish_constant(host, "outlet_position", &x, 1, "m") != SLUICE_OK)
+            goto fail;
         /* a filter reads the phase: a scene without two_phase is refused by
          * the core (the field 'phase' is computed by no loaded plugin) */
         if (sluice_phase_declare(api, host, s->phase_filter) != SLUICE_OK)
@@ -413,12 +455,32 @@ static int boundary_bind(void *state, sluice_host *host)
         s->domain_max[d] = hi[d];
     }
     const char *needs_air = NULL;
-    if (s->inlet && s->air_depth > 0)
+    if (s->vent)
+        needs_air = "air_vent";
+    else if (s->inlet && s->air_depth > 0)
         needs_air = "air_depth";
     else if (!s->inlet && s->form == OUTLET_BUFFER && s->phase_filter != SLUICE_PHASE_WATER)
         needs_air = "a buffer outlet that takes air (phase: all or air)";
     if (bind_phase(s, host, needs_air) != SLUICE_OK)
         return SLUICE_ERROR;
+    if (s->vent) {
+        /* the inlet moves every open particle upstream of its plane, the
+         * outlet every one downstream of its own: the vent lies between */
+        sluice_real x_in, x_out;
+        if (api->constant(host, "inlet_position", &x_in, 1) == 1 && s->box_min[0] < x_in) {
+            api->error(host, "the vent's box (x from %g m) reaches upstream of the inlet's plane "
+                             "(x = %g m): move it downstream",
+                       s->box_min[0], (double)x_in);
+            return SLUICE_ERROR;
+        }
+        if (api->constant(host, "outlet_position", &x_out, 1) == 1 && s->box_max[0] > x_out) {
+            api->error(host, "the vent's box (x up to %g m) reaches downstream of the outlet's "
+                             "plane (x = %g m): move it upstream",
+                       s->box_max[0], (double)x_out);
+            return SLUICE_ERROR;
+        }
+        return SLUICE_OK;
+    }
     if (s->inlet) {
         if (s->air_depth > 0 && !s->has_phase) {
             api->error(host,
@@ -871,6 +933,303 @@ static int outlet_after_step(void *state, sluice_host *host)
     return flux_rows(s, host, v->time);
 }
 
+/* ------------------------------------------------------------- air vent -- */
+
+static int vent_create(const sluice_api *api, sluice_host *host, const void *config,
+                       void **state)
+{
+    const boundary_config *c = config;
+    boundary_state *s = sluice_util_state(api, host, sizeof *s);
+    if (!s)
+        return SLUICE_ERROR;
+    s->api = api;
+    s->vent = 1;
+    s->interval = c->interval;
+    s->response_time = c->response_time;
+    s->file = c->file;
+    /* the vent holds air: the field 'phase' of two_phase (the core refuses
+     * a scene without it) */
+    s->phase_filter = SLUICE_PHASE_AIR;
+    sluice_real value;
+    if (sluice_util_constant(api, host, "dimensions", &value) != SLUICE_OK ||
+        sluice_phase_declare(api, host, SLUICE_PHASE_AIR) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    s->dims = (uint32_t)value;
+    s->vertical = s->dims - 1;
+    for (uint32_t d = 0; d < s->dims; d++) {
+        s->box_min[d] = c->box_min[d];
+        s->box_max[d] = c->box_max[d];
+        if (!(s->box_max[d] > s->box_min[d])) {
+            api->error(host, "box_max %c = %g m must exceed box_min %c = %g m", "xyz"[d],
+                       s->box_max[d], "xyz"[d], s->box_min[d]);
+            free(s);
+            return SLUICE_ERROR;
+        }
+    }
+    *state = s;
+    return SLUICE_OK;
+}
+
+static int in_box(const boundary_state *s, const sluice_view *v, sluice_index i)
+{
+    for (uint32_t d = 0; d < s->dims; d++) {
+        const double x = (double)v->position[d][i];
+        if (!(x >= s->box_min[d] && x < s->box_max[d]))
+            return 0;
+    }
+    return 1;
+}
+
+/* The squared distance from particle i to the box (0 inside). */
+static double box_gap2(const boundary_state *s, const sluice_view *v, sluice_index i)
+{
+    double distance2 = 0;
+    for (uint32_t d = 0; d < s->dims; d++) {
+        const double x = (double)v->position[d][i];
+        const double gap = x < s->box_min[d] ? s->box_min[d] - x
+                           : x > s->box_max[d] ? x - s->box_max[d]
+                                               : 0;
+        distance2 += gap * gap;
+    }
+    return distance2;
+}
+
+/* The air's pressure in the vent: p_b at the box's bottom face, the air's
+ * hydrostatic weight above and below it. */
+static double vent_density(const boundary_state *s, double z)
+{
+    return air_density(s, s->rho_a * s->g * (s->box_min[s->vertical] - z));
+}
+
+static int vent_initialise(void *state, sluice_host *host)
+{
+    boundary_state *s = state;
+    const sluice_api *api = s->api;
+    const sluice_view *v = api->view(host);
+    double thinnest = INFINITY;
+    for (uint32_t d = 0; d < s->dims; d++) {
+        if (!(s->box_min[d] >= s->domain_min[d] && s->box_max[d] <= s->domain_max[d])) {
+            api->error(host,
+                       "the vent's box (%c from %g to %g m) leaves the domain [%g, %g] m: move "
+                       "it inside",
+                       "xyz"[d], s->box_min[d], s->box_max[d], s->domain_min[d],
+                       s->domain_max[d]);
+            return SLUICE_ERROR;
+        }
+        thinnest = fmin(thinnest, s->box_max[d] - s->box_min[d]);
+    }
+    if (thinnest < s->width - 1e-9 * s->dx)
+        api->warning(host,
+                     "the vent's box is %g m across at its thinnest, less than the kernel "
+                     "support (%g m): the air next to it sees a truncated atmosphere unless "
+                     "walls close that side",
+                     thinnest, s->width);
+    /* the fluid in the box becomes the vent's lattice, where it stands (so
+     * that the vent is the air's own lattice, without a seam) */
+    if (reserve(s, host, v->count) != SLUICE_OK)
+        return SLUICE_ERROR;
+    sluice_index inside = 0, open = 0;
+    for (sluice_index i = 0; i < v->count; i++)
+        if (v->kind[i] != SLUICE_KIND_WALL && in_box(s, v, i)) {
+            s->to_convert[inside++] = i;
+            open += v->kind[i] == SLUICE_KIND_OPEN;
+        }
+    if (open) {
+        api->error(host, "the vent's box holds %u particles of an open boundary: keep it apart "
+                         "from inlets and outlets",
+                   (unsigned)open);
+        return SLUICE_ERROR;
+    }
+    if (inside == 0) {
+        api->error(host, "the vent's box holds no fluid: place it in the air (its particles "
+                         "become the vent)");
+        return SLUICE_ERROR;
+    }
+    if (api->set_kind(host, s->to_convert, inside, SLUICE_KIND_OPEN) != SLUICE_OK)
+        return SLUICE_ERROR;
+    v = api->view(host);
+    sluice_real *rho = sluice_real_column(v, s->density_field, 0);
+    sluice_real *mass = sluice_real_column(v, s->mass_field, 0);
+    uint8_t *phase = (uint8_t *)v->columns[s->phase_field.column];
+    for (sluice_index k = 0; k < inside; k++) {
+        const sluice_index i = s->to_convert[k];
+        for (uint32_t d = 0; d < s->dims; d++)
+            sluice_real_column(v, s->velocity_field, d)[i] = 0;
+        rho[i] = (sluice_real)vent_density(s, (double)v->position[s->vertical][i]);
+        mass[i] = (sluice_real)s->air_mass;
+        phase[i] = 1;
+    }
+    s->open_count = inside;
+    s->air_pressure = s->p_ref;
+    api->info(host,
+              "%u particles in the box hold the atmosphere (p_b = %g Pa); air that enters "
+              "leaves the domain",
+              (unsigned)inside, s->p_ref);
+    s->table = api->table_open(host, s->file,
+                               "time,mass_flux,volume_flux,mass_total,water_mass_total,"
+                               "air_pressure_near,air_particles_near");
+    return s->table ? SLUICE_OK : SLUICE_ERROR;
+}
+
+/* The mean pressure of the air within the kernel support outside the box
+ * (what the vent holds at p_b), and how many particles that is. */
+static double vent_pressure_near(const boundary_state *s, const sluice_view *v,
+                                 sluice_index *count)
+{
+    const sluice_real *p = sluice_real_column(v, s->pressure_field, 0);
+    const uint8_t *phase = (const uint8_t *)v->columns[s->phase_field.column];
+    double sum = 0;
+    sluice_index n = 0;
+    for (sluice_index i = 0; i < v->count; i++) {
+        if (v->kind[i] != SLUICE_KIND_FLUID || !phase[i])
+            continue;
+        if (box_gap2(s, v, i) < s->width * s->width) {
+            sum += (double)p[i];
+            n++;
+        }
+    }
+    *count = n;
+    return n ? sum / (double)n : 0;
+}
+
+static int vent_row(boundary_state *s, const sluice_view *v, double time)
+{
+    const double span = time - s->row_time;
+    sluice_index near = 0;
+    const double pressure = s->has_pressure ? vent_pressure_near(s, v, &near) : 0;
+    const double flux = span > 0 ? s->mass_interval / span : 0;
+    const double row[7] = {time, flux, flux / s->rho_a, s->mass_total, s->water_total,
+                           pressure, (double)near};
+    if (s->api->table_row(s->table, row, 7) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->mass_interval = 0;
+    s->row_time = time;
+    return SLUICE_OK;
+}
+
+static int vent_after_step(void *state, sluice_host *host)
+{
+    boundary_state *s = state;
+    const sluice_api *api = s->api;
+    const sluice_view *v = api->view(host);
+    if (reserve(s, host, v->count) != SLUICE_OK)
+        return SLUICE_ERROR;
+    const sluice_real *mass = sluice_real_column(v, s->mass_field, 0);
+    const uint8_t *phase = (const uint8_t *)v->columns[s->phase_field.column];
+    /* the air as a whole above the atmosphere's pressure (the mean over
+     * every air particle: one particle's pressure is noisy, and the air
+     * right at the lattice, at rest, is pressed against it by the flow) */
+    int compressed = 0;
+    if (s->has_pressure) {
+        const sluice_real *p = sluice_real_column(v, s->pressure_field, 0);
+        double sum = 0;
+        sluice_index n = 0;
+        for (sluice_index i = 0; i < v->count; i++)
+            if (v->kind[i] == SLUICE_KIND_FLUID && phase[i]) {
+                sum += (double)p[i];
+                n++;
+            }
+        /* an exponential average over the response time: the air's
+         * acoustic sloshing, let out at its peaks only, would drain it */
+        const double mean = n ? sum / (double)n : s->p_ref;
+        const double dt = v->time - s->last_time, weight = fmin(1.0, dt / s->response_time);
+        s->air_pressure += (mean - s->air_pressure) * weight;
+        compressed = s->air_pressure > s->p_ref;
+    }
+    const double touch2 = 0.25 * s->dx * s->dx;
+    sluice_index removed = 0;
+    double water = 0;
+    for (sluice_index i = 0; i < v->count; i++) {
+        if (v->kind[i] != SLUICE_KIND_FLUID)
+            continue;
+        /* air whose centre is in the box leaves; so does air that touches
+         * it (its centre within dx/2 of the box) while the air next to the
+         * vent is above the atmosphere's pressure: the lattice, at rest,
+         * would otherwise hold it off like a wall */
+        const double gap2 = box_gap2(s, v, i);
+        if (gap2 > 0 && !(compressed && gap2 < touch2 && phase[i]))
+            continue;
+        s->to_remove[removed++] = i;
+        if (phase[i]) {
+            s->mass_interval += mass[i];
+            s->mass_total += mass[i];
+        } else {
+            water += mass[i];
+        }
+    }
+    if (water > 0) {
+        s->water_total += water;
+        if (!s->water_warned)
+            api->warning(host,
+                         "water reached the air vent at t = %g s and left the domain through "
+                         "it (water_mass_total in %s): move the vent away from the flow",
+                         v->time, s->file);
+        s->water_warned = 1;
+    }
+    s->last_time = v->time;
+    if (removed && api->remove_particles(host, s->to_remove, removed) != SLUICE_OK)
+        return SLUICE_ERROR;
+    const double tolerance = 1e-9 * s->interval;
+    if (v->time + tolerance < (double)s->written * s->interval)
+        return SLUICE_OK;
+    if (vent_row(s, api->view(host), v->time) != SLUICE_OK)
+        return SLUICE_ERROR;
+    while ((double)s->written * s->interval <= v->time + tolerance)
+        s->written++;
+    api->request_time(host, (double)s->written * s->interval);
+    return SLUICE_OK;
+}
+
+static int vent_finish(void *state, sluice_host *host, int status)
+{
+    boundary_state *s = state;
+    (void)status;
+    if (s->table && s->last_time > s->row_time)
+        return vent_row(s, s->api->view(host), s->last_time);
+    return SLUICE_OK;
+}
+
+static int vent_save(void *state, sluice_host *host)
+{
+    const boundary_state *s = state;
+    const double values[6] = {s->last_time, s->mass_interval, s->mass_total, s->water_total,
+                              s->row_time,  s->air_pressure};
+    const int64_t counts[2] = {s->written, s->water_warned};
+    if (s->api->state_write(host,
+                            "last_time,mass_interval,mass_total,water_mass_total,row_time,"
+                            "air_pressure",
+                            SLUICE_STATE_DOUBLE, 6, values) != SLUICE_OK ||
+        s->api->state_write(host, "rows_written,water_warned", SLUICE_STATE_INT64, 2, counts) !=
+            SLUICE_OK)
+        return SLUICE_ERROR;
+    return SLUICE_OK;
+}
+
+static int vent_load(void *state, sluice_host *host)
+{
+    boundary_state *s = state;
+    double values[6];
+    int64_t counts[2];
+    if (s->api->state_read(host,
+                           "last_time,mass_interval,mass_total,water_mass_total,row_time,"
+                           "air_pressure",
+                           SLUICE_STATE_DOUBLE, 6, values) != SLUICE_OK ||
+        s->api->state_read(host, "rows_written,water_warned", SLUICE_STATE_INT64, 2, counts) !=
+            SLUICE_OK)
+        return SLUICE_ERROR;
+    s->last_time = values[0];
+    s->mass_interval = values[1];
+    s->mass_total = values[2];
+    s->water_total = values[3];
+    s->row_time = values[4];
+    s->air_pressure = values[5];
+    s->written = counts[0];
+    s->water_warned = (int)counts[1];
+    return SLUICE_OK;
+}
+
 static int boundary_finish(void *state, sluice_host *host, int status)
 {
     boundary_state *s = state;
@@ -963,7 +1322,29 @@ static const sluice_component components[] = {
         .save_state = boundary_save,
         .load_state = boundary_load,
     },
+    {
+        .name = "air_vent",
+        .summary = "the atmosphere for a closed air box: open air particles held at the "
+                   "background pressure p_b in a box; air that enters it leaves the domain",
+        .reference = "Sluice (docs/physics.md, \"Air vent\"); p_b after Colagrossi & "
+                     "Landrini (2003)",
+        .dimensions = SLUICE_DIMS_ALL,
+        .params = vent_params,
+        .param_count = SLUICE_COUNT(vent_params),
+        .config_size = sizeof(boundary_config),
+        .fields = boundary_fields,
+        .field_count = SLUICE_COUNT(boundary_fields),
+        .create = vent_create,
+        .destroy = boundary_destroy,
+        .bind = boundary_bind,
+        .initialise = vent_initialise,
+        .after_step = vent_after_step,
+        .finish = vent_finish,
+        .save_state = vent_save,
+        .load_state = vent_load,
+    },
 };
 
-SLUICE_DEFINE_LIBRARY("open_boundaries", "1.0.0", "inlets and outlets for channel flows",
-                      SLUICE_DIMS_ALL, components)
+SLUICE_DEFINE_LIBRARY("open_boundaries", "1.1.0",
+                      "inlets and outlets for channel flows, and an air vent", SLUICE_DIMS_ALL,
+                      components)

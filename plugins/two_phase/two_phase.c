@@ -44,7 +44,10 @@
  *    Landrini 2003; seed 001 eq. 12): an attractive van der Waals pressure
  *    -a rho^2 in the air, evaluated with a longer smoothing length H, gives
  *        dv_i/dt += 2 a sum_{j air} m_j grad_i W(r_ij, H)     (i air)
- *    (water: a = 0). The pair force is antisymmetric (momentum is conserved)
+ *    (water: a = 0; j: fluid air only, not an open boundary's particles,
+ *    which hold an imposed state at rest, like walls: an air vent's lattice
+ *    drew the air beside it in). The pair force is antisymmetric (momentum
+ *    is conserved)
  *    and derives from the potential -a sum_i m_i rho^H_i, so it conserves
  *    energy. H = 2h in Nugent & Posch: the pairs reach 2H = 4h, beyond the
  *    scene kernel's support (2h); the term asks the core for them with
@@ -570,6 +573,7 @@ static inline void cohesion_pairs(const cohesion_state *s, const sluice_view *v,
 {
     const uint8_t *restrict phase = v->columns[s->phase.column];
     const sluice_index *restrict nb = b->neighbour;
+    const uint8_t *restrict kj = b->neighbour_kind;
     const sluice_real *restrict mj = b->gathered[s->mass.column];
     const sluice_real *restrict r = b->distance;
     const sluice_real *restrict rx = b->offset[0], *restrict ry = b->offset[1];
@@ -585,7 +589,8 @@ static inline void cohesion_pairs(const cohesion_state *s, const sluice_view *v,
             continue; /* a = 0 in the water */
         sluice_real sx = 0, sy = 0, sz = 0;
         for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
-            const sluice_real air = (sluice_real)(phase[nb[k]] == PHASE_AIR);
+            const sluice_real air =
+                (sluice_real)(phase[nb[k]] == PHASE_AIR && kj[k] != SLUICE_KIND_OPEN);
             const sluice_real c = air * mj[k] * cohesion_shape(r[k] * iH, kernel);
             sx += c * rx[k];
             sy += c * ry[k];
@@ -651,5 +656,5 @@ static const sluice_component components[] = {
     },
 };
 
-SLUICE_DEFINE_LIBRARY("two_phase", "1.0.0", "air-water two-phase SPH: phases, equation of state, "
+SLUICE_DEFINE_LIBRARY("two_phase", "1.1.0", "air-water two-phase SPH: phases, equation of state, "
                       "cohesion of the air", SLUICE_DIMS_ALL, components)
