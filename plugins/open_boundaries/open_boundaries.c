@@ -742,6 +742,14 @@ static int write_flux_row(boundary_state *s, double time)
     return SLUICE_OK;
 }
 
+static int vent_row(boundary_state *s, const sluice_view *v, double time);
+
+/* A row of the boundary's table: the fluxes, or the vent's row. */
+static int write_row(boundary_state *s, sluice_host *host, double time)
+{
+    return s->vent ? vent_row(s, s->api->view(host), time) : write_flux_row(s, time);
+}
+
 /* Rows at multiples of the interval (the first at t = 0: zero flux). */
 static int flux_rows(boundary_state *s, sluice_host *host, double time)
 {
@@ -749,7 +757,7 @@ static int flux_rows(boundary_state *s, sluice_host *host, double time)
     double next = (double)s->written * s->interval;
     if (time + tolerance < next)
         return SLUICE_OK;
-    if (write_flux_row(s, time) != SLUICE_OK)
+    if (write_row(s, host, time) != SLUICE_OK)
         return SLUICE_ERROR;
     while ((double)s->written * s->interval <= time + tolerance)
         s->written++;
@@ -1144,10 +1152,10 @@ static int vent_after_step(void *state, sluice_host *host)
     for (sluice_index i = 0; i < v->count; i++) {
         if (v->kind[i] != SLUICE_KIND_FLUID)
             continue;
-        /* air whose centre is in the box leaves; so does air that touches
-         * it (its centre within dx/2 of the box) while the air next to the
-         * vent is above the atmosphere's pressure: the lattice, at rest,
-         * would otherwise hold it off like a wall */
+        /* fluid whose centre is in the box leaves; so does air that
+         * touches it (its centre within dx/2 of the box) while the air is
+         * compressed (above): the lattice, at rest, would otherwise hold it
+         * off like a wall */
         const double gap2 = box_gap2(s, v, i);
         if (gap2 > 0 && !(compressed && gap2 < touch2 && phase[i]))
             continue;
@@ -1168,27 +1176,11 @@ static int vent_after_step(void *state, sluice_host *host)
                          v->time, s->file);
         s->water_warned = 1;
     }
-    s->last_time = v->time;
+    const double time = v->time;
+    s->last_time = time;
     if (removed && api->remove_particles(host, s->to_remove, removed) != SLUICE_OK)
         return SLUICE_ERROR;
-    const double tolerance = 1e-9 * s->interval;
-    if (v->time + tolerance < (double)s->written * s->interval)
-        return SLUICE_OK;
-    if (vent_row(s, api->view(host), v->time) != SLUICE_OK)
-        return SLUICE_ERROR;
-    while ((double)s->written * s->interval <= v->time + tolerance)
-        s->written++;
-    api->request_time(host, (double)s->written * s->interval);
-    return SLUICE_OK;
-}
-
-static int vent_finish(void *state, sluice_host *host, int status)
-{
-    boundary_state *s = state;
-    (void)status;
-    if (s->table && s->last_time > s->row_time)
-        return vent_row(s, s->api->view(host), s->last_time);
-    return SLUICE_OK;
+    return flux_rows(s, host, time);
 }
 
 static int vent_save(void *state, sluice_host *host)
@@ -1233,10 +1225,9 @@ static int vent_load(void *state, sluice_host *host)
 static int boundary_finish(void *state, sluice_host *host, int status)
 {
     boundary_state *s = state;
-    (void)host;
     (void)status;
     if (s->table && s->last_time > s->row_time)
-        return write_flux_row(s, s->last_time);
+        return write_row(s, host, s->last_time);
     return SLUICE_OK;
 }
 
@@ -1339,7 +1330,7 @@ static const sluice_component components[] = {
         .bind = boundary_bind,
         .initialise = vent_initialise,
         .after_step = vent_after_step,
-        .finish = vent_finish,
+        .finish = boundary_finish,
         .save_state = vent_save,
         .load_state = vent_load,
     },
