@@ -458,7 +458,7 @@ END_TEST
  * moved by up to 0.45 of the skin without a list rebuild (the cells it scans
  * must cover the motion); its batches carry no kernel values; the terms
  * within the support keep their single pass. Closed and periodic domains. */
-static void check_reach(int periodic)
+static void check_reach(int periodic, int checkerboard)
 {
     char yaml[2048];
     const double dx = 0.02, radius = 4 * 1.3 * dx; /* 2 x the support 2h, h = 1.3 dx */
@@ -473,10 +473,13 @@ static void check_reach(int periodic)
              "  walls: [{shape: polyline, points: [[0, 0], [0.6, 0]]}]\n"
              "initial: {density: rest}\n"
              "plugins: {wendland_c2: {}, tait: {speed_of_sound: 10}, continuity: {}, "
-             "pressure_gradient: {}, dbc: {}, reach_probe: {radius: %.17g}, symplectic: {}}\n",
+             "pressure_gradient: {}, dbc: {}, reach_probe: {radius: %.17g, checkerboard: %s}, "
+             "symplectic: {}}\n",
              fixture_dir(), dx, periodic ? ", periodic: x" : "", periodic ? 0.0 : 0.1,
-             periodic ? 0.6 : 0.5, radius);
+             periodic ? 0.6 : 0.5, radius, checkerboard ? "true" : "false");
     sluice_sim *sim = test_load(periodic ? "reach-periodic" : "reach", yaml, NULL, 0);
+    sluice_field group_field;
+    ck_assert_int_eq(sluice_sim_field(sim, "reach_group", &group_field), SLUICE_OK);
     uint32_t pair_passes = 0, reach_passes = 0;
     for (uint32_t p = 0; p < sim->pass_count; p++)
         if (sim->passes[p].is_pair) {
@@ -496,14 +499,21 @@ static void check_reach(int periodic)
         const sluice_real *distance = test_column(sim, "reach_distance", 0);
         const sluice_real *offset = test_column(sim, "reach_offset_x", 0);
         const sluice_real *null = test_column(sim, "reach_kernel_null", 0);
+        const uint8_t *group = v->columns[group_field.column];
         double worst = 0, pairs = 0;
-        int targets = 0;
+        int targets = 0, left_out = 0;
         for (sluice_index i = 0; i < v->count; i++) {
             if (v->kind[i] != SLUICE_KIND_FLUID)
                 continue;
+            if (group[i] != 1) { /* left out of the pass: never written */
+                ck_assert_msg(count[i] == 0, "particle %u of group 0 has %g pairs", (unsigned)i,
+                              count[i]);
+                left_out++;
+                continue;
+            }
             double n = 0, r = 0, x = 0;
             for (sluice_index j = 0; j < v->count; j++) {
-                if (j == i || v->kind[j] != SLUICE_KIND_FLUID)
+                if (j == i || v->kind[j] != SLUICE_KIND_FLUID || group[j] != 1)
                     continue;
                 double ex = v->position[0][i] - v->position[0][j];
                 double ey = v->position[1][i] - v->position[1][j];
@@ -523,10 +533,15 @@ static void check_reach(int periodic)
             pairs += n;
             targets++;
         }
-        fprintf(stderr, "reach %g m (%s, round %d): %d targets, %.0f pairs (%.1f each) as brute "
-                        "force; largest difference of the summed distances and offsets %.2e m\n",
-                radius, periodic ? "periodic" : "closed", round, targets, pairs, pairs / targets,
-                worst);
+        fprintf(stderr, "reach %g m (%s%s, round %d): %d targets (%d left out), %.0f pairs (%.1f "
+                        "each) as brute force; largest difference of the summed distances and "
+                        "offsets %.2e m\n",
+                radius, periodic ? "periodic" : "closed", checkerboard ? ", checkerboard" : "",
+                round, targets, left_out, pairs, pairs / targets, worst);
+        if (checkerboard)
+            ck_assert_msg(left_out > targets / 2 && targets > left_out / 2,
+                          "the checkerboard should split the fluid about evenly: %d and %d",
+                          targets, left_out);
         ck_assert_msg(worst < 1e-12, "summed distances and offsets differ by %g m", worst);
         /* move every fluid particle by up to 0.45 skin (no rebuild: < skin / 2) */
         sluice_real *px = (sluice_real *)v->position[0], *py = (sluice_real *)v->position[1];
@@ -542,10 +557,19 @@ static void check_reach(int periodic)
     sluice_sim_free(sim);
 }
 
-START_TEST(reach_matches_brute_force) { check_reach(0); }
+START_TEST(reach_matches_brute_force) { check_reach(0, 0); }
 END_TEST
 
-START_TEST(reach_matches_brute_force_periodic) { check_reach(1); }
+START_TEST(reach_matches_brute_force_periodic) { check_reach(1, 0); }
+END_TEST
+
+/* api->restrict_reach (ABI 1.7): the fixture restricted to a checkerboard
+ * of particles (reach_group = 1) gets exactly the pairs among them, and
+ * the others are never targets. */
+START_TEST(restricted_reach_matches_brute_force) { check_reach(0, 1); }
+END_TEST
+
+START_TEST(restricted_reach_matches_brute_force_periodic) { check_reach(1, 1); }
 END_TEST
 
 /* A reach longer than half a periodic side (plus a cell) is refused at load,
@@ -584,6 +608,8 @@ int main(void)
     tcase_add_test(c, schedule_has_fewest_pair_passes);
     tcase_add_test(c, reach_matches_brute_force);
     tcase_add_test(c, reach_matches_brute_force_periodic);
+    tcase_add_test(c, restricted_reach_matches_brute_force);
+    tcase_add_test(c, restricted_reach_matches_brute_force_periodic);
     tcase_add_test(c, reach_longer_than_periodic_side_refused);
     suite_add_tcase(s, c);
     return test_run_suite(s);

@@ -1171,6 +1171,39 @@ START_TEST(air_vent_refused)
     char *downstream = NULL;
     ck_assert_int_ge(asprintf(&downstream, "%s  outlet: {position: 0.5}\n", yaml), 0);
     test_load_refused("air-vent-downstream", downstream, "downstream of the outlet");
+    /* in the water, and next to it (the water's surface at y = 0.2 m, the
+     * kernel support 0.06 m); the vent listed before two_phase, which sets
+     * the phases first all the same */
+    const char *const boxes[2][2] = {{"box_min: [0.4, 0.05]", "box_max: [0.6, 0.15]"},
+                                     {"box_min: [0.4, 0.24]", "box_max: [0.6, 0.40]"}};
+    const char *const needles[2] = {"water particles and has", "holds 0 water particles"};
+    for (int k = 0; k < 2; k++) {
+        char *wet = NULL;
+        ck_assert_int_ge(asprintf(&wet, "%s", yaml), 0);
+        char *line = strstr(wet, "  air_vent:");
+        ck_assert_ptr_nonnull(line);
+        char *vent = strndup(line, (size_t)(strchr(line, '\n') + 1 - line));
+        ck_assert_ptr_nonnull(vent);
+        *line = '\0';
+        char *plugins = strstr(wet, "plugins:\n");
+        ck_assert_ptr_nonnull(plugins);
+        plugins += strlen("plugins:\n");
+        char *moved = NULL;
+        ck_assert_int_ge(asprintf(&moved, "%.*s%s%s", (int)(plugins - wet), wet, vent, plugins),
+                         0);
+        char *min = strstr(moved, "box_min: [0.4, 0.3], box_max: [0.6, 0.4]");
+        ck_assert_ptr_nonnull(min);
+        char *placed = NULL;
+        ck_assert_int_ge(asprintf(&placed, "%.*s%s, %s%s", (int)(min - moved), moved,
+                                  boxes[k][0], boxes[k][1], min + 40),
+                         0);
+        free(moved);
+        moved = placed;
+        test_load_refused(k ? "air-vent-near-water" : "air-vent-in-water", moved, needles[k]);
+        free(wet);
+        free(vent);
+        free(moved);
+    }
     free(yaml);
     free(single);
     free(with_tait);

@@ -346,6 +346,9 @@ static sluice_index fill_reach(sluice_pair_engine *engine, const sluice_pair_pas
             const sluice_real *restrict px = view->position[0], *restrict py = view->position[1];
             const sluice_real *restrict pz = dims == 3 ? view->position[2] : NULL;
             const uint8_t *restrict kinds = view->kind;
+            const uint8_t *restrict select =
+                pass->select_column >= 0 ? view->columns[pass->select_column] : NULL;
+            const uint8_t wanted = pass->select_value;
             for (int64_t cz = z0; cz <= z1; cz++)
                 for (int64_t cy = y0; cy <= y1; cy++) {
                     const size_t row = ((size_t)cz * (size_t)grid->cells[1] + (size_t)cy) *
@@ -360,7 +363,8 @@ static sluice_index fill_reach(sluice_pair_engine *engine, const sluice_pair_pas
                         const double e0 = xi[0] - (double)px[j], e1 = xi[1] - (double)py[j];
                         const double e2 = pz ? xi[2] - (double)pz[j] : 0.0;
                         const double s2 = e0 * e0 + e1 * e1 + e2 * e2;
-                        if (!(s2 < reach2) || j == i || !((mask >> kinds[j]) & 1u))
+                        if (!(s2 < reach2) || j == i || !((mask >> kinds[j]) & 1u) ||
+                            (select && select[j] != wanted))
                             continue;
                         w->neighbour[np] = j;
                         w->offset[0][np] = (sluice_real)e0;
@@ -394,7 +398,10 @@ static sluice_index fill_reach(sluice_pair_engine *engine, const sluice_pair_pas
                         continue;
                     }
                     for (sluice_index j = j0; j < j1; j++) {
-                        if (j == i || !((mask >> view->kind[j]) & 1u))
+                        if (j == i || !((mask >> view->kind[j]) & 1u) ||
+                            (pass->select_column >= 0 &&
+                             ((const uint8_t *)view->columns[pass->select_column])[j] !=
+                                 pass->select_value))
                             continue;
                         double e[3] = {0, 0, 0}, s2 = 0;
                         for (uint32_t d = 0; d < dims; d++) {
@@ -442,6 +449,8 @@ static int pair_pass_run_reach(sluice_pair_engine *engine, const sluice_pair_pas
         for (uint32_t c = 0; c < w->column_count && !failed; c++)
             w->gathered[c] = NULL;
         const uint8_t *kind = view->kind;
+        const uint8_t *select =
+            pass->select_column >= 0 ? view->columns[pass->select_column] : NULL;
 
 #pragma omp for schedule(dynamic, 4)
         for (sluice_index chunk = 0; chunk < chunks; chunk++) {
@@ -455,7 +464,7 @@ static int pair_pass_run_reach(sluice_pair_engine *engine, const sluice_pair_pas
                     continue;
                 sluice_index t = 0, np = 0;
                 for (sluice_index i = a; i < b && !failed; i++)
-                    if (kind[i] == k)
+                    if (kind[i] == k && (!select || select[i] == pass->select_value))
                         np = fill_reach(engine, pass, grid, view, w, i, &t, np, k, mask, &failed);
                 if (failed)
                     break;

@@ -30,6 +30,11 @@ typedef struct sluice_pair_pass {
      * within this radius (m, beyond the support), found through the cell
      * grid, with no kernel values (api->request_reach) */
     sluice_real reach;
+    /* reach passes (api->restrict_reach): only particles whose uint8
+     * column `select_column` holds `select_value`, as targets and as
+     * neighbours; -1: every particle */
+    int32_t select_column;
+    uint8_t select_value;
 } sluice_pair_pass;
 
 typedef struct sluice_pair_workspace {

@@ -1074,6 +1074,31 @@ static int api_request_reach(sluice_host *host, sluice_real radius)
     return SLUICE_OK;
 }
 
+static int api_restrict_reach(sluice_host *host, const char *field, uint32_t value)
+{
+    sluice_sim *sim = host->sim;
+    if (host->instance == SLUICE_CORE_INSTANCE || sim->creating != (int64_t)host->instance) {
+        api_error(host, "api->restrict_reach is for a component's create()");
+        return SLUICE_ERROR;
+    }
+    sluice_instance *in = &sim->instances[host->instance];
+    if (!(in->reach > 0)) {
+        api_error(host, "api->restrict_reach: '%s' did not request a reach "
+                        "(api->request_reach comes first)",
+                  in->name);
+        return SLUICE_ERROR;
+    }
+    if (!field || !field[0] || strlen(field) >= sizeof in->reach_field || value > 255) {
+        api_error(host, "api->restrict_reach: needs a field name (under %zu characters) and a "
+                        "value from 0 to 255",
+                  sizeof in->reach_field);
+        return SLUICE_ERROR;
+    }
+    memcpy(in->reach_field, field, strlen(field) + 1);
+    in->reach_value = value;
+    return SLUICE_OK;
+}
+
 static const sluice_api api_table = {
     sizeof(sluice_api),
     SLUICE_ABI_MAJOR,
@@ -1118,6 +1143,7 @@ static const sluice_api api_table = {
     sluice_api_state_read,
     sluice_api_state_length,
     api_request_reach,
+    api_restrict_reach,
 };
 
 /* ------------------------------------------------------------ schedule -- */
@@ -1152,6 +1178,7 @@ static int is_evaluation(const sluice_component *c)
 static int fill_pair_pass(sluice_sim *sim, sluice_pair_pass *p, const uint32_t *members,
                           uint32_t count)
 {
+    p->select_column = -1;
     p->terms = calloc(count ? count : 1, sizeof *p->terms);
     if (!p->terms)
         return -1;
@@ -1208,6 +1235,83 @@ static void free_pair_pass(sluice_pair_pass *p)
     for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++)
         free(p->gathered_columns[k]);
     memset(p, 0, sizeof *p);
+}
+
+/* The order of the initialise calls: a component that writes a field
+ * initialises before the components that only read it (two_phase sets each
+ * particle's phase before the components that act on one phase look at
+ * it), scene order otherwise; a cycle falls back to scene order. Returns a
+ * malloc'd permutation of the instances, NULL when out of memory. */
+static uint32_t *initialise_order(const sluice_sim *sim)
+{
+    const uint32_t n = sim->instance_count;
+    uint32_t *order = malloc((n ? n : 1) * sizeof *order);
+    uint8_t *placed = calloc(n ? n : 1, 1);
+    if (!order || !placed) {
+        free(order);
+        free(placed);
+        return NULL;
+    }
+    for (uint32_t o = 0; o < n; o++) {
+        /* the first instance in scene order that waits for no writer */
+        uint32_t chosen = n;
+        for (uint32_t k = 0; k < n && chosen == n; k++) {
+            if (placed[k])
+                continue;
+            int waits = 0;
+            for (uint32_t f = 0; f < sim->field_count && !waits; f++) {
+                const sluice_field_entry *field = &sim->fields[f];
+                int reads = 0;
+                for (uint32_t d = 0; d < field->declarer_count; d++)
+                    if (field->declarers[d].instance == k) {
+                        const uint32_t access = field->declarers[d].access;
+                        reads = (access & (SLUICE_READ | SLUICE_READ_NEIGHBOUR)) &&
+                                !(access & SLUICE_WRITE);
+                    }
+                for (uint32_t d = 0; d < field->declarer_count && reads; d++) {
+                    const sluice_declarer *dec = &field->declarers[d];
+                    if (dec->instance != SLUICE_CORE_INSTANCE && dec->instance != k &&
+                        (dec->access & SLUICE_WRITE) && !placed[dec->instance])
+                        waits = 1;
+                }
+            }
+            if (!waits)
+                chosen = k;
+        }
+        if (chosen == n) /* a cycle: scene order */
+            for (uint32_t k = 0; k < n && chosen == n; k++)
+                if (!placed[k])
+                    chosen = k;
+        placed[chosen] = 1;
+        order[o] = chosen;
+    }
+    free(placed);
+    return order;
+}
+
+/* The reach pass's selection (api->restrict_reach): a uint8 field of one
+ * component that the instance declared it reads. 0, or 1 with the error
+ * reported. */
+static int reach_selection(sluice_sim *sim, uint32_t v, sluice_pair_pass *pass)
+{
+    const sluice_instance *in = &sim->instances[v];
+    if (!in->reach_field[0])
+        return 0;
+    const sluice_field_entry *field = sluice_sim_find_field(sim, in->reach_field);
+    int reads = 0;
+    for (uint32_t d = 0; field && d < field->declarer_count; d++)
+        reads |= field->declarers[d].instance == v &&
+                 (field->declarers[d].access & (SLUICE_READ | SLUICE_READ_NEIGHBOUR));
+    if (!field || field->type != SLUICE_TYPE_UINT8 || field->components != 1 || !reads) {
+        report(sim, v,
+               "plugin '%s' restricts its reach to the field '%s', which must be a uint8 field "
+               "of one component that it declares it reads",
+               in->name, in->reach_field);
+        return 1;
+    }
+    pass->select_column = field->column;
+    pass->select_value = (uint8_t)in->reach_value;
+    return 0;
 }
 
 /* Checks the declarations and orders the evaluation components into passes. */
@@ -1451,6 +1555,8 @@ static int build_schedule(sluice_sim *sim)
             if (fill_pair_pass(sim, &p->pair, &v, 1) != 0)
                 goto oom;
             p->pair.reach = sim->instances[v].reach;
+            if (reach_selection(sim, v, &p->pair) != 0)
+                errors++;
         }
     }
     /* accumulated columns, zeroed before every evaluation */
@@ -1475,13 +1581,16 @@ static int build_schedule(sluice_sim *sim)
         in->on_demand = calloc(1, sizeof *in->on_demand);
         if (!in->on_demand || fill_pair_pass(sim, in->on_demand, &v, 1) != 0)
             goto oom;
-        if (in->reach > sim->support)
+        if (in->reach > sim->support) {
             in->on_demand->reach = in->reach;
+            if (reach_selection(sim, v, in->on_demand) != 0)
+                errors++;
+        }
     }
     free(edge);
     free(slot);
     free(done);
-    return 0;
+    return errors;
 oom:
     free(edge);
     free(slot);
@@ -2144,7 +2253,11 @@ static int load(sluice_sim *sim, const char *scene_path, const char *variant,
     errors += fill_fluid(sim);
     if (errors)
         return errors;
-    for (uint32_t k = 0; k < sim->instance_count; k++) {
+    uint32_t *order = initialise_order(sim);
+    if (!order)
+        return 1;
+    for (uint32_t o = 0; o < sim->instance_count; o++) {
+        const uint32_t k = order[o];
         sluice_instance *in = &sim->instances[k];
         if (!in->component->initialise)
             continue;
@@ -2156,6 +2269,7 @@ static int load(sluice_sim *sim, const char *scene_path, const char *variant,
             errors++;
         }
     }
+    free(order);
     if (errors)
         return errors;
     if (sim->particles.count == 0) {

@@ -56,6 +56,8 @@ typedef struct sluice_instance {
     sluice_host host;
     sluice_pair_pass *on_demand; /* SLUICE_COMPONENT_ON_DEMAND: its own pass */
     sluice_real reach;           /* 1.6: pair radius beyond the support (m), 0: the support */
+    char reach_field[64];        /* 1.7: the reach pass's particles: this uint8 field... */
+    uint32_t reach_value;        /* ...holds this value ("" : every particle) */
 } sluice_instance;
 
 typedef struct sluice_pass {

@@ -1038,6 +1038,24 @@ static int vent_initialise(void *state, sluice_host *host)
      * that the vent is the air's own lattice, without a seam) */
     if (reserve(s, host, v->count) != SLUICE_OK)
         return SLUICE_ERROR;
+    /* the vent belongs in the air: water in its box would become air, and
+     * water within the kernel support of it would leave at once (two_phase,
+     * which writes the phases, initialises first) */
+    const uint8_t *phase_now = (const uint8_t *)v->columns[s->phase_field.column];
+    sluice_index water_in = 0, water_near = 0;
+    for (sluice_index i = 0; i < v->count; i++)
+        if (v->kind[i] == SLUICE_KIND_FLUID && !phase_now[i]) {
+            const double gap2 = box_gap2(s, v, i);
+            water_in += gap2 == 0;
+            water_near += gap2 > 0 && gap2 < s->width * s->width;
+        }
+    if (water_in || water_near) {
+        api->error(host,
+                   "the vent's box holds %u water particles and has %u more within the kernel "
+                   "support (%g m) of it: place it in the air, at least %g m from the water",
+                   (unsigned)water_in, (unsigned)water_near, s->width, s->width);
+        return SLUICE_ERROR;
+    }
     sluice_index inside = 0, open = 0;
     for (sluice_index i = 0; i < v->count; i++)
         if (v->kind[i] != SLUICE_KIND_WALL && in_box(s, v, i)) {

@@ -506,7 +506,10 @@ static int cohesion_create(const sluice_api *api, sluice_host *host, const void 
         (sluice_real)((s->dims == 3 ? n3 / (H * H * H) : n2 / (H * H)) / (H * H));
     /* the pairs within 2H: beyond the scene kernel's support the core gives
      * this term passes of its own (ABI 1.6); within it this changes nothing */
-    if (api->request_reach(host, 2 * s->H) != SLUICE_OK) {
+    /* ...and of those only the air's (ABI 1.7): the water, about half of
+     * the particles, is neither traversed nor scanned as a neighbour */
+    if (api->request_reach(host, 2 * s->H) != SLUICE_OK ||
+        api->restrict_reach(host, "phase", PHASE_AIR) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }

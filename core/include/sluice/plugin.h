@@ -33,7 +33,7 @@ extern "C" {
 #endif
 
 #define SLUICE_ABI_MAJOR 1
-#define SLUICE_ABI_MINOR 6
+#define SLUICE_ABI_MINOR 7
 #define SLUICE_PLUGIN_MAGIC 0x534c4349u /* "SLCI" */
 
 #if defined(__GNUC__)
@@ -430,6 +430,14 @@ typedef struct sluice_api {
      * radius that is not finite and positive; a radius within the support
      * changes nothing. */
     int (*request_reach)(sluice_host *host, sluice_real radius);
+
+    /* -- 1.7: the pairs a reaching term needs. Called in create(), after
+     * request_reach: the term contributes only where the target and the
+     * neighbour both hold `value` in the uint8 field `field` (which the
+     * component declares it reads), e.g. the air's cohesion, phase = 1. The
+     * core then leaves every other particle out of the term's pass, as
+     * target and as neighbour, and the term is spared their traversal. */
+    int (*restrict_reach)(sluice_host *host, const char *field, uint32_t value);
 } sluice_api;
 
 /* ----------------------------------------------------------- components -- */
@@ -476,7 +484,9 @@ typedef struct sluice_component {
     int (*create)(const sluice_api *api, sluice_host *host, const void *config, void **state);
     void (*destroy)(void *state);
     int (*bind)(void *state, sluice_host *host);       /* all components exist */
-    int (*initialise)(void *state, sluice_host *host); /* all particles exist */
+    /* all fluid particles exist; writers of a field initialise before its
+     * readers, scene order otherwise */
+    int (*initialise)(void *state, sluice_host *host);
 
     /* Evaluation of rates (ordered by the core from declared reads/writes). */
     void (*particle)(void *state, const sluice_view *view, sluice_index begin, sluice_index end);
