@@ -1444,6 +1444,133 @@ START_TEST(cli_step_profiles)
 }
 END_TEST
 
+/* Dissolved oxygen: a particle under a constant exposure K a for a time t
+ * has the deficit D0 exp(-K a t); scaling K by f is raising the deficit
+ * ratio to the power f, so the map is the identity at f = 1, composes
+ * (f1 then f2 is f1 f2) and is exact on the analytic relaxation. The
+ * station mean averages each sample's wet points, then the samples; the
+ * calibration recovers the scale that generated a target. */
+START_TEST(dissolved_oxygen_scaling)
+{
+    const double cs = 10.48, cu = 1.29, d0 = cs - cu;
+    for (int k = 0; k <= 20; k++) {
+        const double c = cu + (cs - cu) * k / 21.0;
+        ck_assert_double_eq_tol(sluice_hyd_do_scaled(c, cs, cu, 1.0), c, 1e-12);
+        const double twice = sluice_hyd_do_scaled(sluice_hyd_do_scaled(c, cs, cu, 0.7), cs, cu, 1.9);
+        ck_assert_double_eq_tol(twice, sluice_hyd_do_scaled(c, cs, cu, 0.7 * 1.9), 1e-12);
+    }
+    for (int k = 0; k <= 10; k++) {
+        const double exposure = 0.15 * k; /* K a t */
+        const double c = cs - d0 * exp(-exposure);
+        ck_assert_double_eq_tol(sluice_hyd_do_scaled(c, cs, cu, 2.5), cs - d0 * exp(-2.5 * exposure),
+                                1e-12);
+    }
+    ck_assert_double_eq(sluice_hyd_do_scaled(cs + 1, cs, cu, 3.0), cs);
+    ck_assert(isnan(sluice_hyd_do_scaled(NAN, cs, cu, 1.0)));
+    ck_assert(isnan(sluice_hyd_do_scaled(5.0, cs, cu, 0.0)));
+    ck_assert(isnan(sluice_hyd_do_scaled(5.0, cu, cs, 1.0)));
+
+    /* 3 samples of 2 points: (2, 4), (NaN, 6), (NaN, NaN) -> (3 + 6) / 2 */
+    const double readings[6] = {2.0, 4.0, NAN, 6.0, NAN, NAN};
+    size_t used = 0;
+    ck_assert_double_eq_tol(sluice_hyd_do_station_mean(readings, 3, 2, cs, cu, 1.0, &used), 4.5,
+                            1e-12);
+    ck_assert_uint_eq(used, 2);
+    const double nothing[2] = {NAN, NAN};
+    ck_assert(isnan(sluice_hyd_do_station_mean(nothing, 1, 2, cs, cu, 1.0, &used)));
+    ck_assert_uint_eq(used, 0);
+
+    /* readings from exposures E; the target made with f = 1.7 */
+    enum { SAMPLES = 40, PER = 5 };
+    double r[SAMPLES * PER];
+    double target = 0;
+    for (int s = 0; s < SAMPLES; s++) {
+        double line = 0;
+        for (int k = 0; k < PER; k++) {
+            const double exposure = 0.05 + 0.6 * fmod(0.6180339887 * (s * PER + k + 1), 1.0);
+            r[s * PER + k] = (s + k) % 7 == 3 ? NAN : cs - d0 * exp(-exposure);
+            if (!isnan(r[s * PER + k]))
+                line += cs - d0 * exp(-1.7 * exposure);
+        }
+        int wet = 0;
+        for (int k = 0; k < PER; k++)
+            wet += !isnan(r[s * PER + k]);
+        target += line / wet;
+    }
+    target /= SAMPLES;
+    double f = 0;
+    ck_assert_int_eq(sluice_hyd_do_calibrate(r, SAMPLES, PER, cs, cu, target, &f), 0);
+    ck_assert_double_eq_tol(f, 1.7, 1e-9);
+    ck_assert_int_eq(sluice_hyd_do_calibrate(r, SAMPLES, PER, cs, cu, cs + 0.1, &f), -1);
+    ck_assert_int_eq(sluice_hyd_do_calibrate(r, SAMPLES, PER, cs, cu, cu, &f), -1);
+    ck_assert_int_eq(sluice_hyd_do_calibrate(nothing, 1, 2, cs, cu, 5.0, &f), -1);
+}
+END_TEST
+
+/* The command on a table of 2 stations of 2 points over 3 samples:
+ * station means, the window, the rate at the last station and the
+ * calibration on station 1 (its calibrated mean is the target). */
+START_TEST(cli_dissolved_oxygen)
+{
+    char *dir = test_scratch("analysis-do");
+    ck_assert_ptr_nonnull(dir);
+    char *path = test_write_file(dir, "points.csv",
+                                 "time,p0_dissolved_oxygen,p1_dissolved_oxygen,"
+                                 "p2_dissolved_oxygen,p3_dissolved_oxygen\n"
+                                 "0.5,9,9,9,9\n"
+                                 "1.0,2,4,5,nan\n"
+                                 "1.5,nan,3,7,5\n"
+                                 "2.0,3,3,nan,nan\n");
+    ck_assert_ptr_nonnull(path);
+    char *args = NULL, *out = NULL, *err = NULL;
+    ck_assert(asprintf(&args,
+                       "dissolved-oxygen %s --per-line 2 --cs 10 --cu 1 --from 1 --to 2 "
+                       "--calibrate 1 --target 4",
+                       path) > 0);
+    int status = analyze(dir, args, &out, &err);
+    fprintf(stderr, "cli dissolved-oxygen: exit %d\n%s%s", status, out, err);
+    ck_assert_int_eq(status, 0);
+    const char *row = strstr(out, "station,mean_mg_L,samples,calibrated_mg_L\n");
+    ck_assert_ptr_nonnull(row);
+    row = strchr(row, '\n') + 1;
+    size_t station, samples;
+    double mean, calibrated;
+    ck_assert_int_eq(sscanf(row, "%zu,%lf,%zu,%lf", &station, &mean, &samples, &calibrated), 4);
+    ck_assert_uint_eq(station, 1);
+    ck_assert_double_eq_tol(mean, (3.0 + 3.0 + 3.0) / 3, 1e-5);
+    ck_assert_uint_eq(samples, 3);
+    ck_assert_double_eq_tol(calibrated, 4.0, 1e-5);
+    row = strchr(row, '\n') + 1;
+    ck_assert_int_eq(sscanf(row, "%zu,%lf,%zu,%lf", &station, &mean, &samples, &calibrated), 4);
+    ck_assert_uint_eq(station, 2);
+    ck_assert_double_eq_tol(mean, (5.0 + 6.0) / 2, 1e-5);
+    ck_assert_uint_eq(samples, 2);
+    ck_assert(calibrated > mean && calibrated < 10);
+    ck_assert_ptr_nonnull(strstr(out, "rate r = (Cs - Cu)/(Cs - C) at station 2: 2 (calibrated"));
+    free(args);
+    free(out);
+    free(err);
+    /* bad input: one message, exit 2 */
+    ck_assert(asprintf(&args, "dissolved-oxygen %s --per-line 3 --cs 10 --cu 1", path) > 0);
+    status = analyze(dir, args, &out, &err);
+    ck_assert_int_eq(status, 2);
+    ck_assert_ptr_nonnull(strstr(err, "not a whole number of stations"));
+    free(args);
+    free(out);
+    free(err);
+    ck_assert(asprintf(&args, "dissolved-oxygen %s --per-line 2 --cs 10 --cu 1 --calibrate 1",
+                       path) > 0);
+    status = analyze(dir, args, &out, &err);
+    ck_assert_int_eq(status, 2);
+    ck_assert_ptr_nonnull(strstr(err, "go together"));
+    free(args);
+    free(out);
+    free(err);
+    free(path);
+    free(dir);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("analysis");
@@ -1468,6 +1595,8 @@ int main(void)
     tcase_add_test(c, chute_geometry);
     tcase_add_test(c, aerated_depths);
     tcase_add_test(c, cli_step_profiles);
+    tcase_add_test(c, dissolved_oxygen_scaling);
+    tcase_add_test(c, cli_dissolved_oxygen);
     suite_add_tcase(s, c);
     return test_run_suite(s);
 }

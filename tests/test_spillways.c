@@ -210,6 +210,94 @@ START_TEST(single_phase_variants)
 }
 END_TEST
 
+/* Cheng's reduced spillway with the source's c_1 and with f c_1: oxygen
+ * changes the flow nowhere (the same steps, bitwise), so the water
+ * particles meet the same air; the deficit Cs - C decays by the source,
+ * whose K is linear in c_1, and diffusion is molecular only (D_m dt / dx^2
+ * ~ 1e-11 a step). Each water particle's log-deficit under f c_1 is then
+ * f times that under c_1 (sluice-analyze dissolved-oxygen's calibration,
+ * docs/analysis.md) up to the time stepping: per step the update factor
+ * 1 - x (x = K a dt) against exp(-x) leaves (f^2 - f) x^2 / 2, summed to at
+ * most (f^2 - f) x_max E / 2 for the exposure E = ln(D0 / D). c_1 is raised
+ * (100 and 250) so that exposures of order 1 occur within the 0.008 s at
+ * the tank's surface, the only water next to air so early. */
+static void run_source(double c1, sluice_sim **out, double *x_max)
+{
+    char set[96];
+    snprintf(set, sizeof set, "plugins.dissolved_oxygen.transfer_coefficient=%g", c1);
+    const char *const sets[] = {set};
+    sluice_sim *sim = load_variant("stepped_spillway_cheng.yaml", "reduced", sets, 1);
+    ck_assert_int_eq(sluice_sim_begin(sim, NULL), SLUICE_RUN_COMPLETE);
+    int status;
+    double worst = 0, previous = sluice_sim_time(sim);
+    while ((status = sluice_sim_step(sim)) == SLUICE_RUN_COMPLETE) {
+        const double dt = sluice_sim_time(sim) - previous;
+        previous = sluice_sim_time(sim);
+        const sluice_view *v = sluice_sim_view(sim);
+        const sluice_real *ka = test_column(sim, "reaeration_coefficient", 0);
+        for (sluice_index i = 0; i < v->count; i++)
+            worst = fmax(worst, (double)ka[i] * dt);
+        if (sluice_sim_time(sim) >= sluice_sim_end_time(sim) - 1e-12)
+            break;
+    }
+    ck_assert_msg(status == SLUICE_RUN_COMPLETE, "stopped: %s", sluice_sim_failure(sim));
+    *out = sim;
+    *x_max = worst;
+}
+
+START_TEST(cheng_source_scales_with_its_coefficient)
+{
+    const double c1 = 100, f = 2.5, cs = 10.48, cu = 1.29, d0 = cs - cu;
+    sluice_sim *a, *b;
+    double xa, xb;
+    run_source(c1, &a, &xa);
+    run_source(f * c1, &b, &xb);
+    ck_assert_int_eq(sluice_sim_steps(a), sluice_sim_steps(b));
+    const sluice_view *va = sluice_sim_view(a), *vb = sluice_sim_view(b);
+    ck_assert_uint_eq(va->count, vb->count);
+    sluice_field pa, ida, idb;
+    ck_assert_int_eq(sluice_sim_field(a, "phase", &pa), SLUICE_OK);
+    ck_assert_int_eq(sluice_sim_field(a, "id", &ida), SLUICE_OK);
+    ck_assert_int_eq(sluice_sim_field(b, "id", &idb), SLUICE_OK);
+    const uint8_t *phase = va->columns[pa.column];
+    const sluice_id *id_a = va->columns[ida.column], *id_b = vb->columns[idb.column];
+    const sluice_real *ca = test_column(a, "dissolved_oxygen", 0);
+    const sluice_real *cb = test_column(b, "dissolved_oxygen", 0);
+    /* particle order: the same in both runs (the same motion) */
+    long water = 0, exposed = 0;
+    double exposure_max = 0, worst_ratio = 0, worst_log = 0;
+    for (sluice_index i = 0; i < va->count; i++) {
+        if (id_a[i] != id_b[i])
+            ck_abort_msg("particle %u: ids %llu and %llu", (unsigned)i,
+                         (unsigned long long)id_a[i], (unsigned long long)id_b[i]);
+        if (va->kind[i] != SLUICE_KIND_FLUID || phase[i])
+            continue;
+        if (va->position[0][i] != vb->position[0][i] || va->position[1][i] != vb->position[1][i])
+            ck_abort_msg("particle %u moved differently", (unsigned)i);
+        water++;
+        const double exposure = log(d0 / (cs - (double)ca[i]));
+        if (!(exposure > 1e-6))
+            continue;
+        exposed++;
+        exposure_max = fmax(exposure_max, exposure);
+        const double error = fabs(log(d0 / (cs - (double)cb[i])) - f * exposure);
+        const double bound = (f * f - f) * fmax(xa, xb / f) * exposure / 2 + 1e-12;
+        worst_log = fmax(worst_log, error);
+        worst_ratio = fmax(worst_ratio, error / bound);
+    }
+    fprintf(stderr,
+            "Cheng reduced, c1 = %g and %g: %ld water particles, %ld exposed (largest exposure "
+            "ln(D0/D) = %.3f); |ln(D0/D_f) - f ln(D0/D)| <= %.3e, at most %.3f of the "
+            "time-stepping bound (x_max = K a dt = %.3e)\n",
+            c1, f * c1, water, exposed, exposure_max, worst_log, worst_ratio, xa);
+    ck_assert_msg(exposure_max > 0.5, "exposures too small to test the map: %g", exposure_max);
+    ck_assert_msg(exposed >= 20, "only %ld of %ld water particles exposed", exposed, water);
+    ck_assert_msg(worst_ratio <= 1, "the map is off by %.3f of its bound", worst_ratio);
+    sluice_sim_free(a);
+    sluice_sim_free(b);
+}
+END_TEST
+
 static Suite *spillway_suite(void)
 {
     Suite *s = suite_create("spillways");
@@ -218,6 +306,7 @@ static Suite *spillway_suite(void)
     tcase_add_test(c, chanson_reduced);
     tcase_add_test(c, cheng_reduced);
     tcase_add_test(c, single_phase_variants);
+    tcase_add_test(c, cheng_source_scales_with_its_coefficient);
     suite_add_tcase(s, c);
     return s;
 }

@@ -6,7 +6,9 @@
 #            [FROM, END] (U/Uc against y/dc, Y90, C_mean, the inception
 #            step; Uc = 0.668 m/s as seed 001 prints it, dc = 0.0700 m);
 #   cheng:   tools/cheng-do.awk at points 2-7 over [FROM, END] against seed
-#            001's tables 4 and 5.
+#            001's tables 4 and 5, then sluice-analyze dissolved-oxygen with
+#            the source calibrated on point 4 (station 3: 4.01 mg/L), the
+#            other points being predictions.
 # Every run writes a checkpoint every CHECKPOINT seconds (the newest kept);
 # when OUT/<scene> already holds one, the run continues from it to END.
 #
@@ -57,6 +59,9 @@ for scene in $scenes; do
         tail -n 12 "$dir/step-profiles.csv" ;;
     cheng)
         awk -F, -f tools/cheng-do.awk -v from="$from" -v to="$end" "$dir/points.csv" |
-            tee "$dir/dissolved-oxygen.csv" ;;
+            tee "$dir/dissolved-oxygen.csv"
+        "$build/tools/sluice-analyze" dissolved-oxygen "$dir/points.csv" --per-line 15 \
+            --cs 10.48 --cu 1.29 --from "$from" --to "$end" --calibrate 3 --target 4.01 |
+            tee "$dir/dissolved-oxygen-calibrated.csv" || true ;;
     esac
 done

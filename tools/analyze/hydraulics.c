@@ -685,3 +685,60 @@ long sluice_hyd_first_above(const double *x, size_t n, double threshold)
             return (long)k;
     return -1;
 }
+
+/* --------------------------------------------------- dissolved oxygen */
+
+double sluice_hyd_do_scaled(double c, double cs, double cu, double f)
+{
+    if (isnan(c) || !(f > 0.0) || !(cs > cu))
+        return NAN;
+    if (c >= cs)
+        return cs;
+    return cs - (cs - cu) * pow((cs - c) / (cs - cu), f);
+}
+
+double sluice_hyd_do_station_mean(const double *readings, size_t samples, size_t per,
+                                  double cs, double cu, double f, size_t *used)
+{
+    double sum = 0.0;
+    size_t count = 0;
+    for (size_t s = 0; s < samples; s++) {
+        double line = 0.0;
+        size_t wet = 0;
+        for (size_t k = 0; k < per; k++) {
+            const double c = readings[s * per + k];
+            if (isnan(c))
+                continue;
+            line += sluice_hyd_do_scaled(c, cs, cu, f);
+            wet++;
+        }
+        if (wet) {
+            sum += line / (double)wet;
+            count++;
+        }
+    }
+    if (used)
+        *used = count;
+    return count ? sum / (double)count : NAN;
+}
+
+int sluice_hyd_do_calibrate(const double *readings, size_t samples, size_t per, double cs,
+                            double cu, double target, double *f)
+{
+    if (!(cs > cu) || !(target > cu && target < cs))
+        return -1;
+    double lo = log(1e-4), hi = log(1e4);
+    const double at_lo = sluice_hyd_do_station_mean(readings, samples, per, cs, cu, exp(lo), NULL);
+    const double at_hi = sluice_hyd_do_station_mean(readings, samples, per, cs, cu, exp(hi), NULL);
+    if (isnan(at_lo) || !(at_lo <= target && target <= at_hi))
+        return -1;
+    for (int k = 0; k < 200 && hi - lo > 1e-13; k++) {
+        const double mid = 0.5 * (lo + hi);
+        if (sluice_hyd_do_station_mean(readings, samples, per, cs, cu, exp(mid), NULL) < target)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    *f = exp(0.5 * (lo + hi));
+    return 0;
+}

@@ -277,4 +277,29 @@ double sluice_hyd_band_mean(const double *y, const double *c, size_t n, double l
 /* Index of the first finite x[k] > threshold, or -1 when none. */
 long sluice_hyd_first_above(const double *x, size_t n, double threshold);
 
+/* --------------------------------------------------- dissolved oxygen */
+
+/* A DO reading c (mg/L) of a run with the source K a (Cs - C) mapped to the
+ * same run with K scaled by f: where the water's oxygen changes by the
+ * source only (no diffusion between particles), its deficit D = Cs - C
+ * decays as D0 exp(-integral K a dt) from D0 = Cs - Cu, so
+ *   C_f = Cs - (Cs - Cu) ((Cs - c) / (Cs - Cu))^f.
+ * c >= Cs gives Cs; NaN for NaN c, f <= 0, or Cs <= Cu. */
+double sluice_hyd_do_scaled(double c, double cs, double cu, double f);
+
+/* The station mean of a DO table: readings[s * per + k] is point k of the
+ * station at sample s (NaN: no water there). Each sample with a finite
+ * reading contributes the mean of its finite readings, mapped with
+ * sluice_hyd_do_scaled(f); the result is the mean over those samples (NaN
+ * when none), *used (may be NULL) their count. f = 1 is the run itself. */
+double sluice_hyd_do_station_mean(const double *readings, size_t samples, size_t per,
+                                  double cs, double cu, double f, size_t *used);
+
+/* The scale f (within [1e-4, 1e4]) for which the station mean equals
+ * `target` (Cu < target < Cs), by bisection on log f (the mean grows with
+ * f). Returns 0 with *f, or -1: no reading, target outside (Cu, Cs), or
+ * outside what f in that range reaches. */
+int sluice_hyd_do_calibrate(const double *readings, size_t samples, size_t per, double cs,
+                            double cu, double target, double *f);
+
 #endif

@@ -14,10 +14,12 @@
  *   sluice-analyze drop-type RUN --drop-x X [--drop S]
  *   sluice-analyze step-profiles POINTS.csv --per-line N --edges x,y;.. --theta DEG
  *                                --dc DC --uc UC
+ *   sluice-analyze dissolved-oxygen POINTS.csv --per-line N --cs CS --cu CU
+ *                                [--calibrate STATION --target C]
  *
  * Each prints its headline figures as `name = value [unit]` lines, writes a
  * CSV and (gnuplot permitting) a PNG into --out (default RUN/analysis);
- * step-profiles prints its CSV on stdout instead.
+ * step-profiles and dissolved-oxygen print their CSV on stdout instead.
  * Exit status: 0 measured, 1 the feature is absent from the data, 2 bad
  * input (one message on stderr). The numbers come from hydraulics.c. */
 #define _GNU_SOURCE
@@ -39,7 +41,8 @@ typedef struct options {
     const char *positional[MAX_POSITIONAL];
     size_t positional_count;
     double d1, v1, fr, g, x, from, to, fraction, x1, bed, drop, y1, yt, min_wet, fmin, fmax,
-        tolerance, drop_x, wave_min, per_line, theta, dc, uc, threshold, h, first_step;
+        tolerance, drop_x, wave_min, per_line, theta, dc, uc, threshold, h, first_step, cs, cu,
+        calibrate, target;
     const char *column, *reference, *out, *positions, *points, *field, *edges;
     double times[MAX_TIMES];
     size_t time_count;
@@ -79,6 +82,10 @@ static const struct option_spec {
     {"threshold", OPT_NUMBER, offsetof(options, threshold)},
     {"h", OPT_NUMBER, offsetof(options, h)},
     {"first-step", OPT_NUMBER, offsetof(options, first_step)},
+    {"cs", OPT_NUMBER, offsetof(options, cs)},
+    {"cu", OPT_NUMBER, offsetof(options, cu)},
+    {"calibrate", OPT_NUMBER, offsetof(options, calibrate)},
+    {"target", OPT_NUMBER, offsetof(options, target)},
     {"edges", OPT_STRING, offsetof(options, edges)},
     {"column", OPT_STRING, offsetof(options, column)},
     {"reference", OPT_STRING, offsetof(options, reference)},
@@ -107,6 +114,10 @@ static const char usage[] =
     "            [--first-step 1] [--threshold 0.05] [--h H] [--points x,y;..]\n"
     "                                              U/Uc, air concentration, Y90, inception\n"
     "                                              on a stepped chute (CSV on stdout)\n"
+    "  dissolved-oxygen POINTS.csv --per-line N --cs CS --cu CU [--calibrate S --target C]\n"
+    "            [--field dissolved_oxygen]        DO per station of N points, the\n"
+    "                                              reaeration rate, the source's scale\n"
+    "                                              calibrated on one station (CSV on stdout)\n"
     "options: --from T0 --to T1 (window, s), --out DIR (default RUN/analysis), --g 9.81,\n"
     "  --bed B (bed elevation, m), --positions a,b,.. --points x,y;x,y.. (instead of\n"
     "  RUN/scene.resolved.yaml), --field velocity, --min-wet 0.5, --fmin, --fmax,\n"
@@ -2058,6 +2069,138 @@ static int inflow_from_run(analyze_ctx *cx, options *o)
     return 0;
 }
 
+/* Dissolved oxygen at stations of --per-line points (a point_gauge with the
+ * field dissolved_oxygen, phase water): per station the mean over the window
+ * of each sample's mean over its wet points; the reaeration rate
+ * r = (Cs - Cu) / (Cs - C_last) at the last station; with --calibrate S
+ * --target C, the scale f of the source's K that brings station S to C
+ * (sluice_hyd_do_calibrate: exact where oxygen changes by the source only)
+ * and every station under it, the others being predictions. */
+static int cmd_dissolved_oxygen(analyze_ctx *cx, const options *o)
+{
+    if (o->positional_count != 1)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "dissolved-oxygen needs one point_gauge CSV file, POINTS.csv");
+    const char *file = o->positional[0];
+    if (need(cx, o, o->per_line, "per-line", 1) != 0 || need(cx, o, o->cs, "cs", 1) != 0 ||
+        need(cx, o, o->cu, "cu", 0) != 0)
+        return -1;
+    if (!whole_number(o->per_line))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--per-line must be a whole number");
+    if (!(o->cu >= 0.0 && o->cu < o->cs))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "--cu must be in [0, --cs): the inflow's DO below saturation");
+    const int calibrating = !isnan(o->calibrate) || !isnan(o->target);
+    if (calibrating && (isnan(o->calibrate) || isnan(o->target)))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "--calibrate STATION and --target C go together");
+    if (calibrating && !(o->target > o->cu && o->target < o->cs))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "--target must lie between --cu and --cs");
+    const size_t per = (size_t)o->per_line;
+    const char *field = strcmp(o->field, "velocity") == 0 ? "dissolved_oxygen" : o->field;
+    int status = -1;
+    gauge_table g;
+    double *readings = NULL, *station_mean = NULL, *calibrated = NULL;
+    size_t *used = NULL;
+    long *column = NULL;
+    if (gauge_table_load(cx, o, file, &g) != 0)
+        goto done;
+    /* the columns p<k>_<field>, k = 0, 1, ... */
+    size_t points = 0;
+    for (;;) {
+        char name[128];
+        snprintf(name, sizeof name, "p%zu_%s", points, field);
+        if (analyze_table_find(&g.table, name) < 0)
+            break;
+        points++;
+    }
+    if (points == 0 || points % per != 0) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                     "%s has %zu columns p<k>_%s, not a whole number of stations of %zu points",
+                     file, points, field, per);
+        goto done;
+    }
+    const size_t stations = points / per, samples = g.last - g.first;
+    if (calibrating && !(whole_number(o->calibrate) && o->calibrate >= 1 &&
+                         o->calibrate <= (double)stations)) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--calibrate must be a station from 1 to %zu",
+                     stations);
+        goto done;
+    }
+    column = analyze_alloc(cx, points, sizeof *column);
+    readings = analyze_alloc(cx, samples * per, sizeof *readings);
+    station_mean = analyze_alloc(cx, stations, sizeof *station_mean);
+    calibrated = analyze_alloc(cx, stations, sizeof *calibrated);
+    used = analyze_alloc(cx, stations, sizeof *used);
+    if (!column || !readings || !station_mean || !calibrated || !used)
+        goto done;
+    for (size_t k = 0; k < points; k++) {
+        char name[128];
+        snprintf(name, sizeof name, "p%zu_%s", k, field);
+        column[k] = analyze_table_find(&g.table, name);
+    }
+    double scale = 1.0;
+    for (int round = 0; round < 2; round++) {
+        for (size_t s = 0; s < stations; s++) {
+            for (size_t r = 0; r < samples; r++)
+                for (size_t k = 0; k < per; k++)
+                    readings[r * per + k] =
+                        g.table.data[(g.first + r) * g.table.cols + (size_t)column[s * per + k]];
+            if (round == 0) {
+                station_mean[s] =
+                    sluice_hyd_do_station_mean(readings, samples, per, o->cs, o->cu, 1.0, &used[s]);
+                if (calibrating && s + 1 == (size_t)o->calibrate &&
+                    sluice_hyd_do_calibrate(readings, samples, per, o->cs, o->cu, o->target,
+                                            &scale) != 0) {
+                    analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND,
+                                 "station %zu (mean %g mg/L over %zu samples) cannot be brought to "
+                                 "%g mg/L by scaling the source",
+                                 s + 1, station_mean[s], used[s], o->target);
+                    goto done;
+                }
+            } else {
+                calibrated[s] =
+                    sluice_hyd_do_station_mean(readings, samples, per, o->cs, o->cu, scale, NULL);
+            }
+        }
+        if (!calibrating)
+            break;
+    }
+    printf("# dissolved-oxygen %s: window [%.10g, %.10g] s, %zu samples, %zu stations of %zu "
+           "points; Cs = %.10g, Cu = %.10g mg/L\n",
+           file, g.time[g.first], g.time[g.last - 1], samples, stations, per, o->cs, o->cu);
+    if (calibrating)
+        printf("# calibrated on station %.0f (target %.10g mg/L): the source's K scaled by f = "
+               "%.6g; the other stations are predictions\n",
+               o->calibrate, o->target, scale);
+    printf("station,mean_mg_L,samples%s\n", calibrating ? ",calibrated_mg_L" : "");
+    for (size_t s = 0; s < stations; s++) {
+        printf("%zu,%.6g,%zu", s + 1, station_mean[s], used[s]);
+        if (calibrating)
+            printf(",%.6g", calibrated[s]);
+        printf("\n");
+    }
+    const double last = station_mean[stations - 1];
+    if (!isnan(last)) {
+        printf("# reaeration rate r = (Cs - Cu)/(Cs - C) at station %zu: %.6g", stations,
+               (o->cs - o->cu) / (o->cs - last));
+        if (calibrating)
+            printf(" (calibrated: %.6g)", (o->cs - o->cu) / (o->cs - calibrated[stations - 1]));
+        printf("\n");
+    }
+    status = 0;
+done:
+    analyze_table_free(&g.table);
+    free(g.time);
+    free(column);
+    free(readings);
+    free(station_mean);
+    free(calibrated);
+    free(used);
+    return status;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -2074,6 +2217,7 @@ int main(int argc, char **argv)
     o.command = argv[1];
     o.d1 = o.v1 = o.fr = o.x = o.x1 = o.drop = o.y1 = o.yt = o.fmin = o.fmax = o.drop_x = NAN;
     o.per_line = o.theta = o.dc = o.uc = o.h = NAN;
+    o.cs = o.cu = o.calibrate = o.target = NAN;
     o.threshold = 0.05;
     o.first_step = 1;
     o.wave_min = 0.1;
@@ -2093,7 +2237,7 @@ int main(int argc, char **argv)
         {"roller", cmd_roller},     {"vmax", cmd_vmax},           {"surface", cmd_surface},
         {"spectrum", cmd_spectrum}, {"correlate", cmd_correlate}, {"l2", cmd_l2},
         {"classify", cmd_classify}, {"drop-type", cmd_drop_type},
-        {"step-profiles", cmd_step_profiles},
+        {"step-profiles", cmd_step_profiles}, {"dissolved-oxygen", cmd_dissolved_oxygen},
     };
     int (*command)(analyze_ctx *, const options *) = NULL;
     for (size_t k = 0; k < sizeof commands / sizeof *commands; k++)
