@@ -572,6 +572,93 @@ END_TEST
 START_TEST(restricted_reach_matches_brute_force_periodic) { check_reach(1, 1); }
 END_TEST
 
+/* The same in 3D (closed, then periodic in x), restricted to the
+ * checkerboard (columns of cells in x and y): every count and summed
+ * distance of the fluid's particles against brute force, before and after
+ * a motion of 0.45 skin without a list rebuild. */
+static void check_reach_3d(int periodic)
+{
+    char yaml[2048];
+    const double dx = 0.04, radius = 4 * 1.3 * dx, length = 0.64;
+    snprintf(yaml, sizeof yaml,
+             "dimensions: 3\n"
+             "plugin_path: %s\n"
+             "particles: {spacing: %g, smoothing_length_ratio: 1.3}\n"
+             "time: {end: 1, max_step: 1e-4}\n"
+             "domain: {min: [0, 0, 0], max: [%g, 0.48, 0.48]%s}\n"
+             "geometry:\n"
+             "  fluid: [{shape: box, min: [0, 0.04, 0.04], max: [%g, 0.44, 0.44]}]\n"
+             "initial: {density: rest}\n"
+             "plugins: {wendland_c2: {}, tait: {speed_of_sound: 10}, continuity: {}, "
+             "pressure_gradient: {}, reach_probe: {radius: %.17g, checkerboard: true}, "
+             "symplectic: {}}\n",
+             fixture_dir(), dx, length, periodic ? ", periodic: x" : "",
+             periodic ? length : 0.6, radius);
+    sluice_sim *sim = test_load(periodic ? "reach-3d-periodic" : "reach-3d", yaml, NULL, 0);
+    sluice_field group_field;
+    ck_assert_int_eq(sluice_sim_field(sim, "reach_group", &group_field), SLUICE_OK);
+    const double skin = sim->grid.skin;
+    for (int round = 0; round < 2; round++) {
+        const uint64_t rebuilds = sim->grid.rebuilds;
+        ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
+        if (round == 1)
+            ck_assert_msg(sim->grid.rebuilds == rebuilds, "the list was rebuilt");
+        const sluice_view *v = sluice_sim_view(sim);
+        const sluice_real *count = test_column(sim, "reach_count", 0);
+        const sluice_real *distance = test_column(sim, "reach_distance", 0);
+        const uint8_t *group = v->columns[group_field.column];
+        double worst = 0, pairs = 0;
+        int targets = 0;
+        for (sluice_index i = 0; i < v->count; i++) {
+            if (v->kind[i] != SLUICE_KIND_FLUID || group[i] != 1)
+                continue;
+            double n = 0, r = 0;
+            for (sluice_index j = 0; j < v->count; j++) {
+                if (j == i || v->kind[j] != SLUICE_KIND_FLUID || group[j] != 1)
+                    continue;
+                double e[3];
+                for (int d = 0; d < 3; d++)
+                    e[d] = v->position[d][i] - v->position[d][j];
+                if (periodic)
+                    e[0] -= length * nearbyint(e[0] / length);
+                const double s = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+                if (s < radius) {
+                    n += 1;
+                    r += s;
+                }
+            }
+            if (count[i] != n)
+                ck_abort_msg("3D round %d, particle %u: %g pairs, brute force %g", round,
+                             (unsigned)i, count[i], n);
+            worst = fmax(worst, fabs(distance[i] - r));
+            pairs += n;
+            targets++;
+        }
+        fprintf(stderr, "reach 3D (%s, round %d): %d targets, %.0f pairs as brute force; summed "
+                        "distances within %.2e m\n",
+                periodic ? "periodic" : "closed", round, targets, pairs, worst);
+        ck_assert_int_gt(targets, 100);
+        ck_assert_msg(worst < 1e-11, "summed distances differ by %g m", worst);
+        sluice_real *p[3] = {(sluice_real *)v->position[0], (sluice_real *)v->position[1],
+                             (sluice_real *)v->position[2]};
+        for (sluice_index i = 0; i < v->count; i++) {
+            double a = 2 * M_PI * uniform(), b = acos(2 * uniform() - 1), m = 0.45 * skin * uniform();
+            p[0][i] += (sluice_real)(m * sin(b) * cos(a));
+            p[1][i] += (sluice_real)(m * sin(b) * sin(a));
+            p[2][i] += (sluice_real)(m * cos(b));
+            if (periodic)
+                p[0][i] -= (sluice_real)(length * floor(p[0][i] / length));
+        }
+    }
+    sluice_sim_free(sim);
+}
+
+START_TEST(restricted_reach_matches_brute_force_3d) { check_reach_3d(0); }
+END_TEST
+
+START_TEST(restricted_reach_matches_brute_force_3d_periodic) { check_reach_3d(1); }
+END_TEST
+
 /* A reach longer than half a periodic side (plus a cell) is refused at load,
  * naming the plugin. */
 START_TEST(reach_longer_than_periodic_side_refused)
@@ -610,6 +697,8 @@ int main(void)
     tcase_add_test(c, reach_matches_brute_force_periodic);
     tcase_add_test(c, restricted_reach_matches_brute_force);
     tcase_add_test(c, restricted_reach_matches_brute_force_periodic);
+    tcase_add_test(c, restricted_reach_matches_brute_force_3d);
+    tcase_add_test(c, restricted_reach_matches_brute_force_3d_periodic);
     tcase_add_test(c, reach_longer_than_periodic_side_refused);
     suite_add_tcase(s, c);
     return test_run_suite(s);

@@ -287,17 +287,27 @@ static inline int64_t wrap_cell(int64_t c, int64_t n, int periodic)
     return periodic ? (c % n + n) % n : -1;
 }
 
-/* Appends the pairs of target i within `reach` (beyond the support) found
- * through the cells around i's cell; returns the new pair count, or
- * (sluice_index)-1 when the workspace had to grow and could not. Flushes the
- * batch first when the candidates would not fit. */
-static sluice_index fill_reach(sluice_pair_engine *engine, const sluice_pair_pass *pass,
-                               const sluice_grid *grid, const sluice_view *view,
-                               sluice_pair_workspace *w, sluice_index i, sluice_index *t,
-                               sluice_index np, uint32_t kind, uint32_t mask, int *failed)
+void sluice_reach_list_free(sluice_reach_list *list)
 {
+    if (!list)
+        return;
+    free(list->begin);
+    free(list->list);
+    free(list);
+}
+
+/* The candidates of target i within `cutoff` (m) at the positions of the
+ * grid's last build (grid->built): the selected particles of the kinds in
+ * `mask` in the cells around i's cell that the reach spans, in scan order
+ * (rows of cells, then index). Writes them to out when out is not NULL;
+ * returns their count. */
+static sluice_index reach_scan(const sluice_pair_pass *pass, const sluice_grid *grid,
+                               const sluice_view *view, sluice_index i, uint32_t mask,
+                               double cutoff, sluice_index *out)
+{
+    const sluice_real *const *position = (const sluice_real *const *)grid->built;
     const uint32_t dims = view->dimensions;
-    const double reach2 = (double)pass->reach * (double)pass->reach;
+    const double cutoff2 = cutoff * cutoff;
     const uint32_t cell = grid->cell_of[i];
     int64_t c[3], range[3] = {0, 0, 0};
     c[0] = (int64_t)(cell % (uint32_t)grid->cells[0]);
@@ -308,131 +318,226 @@ static sluice_index fill_reach(sluice_pair_engine *engine, const sluice_pair_pas
         range[d] = reach_cells(grid, pass->reach, d);
         closed &= !grid->periodic[d];
     }
-    /* candidates: every particle of the cells in range */
-    sluice_index candidates = 0;
-    for (int pass_over = 0; pass_over < 2; pass_over++) {
-        if (pass_over == 1) {
-            if (np + candidates > w->pair_capacity && *t > 0) {
-                w->pair_begin[*t] = np;
-                flush(engine, pass, view, w, *t, np, kind);
-                *t = 0;
-                np = 0;
-            }
-            if (candidates > w->pair_capacity) {
-                if (workspace_reserve(w, candidates, pass->gathered_max) != 0) {
-                    *failed = 1;
-                    return np;
-                }
-                for (uint32_t col = 0; col < w->column_count; col++)
-                    w->gathered[col] = NULL;
-            }
-            w->target[*t] = i;
-            w->pair_begin[*t] = np;
-        }
-        const double xi[3] = {(double)view->position[0][i], (double)view->position[1][i],
-                              dims == 3 ? (double)view->position[2][i] : 0.0};
-        if (closed) {
-            /* no periodic side: the cells of a row of the range are
-             * consecutive, and so are their particles (sorted by cell) */
-            const int64_t x0 = c[0] - range[0] > 0 ? c[0] - range[0] : 0;
-            const int64_t x1 =
-                c[0] + range[0] < grid->cells[0] - 1 ? c[0] + range[0] : grid->cells[0] - 1;
-            const int64_t y0 = c[1] - range[1] > 0 ? c[1] - range[1] : 0;
-            const int64_t y1 =
-                c[1] + range[1] < grid->cells[1] - 1 ? c[1] + range[1] : grid->cells[1] - 1;
-            const int64_t z0 = c[2] - range[2] > 0 ? c[2] - range[2] : 0;
-            const int64_t z1 =
-                c[2] + range[2] < grid->cells[2] - 1 ? c[2] + range[2] : grid->cells[2] - 1;
-            const sluice_real *restrict px = view->position[0], *restrict py = view->position[1];
-            const sluice_real *restrict pz = dims == 3 ? view->position[2] : NULL;
-            const uint8_t *restrict kinds = view->kind;
-            const uint8_t *restrict select =
-                pass->select_column >= 0 ? view->columns[pass->select_column] : NULL;
-            const uint8_t wanted = pass->select_value;
-            for (int64_t cz = z0; cz <= z1; cz++)
-                for (int64_t cy = y0; cy <= y1; cy++) {
-                    const size_t row = ((size_t)cz * (size_t)grid->cells[1] + (size_t)cy) *
-                                       (size_t)grid->cells[0];
-                    const sluice_index j0 = grid->cell_start[row + (size_t)x0];
-                    const sluice_index j1 = grid->cell_start[row + (size_t)x1 + 1];
-                    if (pass_over == 0) {
-                        candidates += j1 - j0;
+    const uint8_t *restrict select =
+        pass->select_column >= 0 ? view->columns[pass->select_column] : NULL;
+    const uint8_t wanted = pass->select_value;
+    const uint8_t *restrict kinds = view->kind;
+    const double xi[3] = {(double)position[0][i], (double)position[1][i],
+                          dims == 3 ? (double)position[2][i] : 0.0};
+    sluice_index found = 0;
+    if (closed) {
+        /* no periodic side: the cells of a row of the range are
+         * consecutive, and so are their particles (sorted by cell) */
+        const int64_t x0 = c[0] - range[0] > 0 ? c[0] - range[0] : 0;
+        const int64_t x1 = c[0] + range[0] < grid->cells[0] - 1 ? c[0] + range[0] : grid->cells[0] - 1;
+        const int64_t y0 = c[1] - range[1] > 0 ? c[1] - range[1] : 0;
+        const int64_t y1 = c[1] + range[1] < grid->cells[1] - 1 ? c[1] + range[1] : grid->cells[1] - 1;
+        const int64_t z0 = c[2] - range[2] > 0 ? c[2] - range[2] : 0;
+        const int64_t z1 = c[2] + range[2] < grid->cells[2] - 1 ? c[2] + range[2] : grid->cells[2] - 1;
+        const sluice_real *restrict px = position[0], *restrict py = position[1];
+        const sluice_real *restrict pz = dims == 3 ? position[2] : NULL;
+        for (int64_t cz = z0; cz <= z1; cz++)
+            for (int64_t cy = y0; cy <= y1; cy++) {
+                const size_t row = ((size_t)cz * (size_t)grid->cells[1] + (size_t)cy) *
+                                   (size_t)grid->cells[0];
+                const sluice_index j0 = grid->cell_start[row + (size_t)x0];
+                const sluice_index j1 = grid->cell_start[row + (size_t)x1 + 1];
+                for (sluice_index j = j0; j < j1; j++) {
+                    if (j == i || !((mask >> kinds[j]) & 1u) || (select && select[j] != wanted))
                         continue;
-                    }
-                    for (sluice_index j = j0; j < j1; j++) {
-                        const double e0 = xi[0] - (double)px[j], e1 = xi[1] - (double)py[j];
-                        const double e2 = pz ? xi[2] - (double)pz[j] : 0.0;
-                        const double s2 = e0 * e0 + e1 * e1 + e2 * e2;
-                        if (!(s2 < reach2) || j == i || !((mask >> kinds[j]) & 1u) ||
-                            (select && select[j] != wanted))
-                            continue;
-                        w->neighbour[np] = j;
-                        w->offset[0][np] = (sluice_real)e0;
-                        w->offset[1][np] = (sluice_real)e1;
-                        if (dims == 3)
-                            w->offset[2][np] = (sluice_real)e2;
-                        w->distance_squared[np] = (sluice_real)s2;
-                        np++;
-                    }
+                    const double e0 = xi[0] - (double)px[j], e1 = xi[1] - (double)py[j];
+                    const double e2 = pz ? xi[2] - (double)pz[j] : 0.0;
+                    if (!(e0 * e0 + e1 * e1 + e2 * e2 < cutoff2))
+                        continue;
+                    if (out)
+                        out[found] = j;
+                    found++;
                 }
+            }
+        return found;
+    }
+    for (int64_t dz = -range[2]; dz <= range[2]; dz++) {
+        const int64_t cz = wrap_cell(c[2] + dz, grid->cells[2], grid->periodic[2]);
+        if (cz < 0)
             continue;
-        }
-        for (int64_t dz = -range[2]; dz <= range[2]; dz++) {
-            const int64_t cz = wrap_cell(c[2] + dz, grid->cells[2], grid->periodic[2]);
-            if (cz < 0)
+        for (int64_t dy = -range[1]; dy <= range[1]; dy++) {
+            const int64_t cy = wrap_cell(c[1] + dy, grid->cells[1], grid->periodic[1]);
+            if (cy < 0)
                 continue;
-            for (int64_t dy = -range[1]; dy <= range[1]; dy++) {
-                const int64_t cy = wrap_cell(c[1] + dy, grid->cells[1], grid->periodic[1]);
-                if (cy < 0)
+            for (int64_t dx = -range[0]; dx <= range[0]; dx++) {
+                const int64_t cx = wrap_cell(c[0] + dx, grid->cells[0], grid->periodic[0]);
+                if (cx < 0)
                     continue;
-                for (int64_t dx = -range[0]; dx <= range[0]; dx++) {
-                    const int64_t cx = wrap_cell(c[0] + dx, grid->cells[0], grid->periodic[0]);
-                    if (cx < 0)
+                const size_t at = ((size_t)cz * (size_t)grid->cells[1] + (size_t)cy) *
+                                      (size_t)grid->cells[0] +
+                                  (size_t)cx;
+                const sluice_index j0 = grid->cell_start[at], j1 = grid->cell_start[at + 1];
+                for (sluice_index j = j0; j < j1; j++) {
+                    if (j == i || !((mask >> kinds[j]) & 1u) || (select && select[j] != wanted))
                         continue;
-                    const size_t at = ((size_t)cz * (size_t)grid->cells[1] + (size_t)cy) *
-                                          (size_t)grid->cells[0] +
-                                      (size_t)cx;
-                    const sluice_index j0 = grid->cell_start[at], j1 = grid->cell_start[at + 1];
-                    if (pass_over == 0) {
-                        candidates += j1 - j0;
+                    double s2 = 0;
+                    for (uint32_t d = 0; d < dims; d++) {
+                        double e = xi[d] - (double)position[d][j];
+                        if (grid->periodic[d])
+                            e = minimum_image(e, grid->length[d]);
+                        s2 += e * e;
+                    }
+                    if (!(s2 < cutoff2))
                         continue;
-                    }
-                    for (sluice_index j = j0; j < j1; j++) {
-                        if (j == i || !((mask >> view->kind[j]) & 1u) ||
-                            (pass->select_column >= 0 &&
-                             ((const uint8_t *)view->columns[pass->select_column])[j] !=
-                                 pass->select_value))
-                            continue;
-                        double e[3] = {0, 0, 0}, s2 = 0;
-                        for (uint32_t d = 0; d < dims; d++) {
-                            e[d] = xi[d] - (double)view->position[d][j];
-                            if (grid->periodic[d])
-                                e[d] = minimum_image(e[d], grid->length[d]);
-                            s2 += e[d] * e[d];
-                        }
-                        if (!(s2 < reach2))
-                            continue;
-                        w->neighbour[np] = j;
-                        w->offset[0][np] = (sluice_real)e[0];
-                        w->offset[1][np] = (sluice_real)e[1];
-                        if (dims == 3)
-                            w->offset[2][np] = (sluice_real)e[2];
-                        w->distance_squared[np] = (sluice_real)s2;
-                        np++;
-                    }
+                    if (out)
+                        out[found] = j;
+                    found++;
                 }
             }
         }
     }
-    (*t)++;
+    return found;
+}
+
+/* 1 when target i takes part in the pass (a kind it acts on, selected). */
+static inline int reach_target(const sluice_pair_pass *pass, const sluice_view *view,
+                               sluice_index i)
+{
+    if (!pass->neighbour_mask[view->kind[i]])
+        return 0;
+    return pass->select_column < 0 ||
+           ((const uint8_t *)view->columns[pass->select_column])[i] == pass->select_value;
+}
+
+/* Rebuilds the pass's list from the grid's last build (its cells and the
+ * positions it recorded, whenever this runs: a pair within reach now was
+ * within reach + skin then). Returns 0, or -1 on OOM. */
+static int reach_list_build(const sluice_pair_pass *pass, const sluice_grid *grid,
+                            const sluice_view *view, int threads)
+{
+    sluice_reach_list *L = pass->reach_list;
+    const sluice_index n = view->count;
+    if (n + 1 > L->begin_capacity || !L->begin) {
+        sluice_index cap = n + n / 4 + 64;
+        sluice_index *begin = malloc((size_t)cap * sizeof *begin);
+        if (!begin)
+            return -1;
+        free(L->begin);
+        L->begin = begin;
+        L->begin_capacity = cap;
+    }
+    const double cutoff = (double)pass->reach + (double)grid->skin;
+    sluice_index *begin = L->begin;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 256)
+    for (sluice_index i = 0; i < n; i++)
+        begin[i + 1] = reach_target(pass, view, i) ? reach_scan(pass, grid, view, i,
+                                                                pass->neighbour_mask[view->kind[i]],
+                                                                cutoff, NULL)
+                                                   : 0;
+    begin[0] = 0;
+    size_t total = 0;
+    for (sluice_index i = 0; i < n; i++) {
+        total += begin[i + 1];
+        if (total > UINT32_MAX)
+            return -1;
+        begin[i + 1] = (sluice_index)total;
+    }
+    if (total > L->capacity || !L->list) {
+        size_t cap = total + total / 4 + 64;
+        sluice_index *list = malloc(cap * sizeof *list);
+        if (!list)
+            return -1;
+        free(L->list);
+        L->list = list;
+        L->capacity = cap;
+    }
+    sluice_index *list = L->list;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 256)
+    for (sluice_index i = 0; i < n; i++)
+        if (begin[i + 1] > begin[i])
+            (void)reach_scan(pass, grid, view, i, pass->neighbour_mask[view->kind[i]], cutoff,
+                             list + begin[i]);
+    L->count = n;
+    L->built_at = grid->rebuilds + 1;
+    return 0;
+}
+
+/* Appends the pairs of target i within `reach` from its list entries m0 ..
+ * m1 - 1 (in the list's order); returns the new pair count. */
+static sluice_index fill_reach(const sluice_pair_pass *pass, const sluice_grid *grid,
+                               const sluice_view *view, sluice_pair_workspace *w, sluice_index i,
+                               const sluice_index *restrict list, sluice_index m0,
+                               sluice_index m1, sluice_index np)
+{
+    const uint32_t dims = view->dimensions;
+    const double reach2 = (double)pass->reach * (double)pass->reach;
+    const int periodic = grid->periodic[0] || grid->periodic[1] || grid->periodic[2];
+    const double xi[3] = {(double)view->position[0][i], (double)view->position[1][i],
+                          dims == 3 ? (double)view->position[2][i] : 0.0};
+    if (!periodic) {
+        /* every candidate is written and the count advances for those
+         * within reach (the workspace holds m1 - m0 more pairs) */
+        sluice_index *restrict nb = w->neighbour;
+        sluice_real *restrict ox = w->offset[0], *restrict oy = w->offset[1];
+        sluice_real *restrict oz = w->offset[2], *restrict d2 = w->distance_squared;
+        const sluice_real *restrict px = view->position[0], *restrict py = view->position[1];
+        if (dims == 2) {
+            for (sluice_index m = m0; m < m1; m++) {
+                const sluice_index j = list[m];
+                const double e0 = xi[0] - (double)px[j], e1 = xi[1] - (double)py[j];
+                const double s2 = e0 * e0 + e1 * e1;
+                nb[np] = j;
+                ox[np] = (sluice_real)e0;
+                oy[np] = (sluice_real)e1;
+                d2[np] = (sluice_real)s2;
+                np += s2 < reach2;
+            }
+            return np;
+        }
+        const sluice_real *restrict pz = view->position[2];
+        for (sluice_index m = m0; m < m1; m++) {
+            const sluice_index j = list[m];
+            const double e0 = xi[0] - (double)px[j], e1 = xi[1] - (double)py[j];
+            const double e2 = xi[2] - (double)pz[j];
+            const double s2 = e0 * e0 + e1 * e1 + e2 * e2;
+            nb[np] = j;
+            ox[np] = (sluice_real)e0;
+            oy[np] = (sluice_real)e1;
+            oz[np] = (sluice_real)e2;
+            d2[np] = (sluice_real)s2;
+            np += s2 < reach2;
+        }
+        return np;
+    }
+    for (sluice_index m = m0; m < m1; m++) {
+        const sluice_index j = list[m];
+        double e[3] = {0, 0, 0};
+        for (uint32_t d = 0; d < dims; d++) {
+            e[d] = xi[d] - (double)view->position[d][j];
+            if (periodic && grid->periodic[d])
+                e[d] = minimum_image(e[d], grid->length[d]);
+        }
+        const double s2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+        if (!(s2 < reach2))
+            continue;
+        w->neighbour[np] = j;
+        w->offset[0][np] = (sluice_real)e[0];
+        w->offset[1][np] = (sluice_real)e[1];
+        if (dims == 3)
+            w->offset[2][np] = (sluice_real)e[2];
+        w->distance_squared[np] = (sluice_real)s2;
+        np++;
+    }
     return np;
 }
 
-/* A pass of terms that reach beyond the support (api->request_reach). */
+/* A pass of terms that reach beyond the support (api->request_reach), from
+ * the pass's own list (built on the first evaluation after each grid
+ * build). */
 static int pair_pass_run_reach(sluice_pair_engine *engine, const sluice_pair_pass *pass,
                                const sluice_grid *grid, const sluice_view *view)
 {
     const sluice_index n = view->count;
+    const sluice_reach_list *L = pass->reach_list;
+    if (L->built_at != grid->rebuilds + 1 || L->count != n)
+        if (reach_list_build(pass, grid, view, engine->thread_count) != 0)
+            return -1;
+    const sluice_index *list = L->list, *begin = L->begin;
     sluice_index chunk_targets = engine->batch_pairs / 128;
     if (chunk_targets < 1)
         chunk_targets = 1;
@@ -449,8 +554,6 @@ static int pair_pass_run_reach(sluice_pair_engine *engine, const sluice_pair_pas
         for (uint32_t c = 0; c < w->column_count && !failed; c++)
             w->gathered[c] = NULL;
         const uint8_t *kind = view->kind;
-        const uint8_t *select =
-            pass->select_column >= 0 ? view->columns[pass->select_column] : NULL;
 
 #pragma omp for schedule(dynamic, 4)
         for (sluice_index chunk = 0; chunk < chunks; chunk++) {
@@ -459,13 +562,33 @@ static int pair_pass_run_reach(sluice_pair_engine *engine, const sluice_pair_pas
             const sluice_index a = chunk * chunk_targets;
             const sluice_index b = a + chunk_targets < n ? a + chunk_targets : n;
             for (uint32_t k = 0; k < SLUICE_KIND_COUNT && !failed; k++) {
-                const uint32_t mask = pass->neighbour_mask[k];
-                if (!mask)
+                if (!pass->neighbour_mask[k])
                     continue;
                 sluice_index t = 0, np = 0;
-                for (sluice_index i = a; i < b && !failed; i++)
-                    if (kind[i] == k && (!select || select[i] == pass->select_value))
-                        np = fill_reach(engine, pass, grid, view, w, i, &t, np, k, mask, &failed);
+                for (sluice_index i = a; i < b; i++) {
+                    const sluice_index m0 = begin[i], m1 = begin[i + 1];
+                    if (kind[i] != k || m1 == m0)
+                        continue;
+                    const sluice_index candidates = m1 - m0;
+                    if (np + candidates > w->pair_capacity && t > 0) {
+                        w->pair_begin[t] = np;
+                        flush(engine, pass, view, w, t, np, k);
+                        t = 0;
+                        np = 0;
+                    }
+                    if (candidates > w->pair_capacity) {
+                        if (workspace_reserve(w, candidates, pass->gathered_max) != 0) {
+                            failed = 1;
+                            break;
+                        }
+                        for (uint32_t c = 0; c < w->column_count; c++)
+                            w->gathered[c] = NULL;
+                    }
+                    w->target[t] = i;
+                    w->pair_begin[t] = np;
+                    np = fill_reach(pass, grid, view, w, i, list, m0, m1, np);
+                    t++;
+                }
                 if (failed)
                     break;
                 w->pair_begin[t] = np;

@@ -16,6 +16,23 @@ typedef struct sluice_pair_term {
     uint32_t target_kinds, neighbour_kinds;
 } sluice_pair_term;
 
+/* A reach pass's own Verlet list: the neighbours of each target within
+ * reach + skin at the grid's last build (the selected particles of kinds
+ * the target's kind sees), in the order of the cell scan; rebuilt whenever
+ * the grid is (particles moved skin/2, were added, removed or changed
+ * kind), so between builds every pair within reach is on it. */
+typedef struct sluice_reach_list {
+    uint64_t built_at;   /* grid->rebuilds + 1 at the build; 0: never built */
+    sluice_index count;  /* particles at the build */
+    sluice_index *begin; /* count + 1 */
+    sluice_index begin_capacity;
+    sluice_index *list;
+    size_t capacity;
+} sluice_reach_list;
+
+/* Releases a reach list and its arrays (NULL is fine). */
+void sluice_reach_list_free(sluice_reach_list *list);
+
 typedef struct sluice_pair_pass {
     uint32_t term_count;
     sluice_pair_term *terms;
@@ -35,6 +52,7 @@ typedef struct sluice_pair_pass {
      * neighbours; -1: every particle */
     int32_t select_column;
     uint8_t select_value;
+    sluice_reach_list *reach_list; /* reach passes: allocated with the pass */
 } sluice_pair_pass;
 
 typedef struct sluice_pair_workspace {

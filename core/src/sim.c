@@ -1234,6 +1234,7 @@ static void free_pair_pass(sluice_pair_pass *p)
     free(p->terms);
     for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++)
         free(p->gathered_columns[k]);
+    sluice_reach_list_free(p->reach_list);
     memset(p, 0, sizeof *p);
 }
 
@@ -1555,6 +1556,9 @@ static int build_schedule(sluice_sim *sim)
             if (fill_pair_pass(sim, &p->pair, &v, 1) != 0)
                 goto oom;
             p->pair.reach = sim->instances[v].reach;
+            p->pair.reach_list = calloc(1, sizeof *p->pair.reach_list);
+            if (!p->pair.reach_list)
+                goto oom;
             if (reach_selection(sim, v, &p->pair) != 0)
                 errors++;
         }
@@ -1583,6 +1587,9 @@ static int build_schedule(sluice_sim *sim)
             goto oom;
         if (in->reach > sim->support) {
             in->on_demand->reach = in->reach;
+            in->on_demand->reach_list = calloc(1, sizeof *in->on_demand->reach_list);
+            if (!in->on_demand->reach_list)
+                goto oom;
             if (reach_selection(sim, v, in->on_demand) != 0)
                 errors++;
         }
