@@ -323,6 +323,67 @@ END_TEST
 START_TEST(momentum_3d) { periodic_box("wendland_c2", 3, 0.5); }
 END_TEST
 
+/* artificial_viscosity's speed_of_sound: one evaluation of a box at rest
+ * density (every sound speed c0 = 20 m/s) in a converging shear flow, the
+ * viscosity the only force (beta = 0, so Pi is linear in cbar): with
+ * speed_of_sound = 20 the accelerations equal the pair-mean form's bit for
+ * bit, and with 40 they are twice them (to round-off). */
+static sluice_sim *av_box(const char *speed)
+{
+    char yaml[1024];
+    snprintf(yaml, sizeof yaml,
+             "dimensions: 2\n"
+             "particles: {spacing: 0.05}\n"
+             "time: {end: 0.1}\n"
+             "domain: {min: [-0.2, -0.2], max: [1.2, 1.2]}\n"
+             "geometry:\n"
+             "  fluid: [{shape: box, min: [0, 0], max: [0.5, 0.5]}]\n"
+             "initial: {density: rest}\n"
+             "plugins:\n"
+             "  wendland_c2: {}\n  tait: {speed_of_sound: 20}\n"
+             "  artificial_viscosity: {alpha: 0.3, time_step_limit: false%s}\n"
+             "  symplectic: {}\n",
+             speed);
+    sluice_sim *sim = test_load("av-speed", yaml, NULL, 0);
+    const sluice_view *v = sluice_sim_view(sim);
+    sluice_real *vx = test_column(sim, "velocity", 0), *vy = test_column(sim, "velocity", 1);
+    for (sluice_index i = 0; i < v->count; i++) {
+        vx[i] = (sluice_real)(-0.8 * v->position[0][i] + 0.3 * v->position[1][i]);
+        vy[i] = (sluice_real)(-0.5 * v->position[1][i]);
+    }
+    ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
+    return sim;
+}
+
+START_TEST(artificial_viscosity_fixed_speed)
+{
+    sluice_sim *mean = av_box(""), *same = av_box(", speed_of_sound: 20"),
+               *twice = av_box(", speed_of_sound: 40");
+    const sluice_view *v = sluice_sim_view(mean);
+    double largest = 0, worst_same = 0, worst_twice = 0;
+    for (uint32_t d = 0; d < 2; d++) {
+        const sluice_real *a = test_column(mean, "acceleration", d);
+        const sluice_real *b = test_column(same, "acceleration", d);
+        const sluice_real *c = test_column(twice, "acceleration", d);
+        for (sluice_index i = 0; i < v->count; i++) {
+            largest = fmax(largest, fabs(a[i]));
+            worst_same = fmax(worst_same, fabs(b[i] - a[i]));
+            worst_twice = fmax(worst_twice, fabs(c[i] - 2 * a[i]));
+        }
+    }
+    fprintf(stderr,
+            "artificial_viscosity speed_of_sound: largest |a| %.3e m/s^2; c = c0: differs by "
+            "%.1e; c = 2 c0: differs from twice by %.1e\n",
+            largest, worst_same, worst_twice);
+    ck_assert(largest > 1e-3);
+    ck_assert(worst_same == 0);
+    ck_assert(worst_twice <= 1e-13 * largest);
+    sluice_sim_free(mean);
+    sluice_sim_free(same);
+    sluice_sim_free(twice);
+}
+END_TEST
+
 /* ------------------------------------------------------- plugin swap -- */
 
 /* Two scenes that differ by one plugin: their field tables must agree except
@@ -421,6 +482,7 @@ int main(void)
     tcase_add_test(c, momentum_2d_wendland);
     tcase_add_test(c, momentum_2d_cubic);
     tcase_add_test(c, momentum_3d);
+    tcase_add_test(c, artificial_viscosity_fixed_speed);
     suite_add_tcase(s, c);
     TCase *l = tcase_create("layout");
     tcase_add_test(l, swapping_a_plugin_changes_only_its_fields);

@@ -6,20 +6,24 @@
  * as used by DualSPHysics: dt <= C h / (c_i + max_j |mu_ij|), with the
  * Courant number C published by the time-step plugin. With time_step_limit:
  * false it sets no limit (and computes no max |mu_ij|), so that the acoustic
- * condition alone sets the step (seed 000, eq. 18). */
+ * condition alone sets the step (seed 000, eq. 18). With speed_of_sound
+ * given, cbar_ij is that constant for every pair: in a two-phase scene the
+ * water's c0, so that the air's artificial viscosity (nu = alpha c h / 8)
+ * is the water's and not c0_air / c0_water = 13.5 times it. */
 #include <math.h>
 
 #include "plugin_util.h"
 
 typedef struct av_config {
-    sluice_real alpha, beta;
+    sluice_real alpha, beta, speed_of_sound;
     int time_step_limit;
 } av_config;
 
 typedef struct av_state {
     const sluice_api *api;
     sluice_real alpha, beta, h, eta2, courant;
-    int limit; /* the viscous time-step limit is on */
+    sluice_real speed; /* > 0: cbar for every pair; 0: the pair's mean */
+    int limit;         /* the viscous time-step limit is on */
     sluice_field velocity, density, sound_speed, mass, acceleration, mu_max;
 } av_state;
 
@@ -34,6 +38,12 @@ static const sluice_param_spec params[] = {
      "limit the time step to C h / (c_i + max_j |mu_ij|), with max_j |mu_ij| kept in the field "
      "viscous_mu_max (m s^-1); false leaves the step to the other conditions (seed 000: the "
      "acoustic condition alone)",
+     NULL, 0},
+    {"speed_of_sound", SLUICE_PARAM_REAL, offsetof(av_config, speed_of_sound), NULL, 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_OPTIONAL, "m s^-1",
+     "c in Pi_ij for every pair instead of the pair's mean sound speed; two phases: the water's "
+     "c0, so that the air's artificial viscosity alpha c h / 8 is the water's and not 13.5 times "
+     "it (default: the pair's mean)",
      NULL, 0},
 };
 
@@ -65,6 +75,7 @@ static int av_create(const sluice_api *api, sluice_host *host, const void *confi
     s->api = api;
     s->alpha = c->alpha;
     s->beta = c->beta;
+    s->speed = c->speed_of_sound;
     s->limit = c->time_step_limit;
     if (sluice_util_constant(api, host, "smoothing_length", &s->h) != SLUICE_OK ||
         (s->limit && api->declare_field(host, &mu_max_field) != SLUICE_OK)) {
@@ -104,7 +115,7 @@ static void av_destroy(void *state)
 
 /* limit: also record max_j |mu_ij| for the time-step limit (specialised) */
 static inline void av_pairs(const av_state *s, const sluice_view *v, const sluice_pair_batch *b,
-                            const uint32_t dims, const int limit)
+                            const uint32_t dims, const int limit, const int fixed_speed)
 {
     const sluice_real *vel[3], *vj[3];
     for (uint32_t d = 0; d < dims; d++) {
@@ -141,7 +152,7 @@ static inline void av_pairs(const av_state *s, const sluice_view *v, const sluic
             /* one division per pair: 1 / ((r^2 + eta^2) rhobar) gives both
              * mu = h v.r / (r^2 + eta^2) and the 1 / rhobar of Pi (the divider
              * bounds the pair loop, docs/performance.md) */
-            const sluice_real cbar = (sluice_real)0.5 * (ci + cj[k]);
+            const sluice_real cbar = fixed_speed ? s->speed : (sluice_real)0.5 * (ci + cj[k]);
             const sluice_real sum_rho = rhoi + rhoj[k]; /* 2 rhobar */
             const sluice_real denominator = r[k] * r[k] + eta2;
             const sluice_real inverse = 1 / (denominator * sum_rho);
@@ -170,16 +181,17 @@ static inline void av_pairs(const av_state *s, const sluice_view *v, const sluic
 static void av_pair(void *state, const sluice_view *v, const sluice_pair_batch *b)
 {
     const av_state *s = state;
+    const int fixed = s->speed > 0;
     if (v->dimensions == 3) {
         if (s->limit)
-            av_pairs(s, v, b, 3, 1);
+            fixed ? av_pairs(s, v, b, 3, 1, 1) : av_pairs(s, v, b, 3, 1, 0);
         else
-            av_pairs(s, v, b, 3, 0);
+            fixed ? av_pairs(s, v, b, 3, 0, 1) : av_pairs(s, v, b, 3, 0, 0);
     } else {
         if (s->limit)
-            av_pairs(s, v, b, 2, 1);
+            fixed ? av_pairs(s, v, b, 2, 1, 1) : av_pairs(s, v, b, 2, 1, 0);
         else
-            av_pairs(s, v, b, 2, 0);
+            fixed ? av_pairs(s, v, b, 2, 0, 1) : av_pairs(s, v, b, 2, 0, 0);
     }
 }
 
@@ -221,5 +233,5 @@ static const sluice_component components[] = {{
     .time_step_limit = av_time_step_limit,
 }};
 
-SLUICE_DEFINE_LIBRARY("artificial_viscosity", "1.1.0", "Monaghan artificial viscosity",
+SLUICE_DEFINE_LIBRARY("artificial_viscosity", "1.2.0", "Monaghan artificial viscosity",
                       SLUICE_DIMS_ALL, components)
