@@ -400,23 +400,8 @@ int sluice_grid_build(sluice_grid *grid, sluice_particles *particles, uint32_t p
 #pragma omp parallel for schedule(dynamic, 256)
     for (sluice_index i = 0; i < n; i++)
         begin[i + 1] = visit(grid, pos, i, cutoff2, NULL);
-    begin[0] = 0;
-    size_t total = 0;
-    for (sluice_index i = 0; i < n; i++) {
-        total += begin[i + 1];
-        if (total > UINT32_MAX)
-            return -1;
-        begin[i + 1] = (sluice_index)total;
-    }
-    if (total > grid->list_capacity || !grid->list) {
-        size_t cap = total + total / 4 + 64;
-        sluice_index *list = malloc(cap * sizeof *list);
-        if (!list)
-            return -1;
-        free(grid->list);
-        grid->list = list;
-        grid->list_capacity = cap;
-    }
+    if (sluice_list_offsets(begin, n, &grid->list, &grid->list_capacity) != 0)
+        return -1;
     sluice_index *list = grid->list;
 #pragma omp parallel for schedule(dynamic, 256)
     for (sluice_index i = 0; i < n; i++)
@@ -425,6 +410,29 @@ int sluice_grid_build(sluice_grid *grid, sluice_particles *particles, uint32_t p
     grid->count = n;
     grid->valid = 1;
     grid->rebuilds++;
+    return 0;
+}
+
+int sluice_list_offsets(sluice_index *begin, sluice_index n, sluice_index **list,
+                        size_t *capacity)
+{
+    begin[0] = 0;
+    size_t total = 0;
+    for (sluice_index i = 0; i < n; i++) {
+        total += begin[i + 1];
+        if (total > UINT32_MAX)
+            return -1;
+        begin[i + 1] = (sluice_index)total;
+    }
+    if (total > *capacity || !*list) {
+        size_t cap = total + total / 4 + 64;
+        sluice_index *grown = malloc(cap * sizeof *grown);
+        if (!grown)
+            return -1;
+        free(*list);
+        *list = grown;
+        *capacity = cap;
+    }
     return 0;
 }
 

@@ -74,6 +74,14 @@ sluice_index sluice_grid_near_point(const sluice_grid *grid, sluice_real *const 
 /* Wraps coordinates of periodic directions into [lo, hi). */
 void sluice_grid_wrap(const sluice_grid *grid, sluice_real *position[3], sluice_index count);
 
+/* A list in CSR form, from its counts: turns the counts in begin[1 .. n]
+ * into offsets (begin[0] = 0, begin[i + 1] the end of i's entries) and makes
+ * *list (of *capacity entries, grown with a quarter's margin) hold them all.
+ * Returns 0, or -1 on OOM or when the total exceeds the index type. Used by
+ * the Verlet list and by the reach passes' own lists (pairs.c). */
+int sluice_list_offsets(sluice_index *begin, sluice_index n, sluice_index **list,
+                        size_t *capacity);
+
 /* Bytes held by the grid and the list (memory figures). */
 size_t sluice_grid_bytes(const sluice_grid *grid);
 

@@ -177,6 +177,32 @@ static void flush(sluice_pair_engine *engine, const sluice_pair_pass *pass,
         w->gathered[pass->gathered_columns[kind][g]] = NULL;
 }
 
+/* Opens target i's segment of w's batch for up to `candidates` pairs:
+ * flushes the batch (targets of kind `kind`) when they would not fit, and
+ * grows the workspace when one target's do not fit an empty one. Returns 0,
+ * or -1 when it could not grow. */
+static inline int batch_open(sluice_pair_engine *engine, const sluice_pair_pass *pass,
+                             const sluice_view *view, sluice_pair_workspace *w, sluice_index *t,
+                             sluice_index *np, sluice_index candidates, uint32_t kind,
+                             sluice_index i)
+{
+    if (*np + candidates > w->pair_capacity && *t > 0) {
+        w->pair_begin[*t] = *np;
+        flush(engine, pass, view, w, *t, *np, kind);
+        *t = 0;
+        *np = 0;
+    }
+    if (candidates > w->pair_capacity) {
+        if (workspace_reserve(w, candidates, pass->gathered_max) != 0)
+            return -1;
+        for (uint32_t c = 0; c < w->column_count; c++)
+            w->gathered[c] = NULL;
+    }
+    w->target[*t] = i;
+    w->pair_begin[*t] = *np;
+    return 0;
+}
+
 static inline double minimum_image(double dx, double length)
 {
     return dx - length * nearbyint(dx / length);
@@ -429,23 +455,8 @@ static int reach_list_build(const sluice_pair_pass *pass, const sluice_grid *gri
                                                                 pass->neighbour_mask[view->kind[i]],
                                                                 cutoff, NULL)
                                                    : 0;
-    begin[0] = 0;
-    size_t total = 0;
-    for (sluice_index i = 0; i < n; i++) {
-        total += begin[i + 1];
-        if (total > UINT32_MAX)
-            return -1;
-        begin[i + 1] = (sluice_index)total;
-    }
-    if (total > L->capacity || !L->list) {
-        size_t cap = total + total / 4 + 64;
-        sluice_index *list = malloc(cap * sizeof *list);
-        if (!list)
-            return -1;
-        free(L->list);
-        L->list = list;
-        L->capacity = cap;
-    }
+    if (sluice_list_offsets(begin, n, &L->list, &L->capacity) != 0)
+        return -1;
     sluice_index *list = L->list;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 256)
     for (sluice_index i = 0; i < n; i++)
@@ -509,7 +520,7 @@ static sluice_index fill_reach(const sluice_pair_pass *pass, const sluice_grid *
         double e[3] = {0, 0, 0};
         for (uint32_t d = 0; d < dims; d++) {
             e[d] = xi[d] - (double)view->position[d][j];
-            if (periodic && grid->periodic[d])
+            if (grid->periodic[d])
                 e[d] = minimum_image(e[d], grid->length[d]);
         }
         const double s2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
@@ -566,26 +577,13 @@ static int pair_pass_run_reach(sluice_pair_engine *engine, const sluice_pair_pas
                     continue;
                 sluice_index t = 0, np = 0;
                 for (sluice_index i = a; i < b; i++) {
-                    const sluice_index m0 = begin[i], m1 = begin[i + 1];
-                    if (kind[i] != k || m1 == m0)
+                    if (kind[i] != k || !reach_target(pass, view, i))
                         continue;
-                    const sluice_index candidates = m1 - m0;
-                    if (np + candidates > w->pair_capacity && t > 0) {
-                        w->pair_begin[t] = np;
-                        flush(engine, pass, view, w, t, np, k);
-                        t = 0;
-                        np = 0;
+                    const sluice_index m0 = begin[i], m1 = begin[i + 1];
+                    if (batch_open(engine, pass, view, w, &t, &np, m1 - m0, k, i) != 0) {
+                        failed = 1;
+                        break;
                     }
-                    if (candidates > w->pair_capacity) {
-                        if (workspace_reserve(w, candidates, pass->gathered_max) != 0) {
-                            failed = 1;
-                            break;
-                        }
-                        for (uint32_t c = 0; c < w->column_count; c++)
-                            w->gathered[c] = NULL;
-                    }
-                    w->target[t] = i;
-                    w->pair_begin[t] = np;
                     np = fill_reach(pass, grid, view, w, i, list, m0, m1, np);
                     t++;
                 }
@@ -644,23 +642,10 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
                     if (kind[i] != k)
                         continue;
                     const sluice_index m0 = begin[i], m1 = begin[i + 1];
-                    const sluice_index candidates = m1 - m0;
-                    if (np + candidates > w->pair_capacity && t > 0) {
-                        w->pair_begin[t] = np;
-                        flush(engine, pass, view, w, t, np, k);
-                        t = 0;
-                        np = 0;
+                    if (batch_open(engine, pass, view, w, &t, &np, m1 - m0, k, i) != 0) {
+                        failed = 1;
+                        break;
                     }
-                    if (candidates > w->pair_capacity) {
-                        if (workspace_reserve(w, candidates, pass->gathered_max) != 0) {
-                            failed = 1;
-                            break;
-                        }
-                        for (uint32_t c = 0; c < w->column_count; c++)
-                            w->gathered[c] = NULL;
-                    }
-                    w->target[t] = i;
-                    w->pair_begin[t] = np;
                     np = fill(w, grid, view, i, list, m0, m1, np, support2, mask);
                     t++;
                 }
