@@ -41,7 +41,9 @@
 #include <hdf5.h>
 
 #include "build_config.h"
+#include "schema.h"
 #include "sim_internal.h"
+#include "yaml_tree.h"
 
 #define CHECKPOINT_FORMAT "sluice checkpoint"
 #define CHECKPOINT_VERSION 1
@@ -651,17 +653,55 @@ static int restore_grid(sluice_sim *sim, sluice_real *const *built, ck_error *e)
     int identity = rc == 0;
     for (sluice_index i = 0; identity && i < n; i++)
         identity = sim->grid.order[i] == i;
-    for (uint32_t d = 0; d < dims; d++)
-        memcpy(sim->particles.columns[sim->position.column + (int32_t)d], current + (size_t)d * n,
-               (size_t)n * sizeof *current);
+    /* the build gathered every column through grid.order (particle k is
+     * the old order[k]): the current positions follow the same way */
+    for (uint32_t d = 0; d < dims; d++) {
+        sluice_real *x = sim->particles.columns[sim->position.column + (int32_t)d];
+        const sluice_real *saved = current + (size_t)d * n;
+        if (identity || rc != 0)
+            memcpy(x, saved, (size_t)n * sizeof *x);
+        else
+            for (sluice_index k = 0; k < n; k++)
+                x[k] = saved[sim->grid.order[k]];
+    }
     free(current);
-    if (!identity) {
+    if (rc == -1) {
         sim->grid.valid = 0;
-        fail(e, rc == -1 ? "out of memory rebuilding the neighbour list"
-                         : "the neighbour-list positions do not match the particle order");
+        fail(e, "out of memory rebuilding the neighbour list");
         return -1;
     }
+    if (!identity) {
+        /* the scene's cells differ from the run's (another smoothing length,
+         * kernel or neighbour-search skin): the first step builds the list
+         * afresh from the current positions, a correct state that an
+         * uninterrupted run would not have reached bit for bit */
+        sim->grid.valid = 0;
+        fprintf(stderr, "sluice: warning: the scene's neighbour cells differ from the "
+                        "checkpoint's (smoothing length, kernel or neighbour_search changed): "
+                        "the neighbour list is built afresh, and the run does not continue bit "
+                        "for bit\n");
+    }
     return 0;
+}
+
+/* The particle spacing the checkpoint's run was set up with, from its
+ * resolved scene: 0 when it cannot be read (an older or edited file). */
+static double checkpoint_spacing(const char *scene_text)
+{
+    if (!scene_text)
+        return 0;
+    sluice_diag *diag = sluice_diag_create();
+    if (!diag)
+        return 0;
+    sluice_node *root = sluice_yaml_parse_string(scene_text, strlen(scene_text), "checkpoint", diag);
+    double spacing = 0;
+    const sluice_node *particles = root ? sluice_node_get(root, "particles") : NULL;
+    const sluice_node *node = particles ? sluice_node_get(particles, "spacing") : NULL;
+    if (!node || node->kind != SLUICE_NODE_SCALAR || sluice_parse_real(node->value, &spacing) != 0)
+        spacing = 0;
+    sluice_node_free(root);
+    sluice_diag_destroy(diag);
+    return spacing;
 }
 
 static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
@@ -701,6 +741,19 @@ static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
     free(fields);
     free(want_plugins);
     free(want_fields);
+    /* the particles are the run's: their mass and lattice belong to its
+     * spacing, which a restart cannot change (any other parameter it can) */
+    if (!e->text[0]) {
+        char *scene_text = get_string(file, "scene", e);
+        const double spacing = checkpoint_spacing(scene_text);
+        free(scene_text);
+        if (!e->text[0] && spacing > 0 &&
+            fabs(spacing - (double)sim->spacing) > 1e-12 * spacing)
+            fail(e, "it holds a run at particles.spacing = %.9g m and the scene asks for %.9g "
+                    "m; a restart continues the same particles (--set particles.spacing=%.9g, "
+                    "or start a new run)",
+                 spacing, (double)sim->spacing, spacing);
+    }
 
     uint64_t count = 0, next_id = 0, removed = 0, initial = 0, steps = 0, rebuilds = 0;
     int64_t step = 0;
