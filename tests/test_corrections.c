@@ -140,11 +140,17 @@ START_TEST(xsph_uniform_smoothing_3d) { xsph_uniform(3, "velocity_smoothing"); }
 END_TEST
 
 /* Three particles on a line, spacing dx, h = 1.3 dx (the outer two are 2 dx
- * < 2h apart): the corrections written out by hand. */
+ * < 2h apart): the corrections written out by hand. With coefficient <= 0
+ * the key is left out, and the form's default applies. */
 static void xsph_three(const char *form, double coefficient)
 {
-    char yaml[2048];
+    char yaml[2048], given[64] = "";
     const double dx = 0.1;
+    const int position = strcmp(form, "position") == 0;
+    if (coefficient > 0)
+        snprintf(given, sizeof given, ", %s: %.17g", position ? "epsilon" : "phi", coefficient);
+    else
+        coefficient = position ? 0.3 : 0.01;
     snprintf(yaml, sizeof yaml,
              "dimensions: 2\n"
              "particles: {spacing: %g, smoothing_length_ratio: 1.3, rest_density: 1000}\n"
@@ -152,8 +158,8 @@ static void xsph_three(const char *form, double coefficient)
              "domain: {min: [-1, -1], max: [1, 1]}\n"
              "geometry: {fluid: [{shape: box, min: [0, 0], max: [%g, %g]}]}\n"
              "initial: {density: rest}\n"
-             "plugins: {wendland_c2: {}, xsph: {form: %s, epsilon: %g, phi: %g}, symplectic: {}}\n",
-             dx, 3 * dx, dx, form, coefficient, coefficient);
+             "plugins: {wendland_c2: {}, xsph: {form: %s%s}, symplectic: {}}\n",
+             dx, 3 * dx, dx, form, given);
     sluice_sim *sim = test_load("xsph3", yaml, NULL, 0);
     ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK); /* settles the particle order */
     const sluice_view *v = sluice_sim_view(sim);
@@ -214,9 +220,42 @@ static void xsph_three(const char *form, double coefficient)
     sluice_sim_free(sim);
 }
 
-START_TEST(xsph_three_position) { xsph_three("position", 0.3); }
+START_TEST(xsph_three_position) { xsph_three("position", 0.45); }
 END_TEST
-START_TEST(xsph_three_smoothing) { xsph_three("velocity_smoothing", 0.01); }
+
+START_TEST(xsph_three_position_default) { xsph_three("position", 0); }
+END_TEST
+START_TEST(xsph_three_smoothing) { xsph_three("velocity_smoothing", 0.2); }
+END_TEST
+
+START_TEST(xsph_three_smoothing_default) { xsph_three("velocity_smoothing", 0); }
+END_TEST
+
+/* each form's coefficient belongs to it: the other form's is refused, not
+ * ignored (a scene giving phi with the position form ran with epsilon's
+ * default without a word) */
+START_TEST(xsph_other_forms_coefficient_refused)
+{
+    const char *head = "dimensions: 2\n"
+                       "particles: {spacing: 0.1, smoothing_length_ratio: 1.3, rest_density: 1000}\n"
+                       "time: {end: 1.0, max_step: 0.001}\n"
+                       "domain: {min: [-1, -1], max: [1, 1]}\n"
+                       "geometry: {fluid: [{shape: box, min: [0, 0], max: [0.3, 0.1]}]}\n"
+                       "initial: {density: rest}\n";
+    char yaml[1024];
+    snprintf(yaml, sizeof yaml, "%splugins: {wendland_c2: {}, xsph: {phi: 0.3}, symplectic: {}}\n",
+             head);
+    test_load_refused("xsph-phi-position", yaml, "form position takes epsilon");
+    snprintf(yaml, sizeof yaml,
+             "%splugins: {wendland_c2: {}, xsph: {form: velocity_smoothing, epsilon: 0.3}, "
+             "symplectic: {}}\n",
+             head);
+    test_load_refused("xsph-epsilon-smoothing", yaml, "form velocity_smoothing takes phi");
+    /* 0 is out of range: XSPH off is a scene without the plugin */
+    snprintf(yaml, sizeof yaml,
+             "%splugins: {wendland_c2: {}, xsph: {epsilon: 0}, symplectic: {}}\n", head);
+    test_load_refused("xsph-epsilon-zero", yaml, "epsilon");
+}
 END_TEST
 
 /* Random velocities and densities on a disordered periodic set: the position
@@ -946,6 +985,9 @@ int main(void)
     tcase_add_test(x, xsph_uniform_smoothing_3d);
     tcase_add_test(x, xsph_three_position);
     tcase_add_test(x, xsph_three_smoothing);
+    tcase_add_test(x, xsph_three_position_default);
+    tcase_add_test(x, xsph_three_smoothing_default);
+    tcase_add_test(x, xsph_other_forms_coefficient_refused);
     tcase_add_test(x, xsph_momentum_position);
     suite_add_tcase(s, x);
     TCase *k = tcase_create("kernel_correction");

@@ -45,12 +45,21 @@ static const sluice_param_spec params[] = {
      "position: dr/dt = v + epsilon sum_j (m_j/rhobar_ij) v_ji W_ij (Monaghan 1989, seed 001); "
      "velocity_smoothing: particles move with phi <v>_Shepard + (1 - phi) v (seed 004)",
      "position|velocity_smoothing", 0},
-    {"epsilon", SLUICE_PARAM_REAL, offsetof(xsph_config, epsilon), "0.3", 0, 1,
-     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
-     "XSPH coefficient of the position form (seed 001: 0.3)", NULL, 0},
-    {"phi", SLUICE_PARAM_REAL, offsetof(xsph_config, phi), "0.01", 0, 1,
-     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
-     "velocity smoothing coefficient phi_v of the velocity_smoothing form (seed 004: 0.01)",
+    /* optional, without a default in the table: each belongs to one form,
+     * and the other form's coefficient is refused, not silently ignored */
+    {"epsilon", SLUICE_PARAM_REAL, offsetof(xsph_config, epsilon), NULL, 0, 1,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_HAS_MAX |
+         SLUICE_PARAM_OPTIONAL,
+     "1",
+     "XSPH coefficient of the position form only (default 0.3, seed 001); refused with form "
+     "velocity_smoothing",
+     NULL, 0},
+    {"phi", SLUICE_PARAM_REAL, offsetof(xsph_config, phi), NULL, 0, 1,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_HAS_MAX |
+         SLUICE_PARAM_OPTIONAL,
+     "1",
+     "velocity smoothing coefficient phi_v of the velocity_smoothing form only (default 0.01, "
+     "seed 004); refused with form position",
      NULL, 0},
 };
 
@@ -75,8 +84,23 @@ static int xsph_create(const sluice_api *api, sluice_host *host, const void *con
         return SLUICE_ERROR;
     s->api = api;
     s->form = c->form;
-    s->epsilon = c->epsilon;
-    s->phi = c->phi;
+    /* an optional parameter that is absent reads 0, which its range excludes */
+    if (c->form == FORM_POSITION && c->phi > 0) {
+        api->error(host, "phi = %g is the coefficient of form velocity_smoothing, which this "
+                         "scene does not use; form position takes epsilon (default 0.3)",
+                   (double)c->phi);
+        free(s);
+        return SLUICE_ERROR;
+    }
+    if (c->form == FORM_VELOCITY_SMOOTHING && c->epsilon > 0) {
+        api->error(host, "epsilon = %g is the coefficient of form position, which this scene "
+                         "does not use; form velocity_smoothing takes phi (default 0.01)",
+                   (double)c->epsilon);
+        free(s);
+        return SLUICE_ERROR;
+    }
+    s->epsilon = c->epsilon > 0 ? c->epsilon : (sluice_real)0.3;
+    s->phi = c->phi > 0 ? c->phi : (sluice_real)0.01;
     *state = s;
     return SLUICE_OK;
 }
@@ -192,5 +216,5 @@ static const sluice_component components[] = {{
     .pair = xsph_pair,
 }};
 
-SLUICE_DEFINE_LIBRARY("xsph", "1.0.0", "XSPH transport-velocity corrections", SLUICE_DIMS_ALL,
+SLUICE_DEFINE_LIBRARY("xsph", "1.1.0", "XSPH transport-velocity corrections", SLUICE_DIMS_ALL,
                       components)
