@@ -690,6 +690,159 @@ START_TEST(cohesion_against_brute_force)
 }
 END_TEST
 
+/* air_cohesion_held against air_cohesion on the same jittered two-layer
+ * box (no gravity: the pressure and the cohesion move it), Verlet with a
+ * fixed step (max_step below every stability limit): the positions after
+ * `steps` steps by particle id. `rng` is reset so that every run starts
+ * from the same jitter. */
+static double *run_cohesion(const char *cohesion, int steps, sluice_sim **out)
+{
+    /* box_scene's two layers, without gravity, on Verlet */
+    char *edited = NULL;
+    ck_assert_int_ge(
+        asprintf(&edited,
+                 "dimensions: 2\n"
+                 "particles: {spacing: 0.02, smoothing_length_ratio: 1.225, rest_density: 1000}\n"
+                 "time: {end: 1.0, max_step: 1e-5}\n"
+                 "domain: {min: [-0.1, -0.1], max: [0.3, 0.3]}\n"
+                 "geometry:\n"
+                 "  fluid:\n"
+                 "    - {shape: box, min: [0, 0], max: [0.2, 0.1]}\n"
+                 "    - {shape: box, min: [0, 0.1], max: [0.2, 0.2]}\n"
+                 "initial: {density: hydrostatic}\n"
+                 "plugins:\n"
+                 "  wendland_c2: {}\n"
+                 "  two_phase: {speed_of_sound: 28, background_pressure: 400, "
+                 "air_above: [[0, 0.1]]}\n"
+                 "  continuity: {form: volume}\n"
+                 "  pressure_gradient: {form: density_product}\n"
+                 "  time_step: {}\n"
+                 "  verlet: {euler_every: 40}\n"
+                 "%s",
+                 cohesion),
+        0);
+    sluice_sim *sim = test_load("cohesion-held", edited, NULL, 0);
+    const sluice_view *v = sluice_sim_view(sim);
+    sluice_real *x = (sluice_real *)v->position[0], *y = (sluice_real *)v->position[1];
+    rng = 12345;
+    for (sluice_index i = 0; i < v->count; i++) {
+        x[i] += (sluice_real)(0.004 * (uniform() - 0.5));
+        y[i] += (sluice_real)(0.004 * (uniform() - 0.5));
+    }
+    ck_assert_int_eq(sluice_sim_begin(sim, NULL), SLUICE_RUN_COMPLETE);
+    for (int k = 0; k < steps; k++)
+        ck_assert_msg(sluice_sim_step(sim) == SLUICE_RUN_COMPLETE, "%s", sluice_sim_failure(sim));
+    v = sluice_sim_view(sim);
+    double *at = calloc(2 * (size_t)v->count, sizeof *at);
+    ck_assert_ptr_nonnull(at);
+    for (sluice_index i = 0; i < v->count; i++) {
+        ck_assert(v->id[i] < v->count);
+        at[2 * v->id[i]] = v->position[0][i];
+        at[2 * v->id[i] + 1] = v->position[1][i];
+    }
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    *out = sim;
+    free(edited);
+    return at;
+}
+
+static double largest_difference(const double *a, const double *b, sluice_index n)
+{
+    double worst = 0;
+    for (size_t k = 0; k < 2 * (size_t)n; k++)
+        worst = fmax(worst, fabs(a[k] - b[k]));
+    return worst;
+}
+
+/* air_cohesion_held:
+ *  - update_every 1 is air_cohesion with a one-evaluation integrator: the
+ *    positions after 60 Verlet steps agree to round-off (the held
+ *    acceleration is added after the other terms' sums, in another order);
+ *  - held for N steps, the force lags by (k mod N) dt at step k, (N - 1)
+ *    dt / 2 on average: the position difference from the every-step run
+ *    after a fixed time is first order in the lag, at most (N - 1) times
+ *    that of N = 2 (10 % allowed for the second-order part), and less when
+ *    the hold spans the air's acoustic period dx / c0_a (5 steps here),
+ *    whose oscillation the held force averages; it grows with N;
+ *  - between updates the held field does not change, and it is zero in the
+ *    water. */
+START_TEST(cohesion_held_against_every_step)
+{
+    const int steps = 60;
+    const char *every = "  air_cohesion: {coefficient: 150, smoothing_length_ratio: 2}\n";
+    sluice_sim *reference_sim = NULL, *sim = NULL;
+    double *reference = run_cohesion(every, steps, &reference_sim);
+    const sluice_index n = sluice_sim_view(reference_sim)->count;
+    double *moved = NULL;
+    {
+        /* the scale: how far the particles moved */
+        sluice_sim *still = NULL;
+        moved = run_cohesion(every, 0, &still);
+        sluice_sim_free(still);
+    }
+    const double displacement = largest_difference(reference, moved, n);
+    double errors[4] = {0, 0, 0, 0};
+    const int holds[4] = {1, 2, 4, 8};
+    for (int k = 0; k < 4; k++) {
+        char line[160];
+        snprintf(line, sizeof line,
+                 "  air_cohesion_held: {coefficient: 150, smoothing_length_ratio: 2, "
+                 "update_every: %d}\n",
+                 holds[k]);
+        double *held = run_cohesion(line, steps, &sim);
+        errors[k] = largest_difference(reference, held, n);
+        if (holds[k] == 8) {
+            /* 60 steps: the last update was at step 56; two more steps leave
+             * the held field as it is */
+            sluice_field f;
+            ck_assert_int_eq(sluice_sim_field(sim, "cohesion_acceleration", &f), SLUICE_OK);
+            const sluice_view *v = sluice_sim_view(sim);
+            const uint8_t *phase = phase_column(sim);
+            double *before = malloc(2 * (size_t)v->count * sizeof *before);
+            ck_assert_ptr_nonnull(before);
+            for (sluice_index i = 0; i < v->count; i++) {
+                before[2 * v->id[i]] = sluice_real_column(v, f, 0)[i];
+                before[2 * v->id[i] + 1] = sluice_real_column(v, f, 1)[i];
+                if (!phase[i])
+                    ck_assert(sluice_real_column(v, f, 0)[i] == 0 &&
+                              sluice_real_column(v, f, 1)[i] == 0);
+            }
+            ck_assert_int_eq(sluice_sim_begin(sim, NULL), SLUICE_RUN_COMPLETE);
+            ck_assert_int_eq(sluice_sim_step(sim), SLUICE_RUN_COMPLETE);
+            ck_assert_int_eq(sluice_sim_step(sim), SLUICE_RUN_COMPLETE);
+            v = sluice_sim_view(sim);
+            double nonzero = 0;
+            for (sluice_index i = 0; i < v->count; i++) {
+                ck_assert(before[2 * v->id[i]] == sluice_real_column(v, f, 0)[i]);
+                ck_assert(before[2 * v->id[i] + 1] == sluice_real_column(v, f, 1)[i]);
+                nonzero = fmax(nonzero, fabs(sluice_real_column(v, f, 1)[i]));
+            }
+            ck_assert(nonzero > 0);
+            ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+            free(before);
+        }
+        free(held);
+        sluice_sim_free(sim);
+    }
+    fprintf(stderr,
+            "cohesion held: %u particles moved up to %.3g m in %d steps; position difference "
+            "from every step: N = 1 %.3g m, 2 %.3g, 4 %.3g, 8 %.3g (ratios %.3f, %.3f)\n",
+            n, displacement, steps, errors[0], errors[1], errors[2], errors[3],
+            errors[2] / errors[1], errors[3] / errors[2]);
+    ck_assert(displacement > 1e-6);
+    ck_assert_msg(errors[0] <= 1e-12 * displacement, "update_every 1 differs by %g m", errors[0]);
+    ck_assert(errors[1] > 1e-9 * displacement);
+    ck_assert(errors[1] < errors[2] && errors[2] < errors[3]);
+    for (int k = 2; k < 4; k++)
+        ck_assert_msg(errors[k] <= 1.1 * (holds[k] - 1) * errors[1],
+                      "N = %d: %g m, more than first order (%g m from N = 2)", holds[k],
+                      errors[k], (holds[k] - 1) * errors[1]);
+    sluice_sim_free(reference_sim);
+    free(reference);
+    free(moved);
+}
+END_TEST
+
 START_TEST(cohesion_refusals)
 {
     char *yaml = box_scene("speed_of_sound: 28, background_pressure: 400, air_above: [[0, 0.1]]",
@@ -823,6 +976,7 @@ int main(void)
     TCase *cohesion = tcase_create("cohesion");
     tcase_add_test(cohesion, cohesion_against_brute_force);
     tcase_add_test(cohesion, cohesion_refusals);
+    tcase_add_test(cohesion, cohesion_held_against_every_step);
     suite_add_tcase(s, cohesion);
     TCase *input = tcase_create("input");
     tcase_add_test(input, phase_survives_a_restart);

@@ -1167,9 +1167,16 @@ const char *sluice_field_writers(const sluice_sim *sim, const sluice_field_entry
     return buffer;
 }
 
+/* a pair term of every evaluation (an on-demand pair callback runs only
+ * when its component asks, from a hook) */
+static int evaluation_pair(const sluice_component *c)
+{
+    return c->pair && !(c->flags & SLUICE_COMPONENT_ON_DEMAND);
+}
+
 static int is_evaluation(const sluice_component *c)
 {
-    return c->particle || (c->pair && !(c->flags & SLUICE_COMPONENT_ON_DEMAND));
+    return c->particle || evaluation_pair(c);
 }
 
 /* Describes a pair pass made of the given components: the terms, the
@@ -1447,7 +1454,7 @@ static int build_schedule(sluice_sim *sim)
             }
             if (!ready)
                 continue;
-            int pair = sim->instances[v].component->pair != NULL;
+            int pair = evaluation_pair(sim->instances[v].component);
             if ((lower % 2 == 1) != pair)
                 lower++;
             slot[v] = lower;
@@ -1491,7 +1498,7 @@ static int build_schedule(sluice_sim *sim)
     for (int s = max_slot; s >= 0; s--)
         for (uint32_t v = 0; v < n; v++) {
             if (!is_evaluation(sim->instances[v].component) || slot[v] != s ||
-                sim->instances[v].component->pair == NULL)
+                !evaluation_pair(sim->instances[v].component))
                 continue;
             int latest = last_pair_slot;
             for (uint32_t u = 0; u < n; u++)
@@ -1851,10 +1858,10 @@ static int check_descriptor(sluice_sim *sim, uint32_t k)
                in->path);
         errors++;
     }
-    if (c->pair && c->particle) {
+    if (evaluation_pair(c) && c->particle) {
         report(sim, k,
                "plugin '%s' (%s) is both a particle and a pair term; split it into two "
-               "components",
+               "components (or flag its pair callback on-demand)",
                in->name, in->path);
         errors++;
     }

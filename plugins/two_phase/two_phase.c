@@ -52,7 +52,20 @@
  *    energy. H = 2h in Nugent & Posch: the pairs reach 2H = 4h, beyond the
  *    scene kernel's support (2h); the term asks the core for them with
  *    api->request_reach (plugin ABI 1.6) and evaluates W(r, H) itself from
- *    the pair distances (its batches carry no kernel values). */
+ *    the pair distances (its batches carry no kernel values).
+ *
+ *  air_cohesion_held: the same cohesion, recomputed every `update_every`
+ *    steps (before the step, on the positions it starts from) and held in
+ *    between (multiple time stepping). The time step of a two-phase scene
+ *    is set by the air's sound speed (379 m/s in seed 001: 5e-6 s at
+ *    dx = 8 mm), while the cohesion changes with the interface, which moves
+ *    at the flow's speed; its pass reaches 4h and costs about a third of a
+ *    step. With update_every = 1 it is air_cohesion evaluated once a step
+ *    (identical, to round-off, with a one-evaluation integrator such as
+ *    Verlet; a two-stage integrator's mid-step evaluation gets the value of
+ *    the step's start). The held acceleration is a field of its own
+ *    (cohesion_acceleration, kept in checkpoints), refreshed when the step
+ *    count is a multiple of update_every. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -446,41 +459,68 @@ typedef struct cohesion_state {
     int kernel;
     sluice_real a, ratio, h, H, inverse_H, gradient_normalisation;
     sluice_field phase, mass, acceleration;
+    /* air_cohesion_held: the pair pass writes `held`, the particle hook adds
+     * it to the acceleration at every evaluation */
+    int64_t update_every; /* 0: air_cohesion (every evaluation) */
+    sluice_field held;
 } cohesion_state;
 
-static const sluice_param_spec cohesion_params[] = {
-    {"coefficient", SLUICE_PARAM_REAL, offsetof(cohesion_config, coefficient), NULL, 0, 0,
-     SLUICE_PARAM_HAS_MIN, "m^5 kg^-1 s^-2",
-     "a of the cohesion pressure -a rho^2 of the air (Nugent & Posch 2000); a rho0_a^2 must "
-     "stay below two_phase's background_pressure",
-     NULL, 0},
-    {"smoothing_length_ratio", SLUICE_PARAM_REAL,
-     offsetof(cohesion_config, smoothing_length_ratio), "2", 0, 0,
-     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "1",
-     "H / h, the smoothing length of the cohesion kernel W(r, H) over the scene's h (Nugent & "
-     "Posch 2000: 2); the pairs reach 2H, beyond the kernel's support when H > h (the core then "
-     "gives this term passes of its own, with (H/h)^d times the pairs of a support pass)",
-     NULL, 0},
-    {"kernel", SLUICE_PARAM_ENUM, offsetof(cohesion_config, kernel), "wendland_c2", 0, 0, 0, NULL,
-     "shape of W(r, H) (support 2H): the Wendland C2 kernel of seed 001 or the cubic B-spline",
+typedef struct held_config {
+    cohesion_config cohesion;
+    int64_t update_every;
+} held_config;
+
+#define COHESION_PARAMS \
+    {"coefficient", SLUICE_PARAM_REAL, offsetof(cohesion_config, coefficient), NULL, 0, 0, \
+     SLUICE_PARAM_HAS_MIN, "m^5 kg^-1 s^-2", \
+     "a of the cohesion pressure -a rho^2 of the air (Nugent & Posch 2000); a rho0_a^2 must " \
+     "stay below two_phase's background_pressure", \
+     NULL, 0}, \
+    {"smoothing_length_ratio", SLUICE_PARAM_REAL, \
+     offsetof(cohesion_config, smoothing_length_ratio), "2", 0, 0, \
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "1", \
+     "H / h, the smoothing length of the cohesion kernel W(r, H) over the scene's h (Nugent & " \
+     "Posch 2000: 2); the pairs reach 2H, beyond the kernel's support when H > h (the core then " \
+     "gives this term passes of its own, with (H/h)^d times the pairs of a support pass)", \
+     NULL, 0}, \
+    {"kernel", SLUICE_PARAM_ENUM, offsetof(cohesion_config, kernel), "wendland_c2", 0, 0, 0, NULL, \
+     "shape of W(r, H) (support 2H): the Wendland C2 kernel of seed 001 or the cubic B-spline", \
      "wendland_c2|cubic_spline", 0},
+
+static const sluice_param_spec cohesion_params[] = {COHESION_PARAMS};
+
+/* held_config begins with a cohesion_config: the same offsets */
+static const sluice_param_spec held_params[] = {
+    COHESION_PARAMS
+    {"update_every", SLUICE_PARAM_INT, offsetof(held_config, update_every), "5", 1, 1000,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
+     "recompute the cohesion every this many steps and hold it in between (1: once a step)",
+     NULL, 0},
 };
 
-static const sluice_field_spec cohesion_fields[] = {
-    {"phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_READ, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "phase of the particle: 0 water, 1 air"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", 0,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
-    {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0,
+#define COHESION_FIELDS \
+    {"phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_READ, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, \
+     NULL, 0, "phase of the particle: 0 water, 1 air"}, \
+    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0, \
+     "particle mass"}, \
+    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", 0, \
+     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"}, \
+    {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0, \
      "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
+
+static const sluice_field_spec cohesion_fields[] = {COHESION_FIELDS};
+
+static const sluice_field_spec held_fields[] = {
+    COHESION_FIELDS
+    {"cohesion_acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2",
+     SLUICE_READ | SLUICE_WRITE, SLUICE_FIELD_RESTART, NULL, 0,
+     "the air's cohesion acceleration of the last update, added at every evaluation "
+     "(air_cohesion_held)"},
 };
 
-static int cohesion_create(const sluice_api *api, sluice_host *host, const void *config,
-                           void **state)
+static int cohesion_setup(const sluice_api *api, sluice_host *host, const cohesion_config *c,
+                          int64_t update_every, void **state)
 {
-    const cohesion_config *c = config;
     cohesion_state *s = sluice_util_state(api, host, sizeof *s);
     if (!s)
         return SLUICE_ERROR;
@@ -492,6 +532,7 @@ static int cohesion_create(const sluice_api *api, sluice_host *host, const void 
         return SLUICE_ERROR;
     }
     s->dims = (uint32_t)dims;
+    s->update_every = update_every;
     s->a = c->coefficient;
     s->ratio = c->smoothing_length_ratio;
     s->kernel = c->kernel;
@@ -517,17 +558,32 @@ static int cohesion_create(const sluice_api *api, sluice_host *host, const void 
     return SLUICE_OK;
 }
 
+static int cohesion_create(const sluice_api *api, sluice_host *host, const void *config,
+                           void **state)
+{
+    return cohesion_setup(api, host, config, 0, state);
+}
+
+static int held_create(const sluice_api *api, sluice_host *host, const void *config,
+                       void **state)
+{
+    const held_config *c = config;
+    return cohesion_setup(api, host, &c->cohesion, c->update_every, state);
+}
+
 static int cohesion_bind(void *state, sluice_host *host)
 {
     cohesion_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"phase", "mass", "acceleration"};
-    sluice_field f[3];
-    if (sluice_util_fields(api, host, names, f, 3) != SLUICE_OK)
+    static const char *const names[] = {"phase", "mass", "acceleration", "cohesion_acceleration"};
+    sluice_field f[4];
+    if (sluice_util_fields(api, host, names, f, s->update_every ? 4 : 3) != SLUICE_OK)
         return SLUICE_ERROR;
     s->phase = f[0];
     s->mass = f[1];
     s->acceleration = f[2];
+    if (s->update_every)
+        s->held = f[3];
     sluice_real rho_a, background;
     if (api->constant(host, "air_rest_density", &rho_a, 1) < 1 ||
         api->constant(host, "reference_pressure", &background, 1) < 1) {
@@ -572,7 +628,7 @@ static inline sluice_real cohesion_shape(const sluice_real q, const int kernel)
 
 static inline void cohesion_pairs(const cohesion_state *s, const sluice_view *v,
                                   const sluice_pair_batch *b, const uint32_t dims,
-                                  const int kernel)
+                                  const int kernel, const int held)
 {
     const uint8_t *restrict phase = v->columns[s->phase.column];
     const sluice_index *restrict nb = b->neighbour;
@@ -581,9 +637,10 @@ static inline void cohesion_pairs(const cohesion_state *s, const sluice_view *v,
     const sluice_real *restrict r = b->distance;
     const sluice_real *restrict rx = b->offset[0], *restrict ry = b->offset[1];
     const sluice_real *restrict rz = dims == 3 ? b->offset[2] : b->offset[1];
-    sluice_real *restrict ax = sluice_real_column(v, s->acceleration, 0);
-    sluice_real *restrict ay = sluice_real_column(v, s->acceleration, 1);
-    sluice_real *restrict az = dims == 3 ? sluice_real_column(v, s->acceleration, 2) : ay;
+    const sluice_field out = held ? s->held : s->acceleration;
+    sluice_real *restrict ax = sluice_real_column(v, out, 0);
+    sluice_real *restrict ay = sluice_real_column(v, out, 1);
+    sluice_real *restrict az = dims == 3 ? sluice_real_column(v, out, 2) : ay;
     const sluice_real iH = s->inverse_H;
     const sluice_real scale = 2 * s->a * s->gradient_normalisation; /* 2 a x normalisation */
     for (sluice_index t = 0; t < b->target_count; t++) {
@@ -600,22 +657,57 @@ static inline void cohesion_pairs(const cohesion_state *s, const sluice_view *v,
             if (dims == 3)
                 sz += c * rz[k];
         }
-        ax[i] += scale * sx;
-        ay[i] += scale * sy;
+        /* held: each air target comes once in the pass (the field was
+         * zeroed before it) */
+        ax[i] = (held ? 0 : ax[i]) + scale * sx;
+        ay[i] = (held ? 0 : ay[i]) + scale * sy;
         if (dims == 3)
-            az[i] += scale * sz;
+            az[i] = (held ? 0 : az[i]) + scale * sz;
     }
 }
 
 static void cohesion_pair(void *state, const sluice_view *v, const sluice_pair_batch *b)
 {
     const cohesion_state *s = state;
-    const int key = ((v->dimensions == 3) << 1) | (s->kernel == KERNEL_CUBIC);
+    const int key = ((v->dimensions == 3) << 2) | ((s->kernel == KERNEL_CUBIC) << 1) |
+                    (s->update_every > 0);
     switch (key) {
-    case 0: cohesion_pairs(s, v, b, 2, KERNEL_WENDLAND); break;
-    case 1: cohesion_pairs(s, v, b, 2, KERNEL_CUBIC); break;
-    case 2: cohesion_pairs(s, v, b, 3, KERNEL_WENDLAND); break;
-    default: cohesion_pairs(s, v, b, 3, KERNEL_CUBIC); break;
+    case 0: cohesion_pairs(s, v, b, 2, KERNEL_WENDLAND, 0); break;
+    case 1: cohesion_pairs(s, v, b, 2, KERNEL_WENDLAND, 1); break;
+    case 2: cohesion_pairs(s, v, b, 2, KERNEL_CUBIC, 0); break;
+    case 3: cohesion_pairs(s, v, b, 2, KERNEL_CUBIC, 1); break;
+    case 4: cohesion_pairs(s, v, b, 3, KERNEL_WENDLAND, 0); break;
+    case 5: cohesion_pairs(s, v, b, 3, KERNEL_WENDLAND, 1); break;
+    case 6: cohesion_pairs(s, v, b, 3, KERNEL_CUBIC, 0); break;
+    default: cohesion_pairs(s, v, b, 3, KERNEL_CUBIC, 1); break;
+    }
+}
+
+/* air_cohesion_held: refresh before the step when the step count is a
+ * multiple of update_every (so a restart keeps the schedule: the held field
+ * is in the checkpoint) */
+static int held_before_step(void *state, sluice_host *host)
+{
+    cohesion_state *s = state;
+    const sluice_view *v = s->api->view(host);
+    if (v->step % s->update_every != 0)
+        return SLUICE_OK;
+    for (uint32_t d = 0; d < s->dims; d++) {
+        sluice_real *a = sluice_real_column(v, s->held, d);
+        memset(a, 0, (size_t)v->count * sizeof *a);
+    }
+    return s->api->pair_pass(host);
+}
+
+/* every evaluation: the held cohesion joins the other accelerations */
+static void held_particle(void *state, const sluice_view *v, sluice_index begin, sluice_index end)
+{
+    const cohesion_state *s = state;
+    for (uint32_t d = 0; d < s->dims; d++) {
+        const sluice_real *restrict held = sluice_real_column(v, s->held, d);
+        sluice_real *restrict a = sluice_real_column(v, s->acceleration, d);
+        for (sluice_index i = begin; i < end; i++)
+            a[i] += v->kind[i] == SLUICE_KIND_FLUID ? held[i] : 0;
     }
 }
 
@@ -657,7 +749,30 @@ static const sluice_component components[] = {
         .bind = cohesion_bind,
         .pair = cohesion_pair,
     },
+    {
+        .name = "air_cohesion_held",
+        .summary = "air_cohesion recomputed every update_every steps and held in between "
+                   "(multiple time stepping)",
+        .reference = "Nugent & Posch (2000); Wan et al. (2017, seed 001) eq. 12; held between "
+                     "updates as in multiple-time-step integration (Tuckerman et al. 1992)",
+        .dimensions = SLUICE_DIMS_ALL,
+        .params = held_params,
+        .param_count = SLUICE_COUNT(held_params),
+        .config_size = sizeof(held_config),
+        .fields = held_fields,
+        .field_count = SLUICE_COUNT(held_fields),
+        .flags = SLUICE_COMPONENT_ON_DEMAND,
+        .target_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+        .neighbour_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+        .particle_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+        .create = held_create,
+        .destroy = cohesion_destroy,
+        .bind = cohesion_bind,
+        .pair = cohesion_pair,
+        .particle = held_particle,
+        .before_step = held_before_step,
+    },
 };
 
-SLUICE_DEFINE_LIBRARY("two_phase", "1.1.0", "air-water two-phase SPH: phases, equation of state, "
+SLUICE_DEFINE_LIBRARY("two_phase", "1.2.0", "air-water two-phase SPH: phases, equation of state, "
                       "cohesion of the air", SLUICE_DIMS_ALL, components)
