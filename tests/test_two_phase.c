@@ -843,6 +843,83 @@ START_TEST(cohesion_held_against_every_step)
 }
 END_TEST
 
+/* xsph and artificial_viscosity with `phases: same`: the water moving
+ * uniformly at U over air at rest (no gravity, jittered positions, only the
+ * term under test). Between particles of one phase the velocity is uniform,
+ * so with `same` the XSPH correction and the artificial viscosity vanish
+ * everywhere, exactly; with `all` the particles at the interface feel the
+ * other phase (nonzero), and the pair terms still conserve momentum. */
+static void check_phases(const char *term, const char *field)
+{
+    double largest[2] = {0, 0};
+    for (int same = 0; same < 2; same++) {
+        char extra[200];
+        snprintf(extra, sizeof extra, "  %s: {phases: %s%s}\n", term, same ? "same" : "all",
+                 strcmp(term, "artificial_viscosity") == 0 ? ", time_step_limit: false" : "");
+        char *yaml = box_scene("speed_of_sound: 28, background_pressure: 400, air_above: [[0, 0.1]]",
+                               extra);
+        char *edited = NULL;
+        ck_assert_int_ge(asprintf(&edited, "%s", yaml), 0);
+        char *gravity = strstr(edited, "  gravity: {}\n");
+        ck_assert_ptr_nonnull(gravity);
+        memset(gravity, ' ', strlen("  gravity: {}"));
+        sluice_sim *sim = test_load("phases", edited, NULL, 0);
+        const sluice_view *v = sluice_sim_view(sim);
+        sluice_real *x = (sluice_real *)v->position[0], *y = (sluice_real *)v->position[1];
+        rng = 99;
+        for (sluice_index i = 0; i < v->count; i++) {
+            x[i] += (sluice_real)(0.004 * (uniform() - 0.5));
+            y[i] += (sluice_real)(0.004 * (uniform() - 0.5));
+        }
+        ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK); /* settles the order */
+        v = sluice_sim_view(sim);
+        const uint8_t *phase = phase_column(sim);
+        sluice_real *u = test_column(sim, "velocity", 0), *w = test_column(sim, "velocity", 1);
+        for (sluice_index i = 0; i < v->count; i++) {
+            u[i] = phase[i] ? 0 : (sluice_real)0.7;
+            w[i] = phase[i] ? 0 : (sluice_real)-0.2;
+        }
+        ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
+        v = sluice_sim_view(sim);
+        const sluice_real *fx = test_column(sim, field, 0), *fy = test_column(sim, field, 1);
+        const sluice_real *m = test_column(sim, "mass", 0);
+        double px = 0, py = 0, scale = 0;
+        for (sluice_index i = 0; i < v->count; i++) {
+            largest[same] = fmax(largest[same], fmax(fabs(fx[i]), fabs(fy[i])));
+            px += m[i] * fx[i];
+            py += m[i] * fy[i];
+            scale += m[i] * (fabs(fx[i]) + fabs(fy[i]));
+        }
+        fprintf(stderr, "%s, phases %s: largest |%s| %.3g, sum m %s = (%.2e, %.2e) of %.3g\n",
+                term, same ? "same" : "all", field, largest[same], field, px, py, scale);
+        if (!same)
+            ck_assert(fabs(px) <= 1e-13 * scale && fabs(py) <= 1e-13 * scale);
+        sluice_sim_free(sim);
+        free(edited);
+        free(yaml);
+    }
+    ck_assert_msg(largest[0] > 0, "%s: with phases all the interface feels nothing", term);
+    ck_assert_msg(largest[1] == 0, "%s: with phases same |%s| reaches %g", term, field,
+                  largest[1]);
+}
+
+START_TEST(xsph_and_viscosity_within_each_phase)
+{
+    check_phases("xsph", "transport_velocity_correction");
+    check_phases("artificial_viscosity", "acceleration");
+    /* `same` without the phases */
+    test_load_refused("phases-without-two-phase",
+                      "dimensions: 2\n"
+                      "particles: {spacing: 0.02, smoothing_length_ratio: 1.225}\n"
+                      "time: {end: 1.0, max_step: 1e-4}\n"
+                      "domain: {min: [-0.1, -0.1], max: [0.3, 0.3]}\n"
+                      "geometry: {fluid: [{shape: box, min: [0, 0], max: [0.2, 0.1]}]}\n"
+                      "plugins: {wendland_c2: {}, tait: {speed_of_sound: 20}, "
+                      "xsph: {phases: same}, symplectic: {}}\n",
+                      "phases: same needs the field 'phase'");
+}
+END_TEST
+
 START_TEST(cohesion_refusals)
 {
     char *yaml = box_scene("speed_of_sound: 28, background_pressure: 400, air_above: [[0, 0.1]]",
@@ -977,6 +1054,7 @@ int main(void)
     tcase_add_test(cohesion, cohesion_against_brute_force);
     tcase_add_test(cohesion, cohesion_refusals);
     tcase_add_test(cohesion, cohesion_held_against_every_step);
+    tcase_add_test(cohesion, xsph_and_viscosity_within_each_phase);
     suite_add_tcase(s, cohesion);
     TCase *input = tcase_create("input");
     tcase_add_test(input, phase_survives_a_restart);

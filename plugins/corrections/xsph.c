@@ -29,7 +29,10 @@
 typedef struct xsph_config {
     int form;
     sluice_real epsilon, phi;
+    int phases;
 } xsph_config;
+
+enum { PHASES_ALL = 0, PHASES_SAME = 1 };
 
 enum { FORM_POSITION = 0, FORM_VELOCITY_SMOOTHING = 1 };
 
@@ -37,7 +40,8 @@ typedef struct xsph_state {
     const sluice_api *api;
     int form;
     sluice_real epsilon, phi;
-    sluice_field velocity, density, mass, correction;
+    int same_phase; /* phases: same, between particles of one phase only */
+    sluice_field velocity, density, mass, correction, phase;
 } xsph_state;
 
 static const sluice_param_spec params[] = {
@@ -61,6 +65,11 @@ static const sluice_param_spec params[] = {
      "velocity smoothing coefficient phi_v of the velocity_smoothing form only (default 0.01, "
      "seed 004); refused with form position",
      NULL, 0},
+    {"phases", SLUICE_PARAM_ENUM, offsetof(xsph_config, phases), "all", 0, 0, 0, NULL,
+     "all: every fluid neighbour (seed 001); same: with two_phase loaded, neighbours of the "
+     "target's phase only, so that the air next to the water is not moved with it (the position "
+     "form's pair weight stays symmetric: momentum is still conserved)",
+     "all|same", 0},
 };
 
 static const sluice_field_spec fields[] = {
@@ -99,6 +108,7 @@ static int xsph_create(const sluice_api *api, sluice_host *host, const void *con
         free(s);
         return SLUICE_ERROR;
     }
+    s->same_phase = c->phases == PHASES_SAME;
     s->epsilon = c->epsilon > 0 ? c->epsilon : (sluice_real)0.3;
     s->phi = c->phi > 0 ? c->phi : (sluice_real)0.01;
     *state = s;
@@ -117,6 +127,17 @@ static int xsph_bind(void *state, sluice_host *host)
     s->density = f[1];
     s->mass = f[2];
     s->correction = f[3];
+    if (s->same_phase) {
+        if (!sluice_util_optional_field(s->api, host, "phase", &s->phase)) {
+            s->api->error(host, "phases: same needs the field 'phase' of the two_phase plugin; "
+                                "load two_phase or use phases: all");
+            return SLUICE_ERROR;
+        }
+        if (s->phase.type != SLUICE_TYPE_UINT8 || s->phase.components != 1) {
+            s->api->error(host, "the field 'phase' must be uint8 with one component");
+            return SLUICE_ERROR;
+        }
+    }
     return SLUICE_OK;
 }
 
@@ -129,8 +150,12 @@ static void xsph_destroy(void *state)
  * the batch may hold wall neighbours (the pass is shared with a term that
  * asks for them), which this term leaves out. */
 static inline void xsph_pairs(const xsph_state *s, const sluice_view *v, const sluice_pair_batch *b,
-                              const int smoothing, const uint32_t dims, const int masked)
+                              const int smoothing, const uint32_t dims, const int masked,
+                              const int same_phase)
 {
+    const uint8_t *restrict phase =
+        same_phase ? (const uint8_t *)v->columns[s->phase.column] : NULL;
+    const sluice_index *restrict nb = b->neighbour;
     const sluice_real *vel[3], *vj[3];
     for (uint32_t d = 0; d < dims; d++) {
         vel[d] = sluice_real_column(v, s->velocity, d);
@@ -160,6 +185,8 @@ static inline void xsph_pairs(const xsph_state *s, const sluice_view *v, const s
                                            : 2 * mj[k] / (rhoi + rhoj[k]) * W[k];
             if (masked)
                 weight = kj[k] != SLUICE_KIND_WALL ? weight : 0;
+            if (same_phase)
+                weight = phase[nb[k]] == phase[i] ? weight : 0;
             sx += weight * (vxj[k] - vxi);
             sy += weight * (vyj[k] - vyi);
             if (dims == 3)
@@ -182,16 +209,24 @@ static void xsph_pair(void *state, const sluice_view *v, const sluice_pair_batch
     const xsph_state *s = state;
     const int masked = b->neighbour_kinds != SLUICE_KIND_MASK(SLUICE_KIND_FLUID);
     const int smoothing = s->form == FORM_VELOCITY_SMOOTHING;
+    if (s->same_phase) {
+        /* not vectorised: the phase is a byte gathered through the index */
+        if (v->dimensions == 3)
+            smoothing ? xsph_pairs(s, v, b, 1, 3, 1, 1) : xsph_pairs(s, v, b, 0, 3, 1, 1);
+        else
+            smoothing ? xsph_pairs(s, v, b, 1, 2, 1, 1) : xsph_pairs(s, v, b, 0, 2, 1, 1);
+        return;
+    }
     const int key = (smoothing << 2) | ((v->dimensions == 3) << 1) | masked;
     switch (key) {
-    case 0: xsph_pairs(s, v, b, 0, 2, 0); break;
-    case 1: xsph_pairs(s, v, b, 0, 2, 1); break;
-    case 2: xsph_pairs(s, v, b, 0, 3, 0); break;
-    case 3: xsph_pairs(s, v, b, 0, 3, 1); break;
-    case 4: xsph_pairs(s, v, b, 1, 2, 0); break;
-    case 5: xsph_pairs(s, v, b, 1, 2, 1); break;
-    case 6: xsph_pairs(s, v, b, 1, 3, 0); break;
-    default: xsph_pairs(s, v, b, 1, 3, 1); break;
+    case 0: xsph_pairs(s, v, b, 0, 2, 0, 0); break;
+    case 1: xsph_pairs(s, v, b, 0, 2, 1, 0); break;
+    case 2: xsph_pairs(s, v, b, 0, 3, 0, 0); break;
+    case 3: xsph_pairs(s, v, b, 0, 3, 1, 0); break;
+    case 4: xsph_pairs(s, v, b, 1, 2, 0, 0); break;
+    case 5: xsph_pairs(s, v, b, 1, 2, 1, 0); break;
+    case 6: xsph_pairs(s, v, b, 1, 3, 0, 0); break;
+    default: xsph_pairs(s, v, b, 1, 3, 1, 0); break;
     }
 }
 
@@ -216,5 +251,5 @@ static const sluice_component components[] = {{
     .pair = xsph_pair,
 }};
 
-SLUICE_DEFINE_LIBRARY("xsph", "1.1.0", "XSPH transport-velocity corrections", SLUICE_DIMS_ALL,
+SLUICE_DEFINE_LIBRARY("xsph", "1.2.0", "XSPH transport-velocity corrections", SLUICE_DIMS_ALL,
                       components)

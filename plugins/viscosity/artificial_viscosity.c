@@ -17,14 +17,18 @@
 typedef struct av_config {
     sluice_real alpha, beta, speed_of_sound;
     int time_step_limit;
+    int phases;
 } av_config;
+
+enum { PHASES_ALL = 0, PHASES_SAME = 1 };
 
 typedef struct av_state {
     const sluice_api *api;
     sluice_real alpha, beta, h, eta2, courant;
     sluice_real speed; /* > 0: cbar for every pair; 0: the pair's mean */
     int limit;         /* the viscous time-step limit is on */
-    sluice_field velocity, density, sound_speed, mass, acceleration, mu_max;
+    int same_phase;    /* phases: same, pairs of one phase only */
+    sluice_field velocity, density, sound_speed, mass, acceleration, mu_max, phase;
 } av_state;
 
 static const sluice_param_spec params[] = {
@@ -45,6 +49,11 @@ static const sluice_param_spec params[] = {
      "c0, so that the air's artificial viscosity alpha c h / 8 is the water's and not 13.5 times "
      "it (default: the pair's mean)",
      NULL, 0},
+    {"phases", SLUICE_PARAM_ENUM, offsetof(av_config, phases), "all", 0, 0, 0, NULL,
+     "all: every fluid and wall neighbour (seed 001); same: with two_phase loaded, water with "
+     "water and walls, air with air and walls, so that no artificial viscosity couples the air "
+     "to the water (Pi_ij stays symmetric: momentum is still conserved)",
+     "all|same", 0},
 };
 
 static const sluice_field_spec fields[] = {
@@ -77,6 +86,7 @@ static int av_create(const sluice_api *api, sluice_host *host, const void *confi
     s->beta = c->beta;
     s->speed = c->speed_of_sound;
     s->limit = c->time_step_limit;
+    s->same_phase = c->phases == PHASES_SAME;
     if (sluice_util_constant(api, host, "smoothing_length", &s->h) != SLUICE_OK ||
         (s->limit && api->declare_field(host, &mu_max_field) != SLUICE_OK)) {
         free(s);
@@ -100,6 +110,17 @@ static int av_bind(void *state, sluice_host *host)
     s->sound_speed = f[2];
     s->mass = f[3];
     s->acceleration = f[4];
+    if (s->same_phase) {
+        if (!sluice_util_optional_field(s->api, host, "phase", &s->phase)) {
+            s->api->error(host, "phases: same needs the field 'phase' of the two_phase plugin; "
+                                "load two_phase or use phases: all");
+            return SLUICE_ERROR;
+        }
+        if (s->phase.type != SLUICE_TYPE_UINT8 || s->phase.components != 1) {
+            s->api->error(host, "the field 'phase' must be uint8 with one component");
+            return SLUICE_ERROR;
+        }
+    }
     if (!s->limit)
         return SLUICE_OK;
     s->mu_max = f[5];
@@ -115,8 +136,13 @@ static void av_destroy(void *state)
 
 /* limit: also record max_j |mu_ij| for the time-step limit (specialised) */
 static inline void av_pairs(const av_state *s, const sluice_view *v, const sluice_pair_batch *b,
-                            const uint32_t dims, const int limit, const int fixed_speed)
+                            const uint32_t dims, const int limit, const int fixed_speed,
+                            const int same_phase)
 {
+    const uint8_t *restrict phase =
+        same_phase ? (const uint8_t *)v->columns[s->phase.column] : NULL;
+    const sluice_index *restrict nb = b->neighbour;
+    const uint8_t *restrict kj = b->neighbour_kind;
     const sluice_real *vel[3], *vj[3];
     for (uint32_t d = 0; d < dims; d++) {
         vel[d] = sluice_real_column(v, s->velocity, d);
@@ -161,8 +187,10 @@ static inline void av_pairs(const av_state *s, const sluice_view *v, const sluic
                 const int64_t amu = sluice_util_bits(mu < 0 ? -mu : mu);
                 worst = amu > worst ? amu : worst;
             }
-            const sluice_real pi =
+            sluice_real pi =
                 dot < 0 ? 2 * (-alpha * cbar * mu + beta * mu * mu) * denominator * inverse : 0;
+            if (same_phase) /* walls act on both phases */
+                pi = kj[k] == SLUICE_KIND_WALL || phase[nb[k]] == phase[i] ? pi : 0;
             const sluice_real c = mj[k] * pi * F[k];
             sx += c * rx[k];
             sy += c * ry[k];
@@ -182,16 +210,24 @@ static void av_pair(void *state, const sluice_view *v, const sluice_pair_batch *
 {
     const av_state *s = state;
     const int fixed = s->speed > 0;
+    if (s->same_phase) {
+        /* not vectorised: the phase is a byte gathered through the index */
+        if (v->dimensions == 3)
+            av_pairs(s, v, b, 3, s->limit, fixed, 1);
+        else
+            av_pairs(s, v, b, 2, s->limit, fixed, 1);
+        return;
+    }
     if (v->dimensions == 3) {
         if (s->limit)
-            fixed ? av_pairs(s, v, b, 3, 1, 1) : av_pairs(s, v, b, 3, 1, 0);
+            fixed ? av_pairs(s, v, b, 3, 1, 1, 0) : av_pairs(s, v, b, 3, 1, 0, 0);
         else
-            fixed ? av_pairs(s, v, b, 3, 0, 1) : av_pairs(s, v, b, 3, 0, 0);
+            fixed ? av_pairs(s, v, b, 3, 0, 1, 0) : av_pairs(s, v, b, 3, 0, 0, 0);
     } else {
         if (s->limit)
-            fixed ? av_pairs(s, v, b, 2, 1, 1) : av_pairs(s, v, b, 2, 1, 0);
+            fixed ? av_pairs(s, v, b, 2, 1, 1, 0) : av_pairs(s, v, b, 2, 1, 0, 0);
         else
-            fixed ? av_pairs(s, v, b, 2, 0, 1) : av_pairs(s, v, b, 2, 0, 0);
+            fixed ? av_pairs(s, v, b, 2, 0, 1, 0) : av_pairs(s, v, b, 2, 0, 0, 0);
     }
 }
 
@@ -233,5 +269,5 @@ static const sluice_component components[] = {{
     .time_step_limit = av_time_step_limit,
 }};
 
-SLUICE_DEFINE_LIBRARY("artificial_viscosity", "1.2.0", "Monaghan artificial viscosity",
+SLUICE_DEFINE_LIBRARY("artificial_viscosity", "1.3.0", "Monaghan artificial viscosity",
                       SLUICE_DIMS_ALL, components)
