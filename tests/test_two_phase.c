@@ -61,6 +61,25 @@ static char *box_scene(const char *two_phase, const char *extra)
     return text;
 }
 
+/* box_scene without gravity (the terms under test alone move it), and with
+ * `verlet` on Verlet instead of symplectic. The lines are blanked in a copy
+ * (box_scene's own text is freed). */
+static char *box_scene_without_gravity(const char *two_phase, const char *extra, int verlet)
+{
+    char *yaml = box_scene(two_phase, extra);
+    char *edited = NULL;
+    ck_assert_int_ge(
+        asprintf(&edited, "%s%s", yaml, verlet ? "  verlet: {euler_every: 40}\n" : ""), 0);
+    free(yaml);
+    const char *blank[2] = {"  gravity: {}", verlet ? "  symplectic: {}" : NULL};
+    for (int k = 0; k < 2 && blank[k]; k++) {
+        char *line = strstr(edited, blank[k]);
+        ck_assert_ptr_nonnull(line);
+        memset(line, ' ', strlen(blank[k]));
+    }
+    return edited;
+}
+
 /* ----------------------------------------------- equation of state -- */
 
 /* c0 of the air from one B: seed 001's table 1 lists 379.3 m/s for the
@@ -628,14 +647,9 @@ static void check_cohesion(double ratio, int cubic)
     snprintf(extra, sizeof extra,
              "  air_cohesion: {coefficient: %g, smoothing_length_ratio: %g, kernel: %s}\n",
              coefficient, ratio, cubic ? "cubic_spline" : "wendland_c2");
-    char *yaml = box_scene("speed_of_sound: 28, background_pressure: 400, air_above: [[0, 0.1]]",
-                           extra);
-    char *edited = NULL;
     /* no gravity: the cohesion alone */
-    ck_assert_int_ge(asprintf(&edited, "%s", yaml), 0);
-    char *gravity = strstr(edited, "  gravity: {}\n");
-    ck_assert_ptr_nonnull(gravity);
-    memset(gravity, ' ', strlen("  gravity: {}"));
+    char *edited = box_scene_without_gravity(
+        "speed_of_sound: 28, background_pressure: 400, air_above: [[0, 0.1]]", extra, 0);
     sluice_sim *sim = test_load("cohesion", edited, NULL, 0);
     const sluice_view *v = sluice_sim_view(sim);
     sluice_real *x = (sluice_real *)v->position[0], *y = (sluice_real *)v->position[1];
@@ -676,7 +690,6 @@ static void check_cohesion(double ratio, int cubic)
     ck_assert(fabs(px) <= 1e-13 * momentum_scale && fabs(py) <= 1e-13 * momentum_scale);
     sluice_sim_free(sim);
     free(edited);
-    free(yaml);
 }
 
 START_TEST(cohesion_against_brute_force)
@@ -697,30 +710,15 @@ END_TEST
  * from the same jitter. */
 static double *run_cohesion(const char *cohesion, int steps, sluice_sim **out)
 {
-    /* box_scene's two layers, without gravity, on Verlet */
-    char *edited = NULL;
-    ck_assert_int_ge(
-        asprintf(&edited,
-                 "dimensions: 2\n"
-                 "particles: {spacing: 0.02, smoothing_length_ratio: 1.225, rest_density: 1000}\n"
-                 "time: {end: 1.0, max_step: 1e-5}\n"
-                 "domain: {min: [-0.1, -0.1], max: [0.3, 0.3]}\n"
-                 "geometry:\n"
-                 "  fluid:\n"
-                 "    - {shape: box, min: [0, 0], max: [0.2, 0.1]}\n"
-                 "    - {shape: box, min: [0, 0.1], max: [0.2, 0.2]}\n"
-                 "initial: {density: hydrostatic}\n"
-                 "plugins:\n"
-                 "  wendland_c2: {}\n"
-                 "  two_phase: {speed_of_sound: 28, background_pressure: 400, "
-                 "air_above: [[0, 0.1]]}\n"
-                 "  continuity: {form: volume}\n"
-                 "  pressure_gradient: {form: density_product}\n"
-                 "  time_step: {}\n"
-                 "  verlet: {euler_every: 40}\n"
-                 "%s",
-                 cohesion),
-        0);
+    char extra[512];
+    snprintf(extra, sizeof extra,
+             "  continuity: {form: volume}\n"
+             "  pressure_gradient: {form: density_product}\n"
+             "  time_step: {}\n"
+             "%s",
+             cohesion);
+    char *edited = box_scene_without_gravity(
+        "speed_of_sound: 28, background_pressure: 400, air_above: [[0, 0.1]]", extra, 1);
     sluice_sim *sim = test_load("cohesion-held", edited, NULL, 0);
     const sluice_view *v = sluice_sim_view(sim);
     sluice_real *x = (sluice_real *)v->position[0], *y = (sluice_real *)v->position[1];
@@ -856,13 +854,8 @@ static void check_phases(const char *term, const char *field)
         char extra[200];
         snprintf(extra, sizeof extra, "  %s: {phases: %s%s}\n", term, same ? "same" : "all",
                  strcmp(term, "artificial_viscosity") == 0 ? ", time_step_limit: false" : "");
-        char *yaml = box_scene("speed_of_sound: 28, background_pressure: 400, air_above: [[0, 0.1]]",
-                               extra);
-        char *edited = NULL;
-        ck_assert_int_ge(asprintf(&edited, "%s", yaml), 0);
-        char *gravity = strstr(edited, "  gravity: {}\n");
-        ck_assert_ptr_nonnull(gravity);
-        memset(gravity, ' ', strlen("  gravity: {}"));
+        char *edited = box_scene_without_gravity(
+            "speed_of_sound: 28, background_pressure: 400, air_above: [[0, 0.1]]", extra, 0);
         sluice_sim *sim = test_load("phases", edited, NULL, 0);
         const sluice_view *v = sluice_sim_view(sim);
         sluice_real *x = (sluice_real *)v->position[0], *y = (sluice_real *)v->position[1];
@@ -896,7 +889,6 @@ static void check_phases(const char *term, const char *field)
             ck_assert(fabs(px) <= 1e-13 * scale && fabs(py) <= 1e-13 * scale);
         sluice_sim_free(sim);
         free(edited);
-        free(yaml);
     }
     ck_assert_msg(largest[0] > 0, "%s: with phases all the interface feels nothing", term);
     ck_assert_msg(largest[1] == 0, "%s: with phases same |%s| reaches %g", term, field,

@@ -52,6 +52,24 @@ static inline int sluice_util_optional_field(const sluice_api *api, sluice_host 
     return 0;
 }
 
+/* The two_phase plugin's field `phase` (uint8, one component: 0 water, 1
+ * air) for a term restricted to one phase (`phases: same`): SLUICE_OK and
+ * *out when it is loaded, else an error naming the term's parameter. */
+static inline int sluice_util_phase_field(const sluice_api *api, sluice_host *host,
+                                          sluice_field *out)
+{
+    if (!sluice_util_optional_field(api, host, "phase", out)) {
+        api->error(host, "phases: same needs the field 'phase' of the two_phase plugin; load "
+                         "two_phase or use phases: all");
+        return SLUICE_ERROR;
+    }
+    if (out->type != SLUICE_TYPE_UINT8 || out->components != 1) {
+        api->error(host, "the field 'phase' must be uint8 with one component");
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
 /* Allocates a zeroed state struct; reports OOM. */
 static inline void *sluice_util_state(const sluice_api *api, sluice_host *host, size_t size)
 {

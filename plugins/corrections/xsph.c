@@ -127,17 +127,8 @@ static int xsph_bind(void *state, sluice_host *host)
     s->density = f[1];
     s->mass = f[2];
     s->correction = f[3];
-    if (s->same_phase) {
-        if (!sluice_util_optional_field(s->api, host, "phase", &s->phase)) {
-            s->api->error(host, "phases: same needs the field 'phase' of the two_phase plugin; "
-                                "load two_phase or use phases: all");
-            return SLUICE_ERROR;
-        }
-        if (s->phase.type != SLUICE_TYPE_UINT8 || s->phase.components != 1) {
-            s->api->error(host, "the field 'phase' must be uint8 with one component");
-            return SLUICE_ERROR;
-        }
-    }
+    if (s->same_phase && sluice_util_phase_field(s->api, host, &s->phase) != SLUICE_OK)
+        return SLUICE_ERROR;
     return SLUICE_OK;
 }
 
