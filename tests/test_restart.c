@@ -6,6 +6,7 @@
  * step with a checkpoint that does not perturb the run; damaged, foreign
  * and mismatched checkpoints are refused with one message (exit 2). */
 #include <dirent.h>
+#include <hdf5.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -56,6 +57,16 @@ static const channel_case channel_cases[] = {
      "  k_epsilon: {length_scale: 0.05}\n"
      "  turbulent_stress: {form: eddy_viscosity}\n",
      {"inlet.csv", "outlet.csv", NULL}},
+    /* the one-evaluation predictor-corrector with particles entering (zero
+     * lagged rates) and leaving; that its restart continues with the lagged
+     * rates rather than evaluating afresh is checked on the dam break, where
+     * the two differ (dam_break_restart_bit_identical) */
+    {"buffer-free-pec",
+     "inlet: {form: buffer, position: 0, depth: 0.1, velocity: 0.5, interval: 0.05}",
+     "outlet: {form: free, position: 1.0, interval: 0.05}", "penalty_contact: {}",
+     "predictor_corrector: {mode: pec}",
+     "  point_gauge: {points: [[0.5, 0.05]], fields: 'pressure, velocity', interval: 0.02}\n",
+     {"inlet.csv", "outlet.csv", "points.csv", NULL}},
 };
 
 static char *channel_scene(const channel_case *c, double end, double checkpoint)
@@ -297,28 +308,39 @@ static char *rows_after(const char *text, double t)
     return out;
 }
 
-/* The dam break on dbc walls (Verlet, pressure filter every 7 steps) to T,
- * restarted from T/2 into a new directory: identical; its front table holds
- * the header and the rows after T/2, as the uninterrupted run's. The same
- * restart on two threads agrees within round-off. */
+/* The dam break on dbc walls (pressure filter every 7 steps) to T, restarted
+ * from T/2 into a new directory: identical; its front table holds the header
+ * and the rows after T/2, as the uninterrupted run's. The same restart on two
+ * threads agrees within round-off. Two integrators whose state crosses the
+ * checkpoint: Verlet (its Euler-step cycle and the previous velocity) and the
+ * one-evaluation predictor-corrector (the previous step's rates, which an
+ * evaluation at the restart would replace: 2e-6 m/s in velocity by T here). */
+static const char *const restart_integrators[] = {"verlet: {euler_every: 40}",
+                                                  "predictor_corrector: {mode: pec}"};
+
 START_TEST(dam_break_restart_bit_identical)
 {
     const double end = 0.12;
-    char *yaml = dam_break_scene(end, end / 2, "verlet: {euler_every: 40}");
-    sluice_sim *full = test_load("restart-dam", yaml, NULL, 0);
-    char *dir = test_scratch("restart-dam-out");
+    char *yaml = dam_break_scene(end, end / 2, restart_integrators[_i]);
+    char name[4][64];
+    snprintf(name[0], sizeof name[0], "restart-dam%d", _i);
+    snprintf(name[1], sizeof name[1], "restart-dam%d-out", _i);
+    snprintf(name[2], sizeof name[2], "restart-dam%d-new", _i);
+    snprintf(name[3], sizeof name[3], "restart-dam%d-2", _i);
+    sluice_sim *full = test_load(name[0], yaml, NULL, 0);
+    char *dir = test_scratch(name[1]);
     double t0 = sluice_wall_clock();
     run_to_end(full, dir);
     const double full_seconds = sluice_wall_clock() - t0;
     int checkpoints = 0;
     char *checkpoint = first_checkpoint(dir, &checkpoints);
 
-    sluice_sim *resumed = test_load("restart-dam", yaml, NULL, 0);
+    sluice_sim *resumed = test_load(name[0], yaml, NULL, 0);
     char error[2048];
     ck_assert_msg(sluice_sim_restart(resumed, checkpoint, error, sizeof error) == SLUICE_OK, "%s",
                   error);
     const double t_checkpoint = sluice_sim_time(resumed);
-    char *fresh = test_scratch("restart-dam-new");
+    char *fresh = test_scratch(name[2]);
     run_to_end(resumed, fresh);
     assert_identical(full, resumed, "dam break");
     char *whole = read_or_fail(dir, "front.csv"), *continued = read_or_fail(fresh, "front.csv");
@@ -336,7 +358,7 @@ START_TEST(dam_break_restart_bit_identical)
      * OpenMP waiting on this shared machine): its final checkpoint holds the
      * same state within round-off (the sums run in a fixed order, so in
      * practice bit for bit) */
-    char *scene_dir = test_scratch("restart-dam-2");
+    char *scene_dir = test_scratch(name[3]);
     char *scene = test_write_file(scene_dir, "scene.yaml", yaml);
     char *command = NULL, *output = NULL;
     ck_assert_int_ge(asprintf(&command,
@@ -352,7 +374,7 @@ START_TEST(dam_break_restart_bit_identical)
     char set[64];
     snprintf(set, sizeof set, "time.end=%.17g", 2 * end);
     const char *sets[] = {set};
-    sluice_sim *two = test_load("restart-dam-2", yaml, sets, 1);
+    sluice_sim *two = test_load(name[3], yaml, sets, 1);
     ck_assert_msg(sluice_sim_restart(two, last, error, sizeof error) == SLUICE_OK, "%s", error);
     const sluice_view *va = sluice_sim_view(full);
     const sluice_view *vb = sluice_sim_view(two);
@@ -368,10 +390,11 @@ START_TEST(dam_break_restart_bit_identical)
     free(command);
     free(output);
     fprintf(stderr,
-            "restart, dam break: %u particles, %lld steps to T = %g s (%.2f s on 1 thread), "
+            "restart, dam break, %s: %u particles, %lld steps to T = %g s (%.2f s on 1 thread), "
             "checkpoint at t = %.9g s; every field identical; restarted on 2 threads: largest "
             "position difference %g m\n",
-            va->count, (long long)sluice_sim_steps(full), end, full_seconds, t_checkpoint, worst);
+            restart_integrators[_i], va->count, (long long)sluice_sim_steps(full), end, full_seconds,
+            t_checkpoint, worst);
     sluice_sim_free(full);
     sluice_sim_free(resumed);
     sluice_sim_free(two);
@@ -543,6 +566,27 @@ START_TEST(restart_with_other_cells_keeps_each_particle)
 END_TEST
 
 /* One message naming the file, exit status 2, for every bad checkpoint. */
+/* A copy of a checkpoint without the state group of one plugin: what a
+ * version of that plugin without checkpoint state wrote. */
+static char *without_state_of(const char *checkpoint, const char *bytes, long size,
+                              const char *dir, const char *plugin)
+{
+    char *path = NULL, *link = NULL;
+    ck_assert_int_ge(asprintf(&path, "%s/without_%s.h5", dir, plugin), 0);
+    FILE *f = fopen(path, "wb");
+    ck_assert_ptr_nonnull(f);
+    ck_assert_int_eq(fwrite(bytes, 1, (size_t)size, f), (size_t)size);
+    fclose(f);
+    hid_t file = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+    ck_assert_msg(file >= 0, "cannot open %s (a copy of %s)", path, checkpoint);
+    ck_assert_int_ge(asprintf(&link, "plugins/%s", plugin), 0);
+    ck_assert_msg(H5Lexists(file, link, H5P_DEFAULT) > 0, "%s has no group %s", checkpoint, link);
+    ck_assert_int_ge(H5Ldelete(file, link, H5P_DEFAULT), 0);
+    H5Fclose(file);
+    free(link);
+    return path;
+}
+
 static void refused(const char *scene, const char *checkpoint, const char *needle)
 {
     char *dir = test_scratch("restart-refused");
@@ -611,6 +655,30 @@ START_TEST(bad_checkpoints_refused)
     ck_assert_int_ge(asprintf(&finer, "%s --set particles.spacing=0.01", scene), 0);
     refused(finer, good, "--set particles.spacing=0.02");
     free(finer);
+    /* a plugin whose state is missing (a checkpoint of an older version of
+     * it): the gauge needs its rows count, and the message names the plugin,
+     * the array and the file; the predictor-corrector (state since 1.1.0)
+     * does without, so the restart goes on */
+    char *later = NULL; /* the good checkpoint is the run's last, at its end */
+    ck_assert_int_ge(asprintf(&later, "%s --set time.end=0.03", scene), 0);
+    char *no_gauge = without_state_of(good, bytes, size, dir, "point_gauge");
+    refused(later, no_gauge,
+            "plugin 'point_gauge' could not load its state: state array 'rows_written'");
+    refused(later, no_gauge, "holds no state of this plugin");
+    char *no_pc = without_state_of(good, bytes, size, dir, "predictor_corrector");
+    char *resumed = NULL, *resumed_dir = test_scratch("restart-older-plugin");
+    ck_assert_int_ge(asprintf(&resumed, "run %s --out %s/out --restart %s --quiet", later,
+                              resumed_dir, no_pc),
+                     0);
+    char *output = NULL;
+    ck_assert_msg(test_sluice(resumed, &output) == 0, "restart without predictor_corrector's "
+                  "state failed:\n%s", output);
+    free(output);
+    free(resumed);
+    free(resumed_dir);
+    free(no_gauge);
+    free(no_pc);
+    free(later);
     free(config);
     free(bytes);
     free(truncated);
@@ -635,7 +703,8 @@ int main(void)
     tcase_set_timeout(exact, 300);
     tcase_add_loop_test(exact, open_boundaries_restart_bit_identical, 0,
                         (int)(sizeof channel_cases / sizeof channel_cases[0]));
-    tcase_add_test(exact, dam_break_restart_bit_identical);
+    tcase_add_loop_test(exact, dam_break_restart_bit_identical, 0,
+                        (int)(sizeof restart_integrators / sizeof restart_integrators[0]));
     tcase_add_test(exact, sigint_stops_with_a_checkpoint);
     tcase_add_test(exact, restart_with_other_cells_keeps_each_particle);
     suite_add_tcase(s, exact);

@@ -33,8 +33,10 @@
 #               its examples/dam_break_2d (WCSPH, Wendland quintic, h = 1.3 dx,
 #               PEC) at dx = 0.03 m to 0.75 s, serial and 2 threads, with the
 #               same front error; and Sluice at the same dx, h = 1.3 dx,
-#               predictor-corrector, same end time (matched particle count
-#               and physics class).
+#               same end time (matched particle count and physics class)
+#               with the predictor-corrector in PySPH's PEC form (one
+#               evaluation per step, sluice-matched) and in its EPEC form
+#               (two, sluice-epec).
 #
 # Writes OUT/benchmark.csv (one row per run), OUT/benchmark.md and
 # OUT/benchmark.png (wall time against error, log-log, gnuplot), and with
@@ -99,6 +101,7 @@ variant_scene() {
     base) cp "$1" "$file" ;;
     cubic_spline) sed 's/^  wendland_c2: {}$/  cubic_spline: {}/' "$1" >"$file" ;;
     verlet | predictor_corrector) sed "s/^  symplectic: {}\$/  $2: {}/" "$1" >"$file" ;;
+    predictor_corrector_pec) sed 's/^  symplectic: {}$/  predictor_corrector: {mode: pec}/' "$1" >"$file" ;;
     ghost_particles) sed 's/^  dbc: {}$/  ghost_particles: {slip: no_slip}/' "$1" >"$file" ;;
     mdbc | penalty_contact | repulsive_force) sed "s/^  dbc: {}\$/  $2: {}/" "$1" >"$file" ;;
     esac
@@ -202,10 +205,15 @@ if has pysph; then
         t=1; [ "$mode" = openmp ] && t=2
         echo "pysph,pysph-$mode,dx=0.03,0.03,$1,$2,$3,$4,,,$t,complete,front_error_worst,$(front_error "$out/pysph/dx0.03_front.csv")" >>"$csv"
     done
-    # Sluice at PySPH's dx, h/dx and integrator (DBC, delta-SPH kept)
-    scene=$(variant_scene configs/dam_break_2d.yaml predictor_corrector)
-    run pysph sluice-matched dx=0.03 0.03 "$scene" front_error_worst 'front_error "$run/front.csv"' \
-        --set time.end=0.75 --set plugins.hdf5.interval=0.75 --set particles.smoothing_length_ratio=1.3
+    # Sluice at PySPH's dx, h/dx and integrator (DBC, delta-SPH kept): its
+    # PECIntegrator evaluates once per step (the predictor reuses the previous
+    # step's rates), as predictor_corrector's mode pec; mode epec (two
+    # evaluations per step) for comparison
+    for pc in predictor_corrector_pec:sluice-matched predictor_corrector:sluice-epec; do
+        scene=$(variant_scene configs/dam_break_2d.yaml "${pc%:*}")
+        run pysph "${pc#*:}" dx=0.03 0.03 "$scene" front_error_worst 'front_error "$run/front.csv"' \
+            --set time.end=0.75 --set plugins.hdf5.interval=0.75 --set particles.smoothing_length_ratio=1.3
+    done
 fi
 
 # --------------------------------------------------- plugin path, memory
@@ -218,6 +226,13 @@ fi
     echo "| case | variant | resolution | particles | wall s | particle-steps/s | pair interactions/s | bytes/particle | threads | status | error |"
     echo "|---|---|---|---|---|---|---|---|---|---|---|"
     awk -F, 'NR > 1 { printf "| %s | %s | %s | %s | %.4g | %.3g | %.3g | %s | %s | %s | %s = %s |\n", $1, $2, $3, $5, $7, $8, $9, $10, $11, $12, $13, $14 }' "$csv"
+    # Sluice against PySPH on 2 threads: particle-steps/s and time to the
+    # same end time (the two codes choose their own time steps)
+    awk -F, 'NR > 1 && $1 == "pysph" && $12 == "complete" { rate[$2] = $8; wall[$2] = $7 }
+        END { if (("pysph-openmp" in rate) && rate["pysph-openmp"] > 0)
+                  for (v in rate) if (v ~ /^sluice-/)
+                      printf "\n%s against PySPH on 2 threads: %.2fx the particle-steps/s, %.2fx faster to the same end time\n",
+                             v, rate[v] / rate["pysph-openmp"], wall["pysph-openmp"] / wall[v] }' "$csv"
     if [ -f "$out/core/summary.md" ]; then
         echo
         cat "$out/core/summary.md"

@@ -892,24 +892,25 @@ static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
         sluice_instance *in = &sim->instances[k];
         if (!in->component->load_state)
             continue;
-        if (H5Lexists(group, in->name, H5P_DEFAULT) <= 0) {
-            fail(e, "it holds no state of plugin '%s' (was it written by an older version of "
-                    "the plugin?)",
-                 in->name);
-            break;
-        }
-        hid_t own = H5Gopen2(group, in->name, H5P_DEFAULT);
-        if (own < 0) {
+        /* A checkpoint of a plugin version without state has no group: its
+         * load_state still runs, sees every array missing (state_length -1)
+         * and decides; state_read fails with the message below. */
+        const int absent = H5Lexists(group, in->name, H5P_DEFAULT) <= 0;
+        hid_t own = absent ? -1 : H5Gopen2(group, in->name, H5P_DEFAULT);
+        if (!absent && own < 0) {
             fail(e, "the state of plugin '%s' cannot be read", in->name);
             break;
         }
         sim->state_group = own;
+        sim->state_absent = absent;
         sim->state_instance = k;
         sim->state_writing = 0;
         sluice_sim_refresh_view(sim);
         int rc = in->component->load_state(in->state, &in->host);
         sim->state_group = -1;
-        H5Gclose(own);
+        sim->state_absent = 0;
+        if (own >= 0)
+            H5Gclose(own);
         if (rc != SLUICE_OK || sim->failure[0])
             fail(e, "plugin '%s' could not load its state%s%s", in->name,
                  sim->failure[0] ? ": " : "", sim->failure);
@@ -960,8 +961,8 @@ static int state_access(sluice_host *host, const char *name, int type, int writi
 {
     sluice_sim *sim = host->sim;
     const char *who = sim->instances[host->instance].name;
-    if (sim->state_group < 0 || sim->state_instance != host->instance ||
-        sim->state_writing != writing) {
+    if ((sim->state_group < 0 && !(sim->state_absent && !writing)) ||
+        sim->state_instance != host->instance || sim->state_writing != writing) {
         sluice_sim_fail(sim, "plugin '%s': api->state_%s outside its own %s callback", who,
                         writing ? "write" : "read", writing ? "save_state" : "load_state");
         return SLUICE_ERROR;
@@ -997,8 +998,9 @@ int sluice_api_state_write(sluice_host *host, const char *name, sluice_state_typ
         fail(&e, "it is written twice");
     put_rows((hid_t)sim->state_group, name, type, 1, 1, count, row, &e);
     if (e.text[0]) {
-        sluice_sim_fail(sim, "plugin '%s': state array '%s': %s",
-                        sim->instances[host->instance].name, name, e.text);
+        /* only inside load_state, whose failure the restart reports with
+         * the plugin's name and the checkpoint's */
+        sluice_sim_fail(sim, "state array '%s': %s", name, e.text);
         return SLUICE_ERROR;
     }
     return SLUICE_OK;
@@ -1013,13 +1015,17 @@ int sluice_api_state_read(sluice_host *host, const char *name, sluice_state_type
         return SLUICE_ERROR;
     ck_error e = {{0}};
     void *row[1] = {data};
-    if (count > 0 && !data)
+    if (sim->state_absent)
+        fail(&e, "the checkpoint holds no state of this plugin (was it written by an older "
+                 "version of the plugin?)");
+    else if (count > 0 && !data)
         fail(&e, "no buffer given");
-    get_rows((hid_t)sim->state_group, name, type, 1, 1, count, row, &e);
+    else
+        get_rows((hid_t)sim->state_group, name, type, 1, 1, count, row, &e);
     if (e.text[0]) {
-        sluice_sim_fail(sim, "plugin '%s': state array '%s' in checkpoint '%s': %s",
-                        sim->instances[host->instance].name, name,
-                        sim->state_file ? sim->state_file : "?", e.text);
+        /* only inside load_state, whose failure the restart reports with
+         * the plugin's name and the checkpoint's */
+        sluice_sim_fail(sim, "state array '%s': %s", name, e.text);
         return SLUICE_ERROR;
     }
     return SLUICE_OK;
@@ -1028,7 +1034,7 @@ int sluice_api_state_read(sluice_host *host, const char *name, sluice_state_type
 int64_t sluice_api_state_length(sluice_host *host, const char *name)
 {
     sluice_sim *sim = host->sim;
-    if (state_access(host, name, CK_DOUBLE, 0) != SLUICE_OK)
+    if (state_access(host, name, CK_DOUBLE, 0) != SLUICE_OK || sim->state_absent)
         return -1;
     return rows_length((hid_t)sim->state_group, name, 1, 1);
 }

@@ -159,6 +159,7 @@ struct sluice_sim {
     int64_t state_group;          /* HDF5 group of api->state_write/read, or -1 */
     uint32_t state_instance;      /* the component whose save_state/load_state runs */
     int state_writing;
+    int state_absent;             /* load_state of a plugin the checkpoint holds no state of */
     const char *state_file;       /* the checkpoint read or written (messages) */
 };
 

@@ -1,6 +1,20 @@
 /* Two-stage XSPH predictor-corrector of Monaghan (1989, 1992), the "2nd order
  * two-stage XSPH explicit algorithm" of seed 004 (De Padova et al. 2017) and
- * of SPHysics, two evaluations per step. With V = v + dv the velocity that
+ * of SPHysics. Two modes:
+ *
+ *  - epec (default): evaluate at t^n, predict, evaluate, correct; two
+ *    evaluations per step (SPHysics; PySPH's EPECIntegrator);
+ *  - pec: predict with the rates of the previous step's evaluation (the one
+ *    at t^{n-1/2}), evaluate, correct; one evaluation per step (PySPH's
+ *    PECIntegrator, the integrator of its dam break). Still second order:
+ *    the lagged rates differ from those at t^n by O(dt), which moves the
+ *    predicted state by O(dt^2) and the corrected one by O(dt^3) per step.
+ *    The first step of a run evaluates at t^0 first. The rates survive
+ *    between steps in their fields, and checkpoints hold every field, so a
+ *    restart continues exactly; particles that enter during a run start
+ *    with zero lagged rates (their first predicted state only).
+ *
+ * With V = v + dv the velocity that
  * moves fluid particles (dv: XSPH transport-velocity correction, when a plugin
  * declares transport_velocity_correction):
  *
@@ -20,14 +34,36 @@
  * the explicit midpoint rule (second-order Runge-Kutta). Wall particles do
  * not move. The step size comes from the rates at t^n.
  *
+ * In pec mode the predictor reads the lagged rates (dq/dt)^{n-1/2} and the
+ * lagged transport correction dv^{n-1/2} in place of those at t^n.
+ *
  * Energy: not symplectic. On an undamped oscillator every step multiplies the
  * energy by exactly 1 + (omega dt)^4 / 4, a slow secular growth; dissipation
- * (viscosity) in a real flow outweighs it. */
+ * (viscosity) in a real flow outweighs it. In pec mode the energy is not
+ * multiplied by a fixed factor every step, but grows as the spectral radius
+ * of its step squared, 1 + (omega dt)^4 / 2 + O((omega dt)^6) per step
+ * (test_integrators, energy_pec): twice the epec rate. */
 #include "integrator_util.h"
+
+enum { MODE_EPEC = 0, MODE_PEC = 1 };
+
+typedef struct pc_config {
+    int mode;
+} pc_config;
+
+static const sluice_param_spec params[] = {
+    {"mode", SLUICE_PARAM_ENUM, offsetof(pc_config, mode), "epec", 0, 0, 0, NULL,
+     "epec: evaluate at t^n, predict, evaluate, correct (two evaluations per step; SPHysics, "
+     "seed 004); pec: predict with the rates of the previous step's evaluation, evaluate, "
+     "correct (one evaluation per step; PySPH's PECIntegrator)",
+     "epec|pec", 0},
+};
 
 typedef struct pc_state {
     const sluice_api *api;
     uint32_t dims;
+    int mode;
+    int64_t rates_ready; /* the rate fields hold the last step's evaluation */
     sluice_field position_start; /* x^n */
     sluice_integrand in;         /* stored: q^n of every rate */
     double dt;
@@ -43,11 +79,12 @@ static const sluice_field_spec fields[] = {
 
 static int pc_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
 {
-    (void)config;
+    const pc_config *c = config;
     pc_state *s = sluice_util_state(api, host, sizeof *s);
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
+    s->mode = c->mode;
     sluice_real dims;
     if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
         free(s);
@@ -132,7 +169,8 @@ static int pc_advance(void *state, sluice_host *host)
 {
     pc_state *s = state;
     const sluice_api *api = s->api;
-    if (api->evaluate(host) != SLUICE_OK)
+    /* pec reuses the rates of the previous step's (mid-step) evaluation */
+    if ((s->mode == MODE_EPEC || !s->rates_ready) && api->evaluate(host) != SLUICE_OK)
         return SLUICE_ERROR;
     s->dt = api->time_step(host);
     if (!(s->dt > 0))
@@ -143,24 +181,49 @@ static int pc_advance(void *state, sluice_host *host)
         return SLUICE_ERROR;
     v = api->view(host);
     api->parallel_for(host, v->count, corrector, s);
+    s->rates_ready = 1;
     return SLUICE_OK;
+}
+
+/* Both modes record whether the rate fields hold a step's evaluation, so that
+ * a pec restart from either mode's checkpoint continues without evaluating
+ * at t^n (which would change the result). */
+static int pc_save(void *state, sluice_host *host)
+{
+    const pc_state *s = state;
+    return sluice_util_save_int(s->api, host, "rates_ready", s->rates_ready);
+}
+
+static int pc_load(void *state, sluice_host *host)
+{
+    pc_state *s = state;
+    if (s->api->state_length(host, "rates_ready") < 0) {
+        s->rates_ready = 0; /* a checkpoint of predictor_corrector 1.0: evaluate first */
+        return SLUICE_OK;
+    }
+    return sluice_util_load_int(s->api, host, "rates_ready", &s->rates_ready);
 }
 
 static const sluice_component components[] = {{
     .name = "predictor_corrector",
     .summary = "two-stage XSPH predictor-corrector (explicit midpoint), second order, two "
-               "evaluations per step",
+               "evaluations per step (epec) or one (pec, lagged predictor)",
     .reference = "Monaghan (1989) J. Comput. Phys. 82:1; Monaghan (1992) J. Comput. Phys. "
                  "110:399; seed 004 (De Padova et al. 2017)",
     .dimensions = SLUICE_DIMS_ALL,
+    .params = params,
+    .param_count = SLUICE_COUNT(params),
+    .config_size = sizeof(pc_config),
     .fields = fields,
     .field_count = SLUICE_COUNT(fields),
     .create = pc_create,
     .destroy = pc_destroy,
     .bind = pc_bind,
     .advance = pc_advance,
+    .save_state = pc_save,
+    .load_state = pc_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("predictor_corrector", "1.0.0",
+SLUICE_DEFINE_LIBRARY("predictor_corrector", "1.1.0",
                       "two-stage XSPH predictor-corrector (Monaghan 1989)", SLUICE_DIMS_ALL,
                       components)

@@ -409,9 +409,12 @@ typedef struct sluice_api {
      * and restart"). Only inside the component's own save_state (write) or
      * load_state (read, length) callback. Arrays are named (a plain name, no
      * '/'), stored under the component's group of the checkpoint, with an
-     * element type and count (0 is allowed). state_read fails with a message naming the checkpoint when
-     * the array is missing or its type or count differ; state_length returns
-     * the element count, or -1 when the array is missing. */
+     * element type and count (0 is allowed). state_read fails with a
+     * message (the restart adds the plugin and the checkpoint) when the
+     * array is missing or its type or count differ; state_length returns the
+     * element count, or -1 when the array is missing. A checkpoint with no
+     * group for the component (an older plugin version without state) still
+     * calls load_state, with every array missing. */
     int (*state_write)(sluice_host *host, const char *name, sluice_state_type type,
                        uint64_t count, const void *data);
     int (*state_read)(sluice_host *host, const char *name, sluice_state_type type,
