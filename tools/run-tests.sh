@@ -1,14 +1,16 @@
 #!/bin/sh
-# Builds Sluice and runs the whole test suite twice: in the optimised release
-# build, and in a build with AddressSanitizer and UndefinedBehaviorSanitizer
-# (any report fails the run); then fuzzes the scene loader for 60 s
+# Builds Sluice and runs the whole test suite three times: in the optimised
+# release build, in the same with MPI (-Dmpi=enabled, which adds the runs
+# across 1, 2 and 4 ranks, docs/scaling.md), and in a build with
+# AddressSanitizer and UndefinedBehaviorSanitizer (any report fails the run);
+# then fuzzes the scene loader for 60 s
 # (tools/fuzz.sh; any crash fails the run). Installs the Debian 12 build dependencies first
 # when they are missing (needs root). Used by .ci/run; see README.md.
 set -eu
 cd "$(dirname "$0")/.."
 
 missing=""
-for tool in gcc clang make meson ninja pkg-config; do
+for tool in gcc clang make meson ninja pkg-config mpicc mpiexec; do
     command -v "$tool" >/dev/null 2>&1 || missing=yes
 done
 if [ -z "$missing" ]; then
@@ -24,7 +26,8 @@ if [ -n "$missing" ]; then
     export DEBIAN_FRONTEND=noninteractive
     apt-get update -qq
     apt-get install -y -qq --no-install-recommends build-essential meson ninja-build \
-        pkg-config libyaml-dev libhdf5-dev check clang libclang-rt-14-dev >/dev/null
+        pkg-config libyaml-dev libhdf5-dev check clang libclang-rt-14-dev libopenmpi-dev \
+        openmpi-bin >/dev/null
 fi
 
 jobs=$(nproc 2>/dev/null || echo 2)
@@ -34,6 +37,11 @@ echo "== release build (build/)"
 [ -f build/build.ninja ] || meson setup build --buildtype=release
 meson compile -C build
 meson test -C build --print-errorlogs --num-processes "$jobs"
+
+echo "== MPI build (build-mpi/, -Dmpi=enabled): runs across 1, 2 and 4 ranks, and the suite"
+[ -f build-mpi/build.ninja ] || meson setup build-mpi --buildtype=release -Dmpi=enabled
+meson compile -C build-mpi
+meson test -C build-mpi --print-errorlogs --num-processes "$jobs"
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build (build-asan/)"
 [ -f build-asan/build.ninja ] || meson setup build-asan --buildtype=debugoptimized \

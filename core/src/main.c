@@ -124,7 +124,7 @@ static sluice_sim *load(const arguments *a, int check_only)
         fprintf(stderr, "sluice: error: out of memory\n");
         return NULL;
     }
-    sluice_load_options options = {a->sets, a->set_count, a->threads, check_only, 0};
+    sluice_load_options options = {a->sets, a->set_count, a->threads, check_only, 0, NULL};
     sluice_sim *sim = sluice_sim_load_variant(a->scene, a->variant, &options, diag);
     sluice_diag_print(diag, stderr);
     sluice_diag_destroy(diag);

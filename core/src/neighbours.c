@@ -75,6 +75,8 @@ void sluice_grid_free(sluice_grid *grid)
     free(grid->list_begin);
     free(grid->list);
     free(grid->thread_counts);
+    free(grid->halo_start);
+    free(grid->halo_order);
     memset(grid, 0, sizeof *grid);
 }
 
@@ -243,6 +245,10 @@ static inline sluice_index visit(const sluice_grid *grid, sluice_real *const pos
                 int64_t x1 = c[0] + 1 < grid->cells[0] ? c[0] + 1 : grid->cells[0] - 1;
                 found = scan_range(grid, pos, i, xi, yi, zi, grid->cell_start[row + (size_t)x0],
                                    grid->cell_start[row + (size_t)x1 + 1], cutoff2, out, found);
+                if (grid->halo_count)
+                    found = scan_range(grid, pos, i, xi, yi, zi,
+                                       grid->halo_start[row + (size_t)x0],
+                                       grid->halo_start[row + (size_t)x1 + 1], cutoff2, out, found);
                 continue;
             }
             for (int64_t k = -1; k <= 1; k++) {
@@ -318,8 +324,79 @@ sluice_index sluice_grid_near_point(const sluice_grid *grid, sluice_real *const 
     return found;
 }
 
+/* Sorts the halo [n, n + h) of the store by cell (h is small: one
+ * temporary per column) and indexes it in grid->halo_start. */
+static int sort_halo(sluice_grid *grid, sluice_particles *particles, uint32_t position_column,
+                     sluice_index n, sluice_index h)
+{
+    const uint32_t dims = grid->dimensions;
+    if (!grid->halo_start &&
+        !(grid->halo_start = calloc(grid->cell_count + 1, sizeof *grid->halo_start)))
+        return -1;
+    if (h > grid->halo_capacity) {
+        sluice_index cap = h + h / 4 + 64;
+        sluice_index *order = malloc((size_t)cap * sizeof *order);
+        if (!order)
+            return -1;
+        free(grid->halo_order);
+        grid->halo_order = order;
+        grid->halo_capacity = cap;
+    }
+    uint32_t *cell = malloc(((size_t)h + 1) * sizeof *cell);
+    if (!cell)
+        return -1;
+    for (sluice_index k = 0; k < h; k++) {
+        int64_t c[3] = {0, 0, 0};
+        for (uint32_t d = 0; d < dims; d++) {
+            const sluice_real *x = particles->columns[position_column + d];
+            c[d] = cell_coordinate(grid, (int)d, (double)x[n + k]);
+            if (c[d] < 0) { /* a halo particle outside the domain: its owner reports it */
+                free(cell);
+                return -2;
+            }
+        }
+        cell[k] = (uint32_t)((c[2] * grid->cells[1] + c[1]) * grid->cells[0] + c[0]);
+    }
+    sluice_index *start = grid->halo_start;
+    memset(start, 0, (grid->cell_count + 1) * sizeof *start);
+    for (sluice_index k = 0; k < h; k++)
+        start[cell[k] + 1]++;
+    for (size_t c = 0; c < grid->cell_count; c++)
+        start[c + 1] += start[c];
+    for (sluice_index k = 0; k < h; k++)
+        grid->halo_order[start[cell[k]]++] = k;
+    for (size_t c = grid->cell_count; c > 0; c--)
+        start[c] = start[c - 1] + n;
+    start[0] = n;
+    free(cell);
+    /* permute the halo rows of every column */
+    size_t widest = 1;
+    for (uint32_t c = 0; c < particles->column_count; c++)
+        if (particles->element_size[c] > widest)
+            widest = particles->element_size[c];
+    char *tmp = malloc((size_t)h * widest + 1);
+    if (!tmp)
+        return -1;
+    for (uint32_t c = 0; c < particles->column_count; c++) {
+        const size_t e = particles->element_size[c];
+        char *base = (char *)particles->columns[c] + (size_t)n * e;
+        for (sluice_index s = 0; s < h; s++)
+            memcpy(tmp + (size_t)s * e, base + (size_t)grid->halo_order[s] * e, e);
+        memcpy(base, tmp, (size_t)h * e);
+    }
+    free(tmp);
+    return 0;
+}
+
 int sluice_grid_build(sluice_grid *grid, sluice_particles *particles, uint32_t position_column,
                       sluice_index *bad)
+{
+    return sluice_grid_build_with_halo(grid, particles, position_column, bad, NULL, NULL);
+}
+
+int sluice_grid_build_with_halo(sluice_grid *grid, sluice_particles *particles,
+                                uint32_t position_column, sluice_index *bad,
+                                sluice_grid_halo_fn halo, void *context)
 {
     const sluice_index n = particles->count;
     const uint32_t dims = grid->dimensions;
@@ -392,6 +469,22 @@ int sluice_grid_build(sluice_grid *grid, sluice_particles *particles, uint32_t p
     /* 3. positions at this build */
     for (uint32_t d = 0; d < dims; d++)
         memcpy(grid->built[d], pos[d], (size_t)n * sizeof(sluice_real));
+
+    /* 3b. the halo of a distributed run, sorted by cell after the particles */
+    grid->halo_count = 0;
+    if (halo) {
+        sluice_index h = 0;
+        if (halo(context, particles, &h) != 0)
+            return -3;
+        int rc = h ? sort_halo(grid, particles, position_column, n, h) : 0;
+        if (rc != 0)
+            return rc == -2 ? -3 : rc; /* -2: outside the domain, which its owner reports */
+        grid->halo_count = h;
+        for (uint32_t d = 0; d < dims; d++)
+            pos[d] = particles->columns[position_column + d];
+        if (dims == 2)
+            pos[2] = pos[1];
+    }
 
     /* 4. Verlet list: count, prefix sum, fill */
     const double cutoff = (double)grid->support + (double)grid->skin;

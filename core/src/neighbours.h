@@ -38,9 +38,26 @@ typedef struct sluice_grid {
     int threads;
     size_t *thread_counts;    /* scratch */
 
+    /* Halo of a distributed run (docs/scaling.md): particles [count, count +
+     * halo_count) of the store, copies of other ranks' particles, sorted by
+     * cell and indexed by halo_start (absolute indices, cell_count + 1).
+     * They are neighbours only: the list holds no entries of their own.
+     * halo_order[s]: the halo received k-th that went to slot count + s. */
+    sluice_index halo_count;
+    sluice_index *halo_start;
+    sluice_index *halo_order;
+    sluice_index halo_capacity;
+
     /* Figures for benchmarks. */
     uint64_t rebuilds;
 } sluice_grid;
+
+/* Appends the halo after the build has sorted the particles [0, count) by
+ * cell: writes the other ranks' copies to [count, count + *halo_count) of
+ * the store (reserving room for them). Returns 0 or -1 (with a message of
+ * its own). */
+typedef int (*sluice_grid_halo_fn)(void *context, sluice_particles *particles,
+                                   sluice_index *halo_count);
 
 /* Sets up the grid over the box [lo, hi). Returns 0, or -1 with *reason set
  * (a periodic direction shorter than 3 cells, a domain too large to index). */
@@ -60,6 +77,12 @@ int sluice_grid_needs_rebuild(const sluice_grid *grid, const sluice_view *view);
  * before sorting, goes to *bad). */
 int sluice_grid_build(sluice_grid *grid, sluice_particles *particles, uint32_t position_column,
                       sluice_index *bad);
+/* The same for a distributed run: halo(context, ...) appends the halo once
+ * the particles are sorted, and the Verlet list of [0, count) takes its
+ * neighbours from both. -3: the halo function failed. */
+int sluice_grid_build_with_halo(sluice_grid *grid, sluice_particles *particles,
+                                uint32_t position_column, sluice_index *bad,
+                                sluice_grid_halo_fn halo, void *context);
 
 /* Particles within sqrt(radius2) <= support of the point p (3 reals), from the
  * last build's cells and the current positions (valid while the list is:

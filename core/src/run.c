@@ -517,7 +517,26 @@ static int periodic_checkpoint(sluice_sim *sim)
     return SLUICE_OK;
 }
 
+static int step(sluice_sim *sim);
+
 int sluice_sim_step(sluice_sim *sim)
+{
+    int status = step(sim);
+#ifdef SLUICE_MPI
+    /* A rank that fails leaves the others waiting in a halo exchange or a
+     * reduction: in a run across ranks a failure ends every rank, with the
+     * failing rank's diagnostic (docs/scaling.md). */
+    if (status != SLUICE_RUN_COMPLETE && sim->comm.size > 1) {
+        fprintf(stderr, "sluice: rank %d of %d: error: %s\n", sim->comm.rank, sim->comm.size,
+                sim->failure[0] ? sim->failure : "the step failed");
+        fflush(stderr);
+        MPI_Abort(sim->comm.comm, status);
+    }
+#endif
+    return status;
+}
+
+static int step(sluice_sim *sim)
 {
     if (call_hooks(sim, 0) != 0)
         return SLUICE_RUN_FAILED;

@@ -424,10 +424,26 @@ static int add_particles(sluice_sim *sim, uint8_t kind, const sluice_real *posit
     return 0;
 }
 
+/* What a distributed run does not do yet (docs/scaling.md): refused with a
+ * message naming the plugin, never run on one rank's particles only. */
+static int one_rank_only(sluice_host *host, const char *what)
+{
+    if (host->sim->comm.size == 1)
+        return SLUICE_OK;
+    api_error(host, "%s is not supported in a run across %d ranks yet (docs/scaling.md)", what,
+              host->sim->comm.size);
+    return SLUICE_ERROR;
+}
+
 static int api_add_particles(sluice_host *host, uint8_t kind, const sluice_real *positions,
                              sluice_index count, sluice_index *first)
 {
     sluice_sim *sim = host->sim;
+    /* while the scene loads, every rank builds every particle; the split
+     * into slabs comes after */
+    if (sim->phase == SLUICE_PHASE_RUN &&
+        one_rank_only(host, "adding particles (api->add_particles)") != SLUICE_OK)
+        return SLUICE_ERROR;
     if (sim->phase < SLUICE_PHASE_INITIALISE) {
         api_error(host, "adds particles before initialise(); add them in initialise() or later");
         return SLUICE_ERROR;
@@ -472,6 +488,9 @@ static int check_indices(sluice_host *host, const char *what, const sluice_index
 static int api_remove_particles(sluice_host *host, const sluice_index *indices, sluice_index count)
 {
     sluice_sim *sim = host->sim;
+    if (sim->phase == SLUICE_PHASE_RUN &&
+        one_rank_only(host, "removing particles (api->remove_particles)") != SLUICE_OK)
+        return SLUICE_ERROR;
     if (check_indices(host, "removes particles", indices, count) != SLUICE_OK)
         return SLUICE_ERROR;
     if (count == 0)
@@ -606,9 +625,29 @@ static const char *describe_particle(const sluice_sim *sim, sluice_index i, char
 static int update_neighbours(sluice_sim *sim)
 {
     sluice_sim_refresh_view(sim);
-    if (sluice_grid_needs_rebuild(&sim->grid, &sim->view)) {
+    int rebuild = sluice_grid_needs_rebuild(&sim->grid, &sim->view);
+    if (sim->comm.size > 1)
+        rebuild = sluice_comm_any(&sim->comm, rebuild);
+    if (rebuild) {
         sluice_index bad = 0;
-        int rc = sluice_grid_build(&sim->grid, &sim->particles, (uint32_t)sim->position.column, &bad);
+        int rc;
+#ifdef SLUICE_MPI
+        if (sim->comm.size > 1) {
+            if (sluice_ranks_migrate(sim) != 0)
+                return SLUICE_ERROR;
+            rc = sluice_grid_build_with_halo(&sim->grid, &sim->particles,
+                                             (uint32_t)sim->position.column, &bad,
+                                             sluice_ranks_collect_halo, sim);
+            if (rc == -3) {
+                if (!sim->failure[0])
+                    sluice_sim_fail(sim, "rank %d: the halo of the neighbour list failed",
+                                    sim->comm.rank);
+                return SLUICE_ERROR;
+            }
+        } else
+#endif
+            rc = sluice_grid_build(&sim->grid, &sim->particles, (uint32_t)sim->position.column,
+                                   &bad);
         if (rc == -2) {
             char where[256];
             sluice_sim_refresh_view(sim);
@@ -656,6 +695,11 @@ static int evaluate(sluice_sim *sim)
     for (uint32_t p = 0; p < sim->pass_count; p++) {
         const sluice_pass *pass = &sim->passes[p];
         if (pass->is_pair) {
+#ifdef SLUICE_MPI
+            /* the other ranks' particles as they are now, every field */
+            if (sim->comm.size > 1 && sluice_ranks_refresh_halo(sim) != 0)
+                return SLUICE_ERROR;
+#endif
             if (sluice_pair_pass_run(&sim->engine, &pass->pair, &sim->grid, &sim->view) != 0) {
                 sluice_sim_fail(sim, "out of memory in a pair pass");
                 return SLUICE_ERROR;
@@ -712,6 +756,8 @@ static double api_time_step(sluice_host *host)
         if (limit < dt)
             dt = limit;
     }
+    if (sim->comm.size > 1) /* NaN limits are -1: the minimum keeps them */
+        dt = sluice_comm_min(&sim->comm, dt);
     if (sim->scene.time.max_step > 0 && dt > sim->scene.time.max_step)
         dt = sim->scene.time.max_step;
     sim->dt_limit = dt;
@@ -778,6 +824,8 @@ void sluice_sim_request_time(sluice_sim *sim, double t)
 static int api_output_path(sluice_host *host, const char *name, char *buffer, size_t size)
 {
     sluice_sim *sim = host->sim;
+    if (one_rank_only(host, "writing output files (api->output_path)") != SLUICE_OK)
+        return SLUICE_ERROR;
     if (!sim->output_directory) {
         if (size)
             buffer[0] = '\0';
@@ -848,6 +896,8 @@ int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t len
 static sluice_table *api_table_open(sluice_host *host, const char *file_name, const char *header)
 {
     sluice_sim *sim = host->sim;
+    if (one_rank_only(host, "writing tables (api->table_open)") != SLUICE_OK)
+        return NULL;
     if (!file_name || !*file_name || strchr(file_name, '/')) {
         api_error(host, "table file name '%s' must be a plain file name in the run directory",
                   file_name ? file_name : "");
@@ -914,6 +964,8 @@ static int api_table_row(sluice_table *table, const double *values, uint32_t cou
 
 static int api_write_file_atomic(sluice_host *host, const char *path, const void *data, size_t size)
 {
+    if (one_rank_only(host, "writing files (api->write_file_atomic)") != SLUICE_OK)
+        return SLUICE_ERROR;
     char error[512];
     if (sluice_write_file_atomic(path, data, size, error, sizeof error) != 0) {
         api_error(host, "%s", error);
@@ -949,6 +1001,8 @@ static sluice_real api_wall_distance(sluice_host *host, const sluice_real *point
 static int api_pair_pass(sluice_host *host)
 {
     sluice_sim *sim = host->sim;
+    if (one_rank_only(host, "an on-demand pair pass (api->pair_pass)") != SLUICE_OK)
+        return SLUICE_ERROR;
     sluice_instance *in = &sim->instances[host->instance];
     if (!in->on_demand) {
         api_error(host, "calls api->pair_pass but is not flagged SLUICE_COMPONENT_ON_DEMAND");
@@ -1033,6 +1087,8 @@ static int api_point_pass(sluice_host *host, const sluice_real *points, sluice_i
                           uint32_t kinds, sluice_point_fn fn, void *context)
 {
     sluice_sim *sim = host->sim;
+    if (one_rank_only(host, "a point pass (api->point_pass)") != SLUICE_OK)
+        return SLUICE_ERROR;
     if (!fn || (count > 0 && !points)) {
         api_error(host, "api->point_pass called without points or without a callback");
         return SLUICE_ERROR;
@@ -1056,6 +1112,8 @@ static int api_point_pass(sluice_host *host, const sluice_real *points, sluice_i
 static int api_request_reach(sluice_host *host, sluice_real radius)
 {
     sluice_sim *sim = host->sim;
+    if (one_rank_only(host, "a pass beyond the kernel support (api->request_reach)") != SLUICE_OK)
+        return SLUICE_ERROR;
     if (host->instance == SLUICE_CORE_INSTANCE || sim->creating != (int64_t)host->instance) {
         api_error(host, "api->request_reach is for a component's create()");
         return SLUICE_ERROR;
@@ -2355,6 +2413,12 @@ static int load(sluice_sim *sim, const char *scene_path, const char *variant,
     sluice_real zero = 0, r0 = 0, w0 = 0, f0 = 0;
     kernel->component->kernel(kernel->state, 1, &zero, &r0, &w0, &f0);
     sim->engine.kernel_self = w0;
+#ifdef SLUICE_MPI
+    if (sim->comm.size > 1 && !sim->check_only && sluice_ranks_split(sim) != 0) {
+        sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, scene->path, 0, 0, "%s", sim->failure);
+        return 1;
+    }
+#endif
     sim->particles_initial = sim->particles.count;
 
     sim->resolved_scene = sluice_yaml_emit(scene->root);
@@ -2386,6 +2450,22 @@ sluice_sim *sluice_sim_load_variant(const char *scene_path, const char *variant,
     sim->position.column = sim->kind.column = sim->id.column = -1;
     sim->mass.column = sim->velocity.column = sim->density.column = -1;
     sim->check_only = options ? options->check_only : 0;
+    sim->comm = sluice_comm_self();
+    if (options && options->communicator) {
+#ifdef SLUICE_MPI
+        if (sluice_comm_from_mpi(&sim->comm, *(const MPI_Comm *)options->communicator) != 0) {
+            sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, scene_path, 0, 0,
+                            "MPI could not set up the ranks of this run");
+            sluice_sim_free(sim);
+            return NULL;
+        }
+#else
+        sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, scene_path, 0, 0,
+                        "this Sluice was built without MPI (meson setup -Dmpi=enabled)");
+        sluice_sim_free(sim);
+        return NULL;
+#endif
+    }
     if (options && options->threads > 0)
         omp_set_num_threads(options->threads);
     int errors = load(sim, scene_path, variant, options);
@@ -2452,6 +2532,8 @@ void sluice_sim_free(sluice_sim *sim)
     sluice_wall_watch_free(&sim->wall_watch);
     free(sim->wall_geometries);
     sluice_pair_engine_free(&sim->engine);
+    sluice_ranks_free(&sim->halo);
+    sluice_comm_free(&sim->comm);
     free(sim->instances);
     free(sim->resolved_scene);
     free(sim->output_directory);
@@ -2462,6 +2544,16 @@ void sluice_sim_free(sluice_sim *sim)
 }
 
 /* --------------------------------------------------------- introspection -- */
+
+int sluice_sim_rank(const sluice_sim *sim)
+{
+    return sim->comm.rank;
+}
+
+int sluice_sim_rank_count(const sluice_sim *sim)
+{
+    return sim->comm.size;
+}
 
 const sluice_view *sluice_sim_view(sluice_sim *sim)
 {

@@ -19,6 +19,9 @@ typedef struct sluice_load_options {
     int check_only;               /* validate and build the initial state, no output */
     double max_particles;         /* > 0: refuse a scene that would create more (the
                                      fuzzer's bound); 0: only the machine's memory */
+    const void *communicator;     /* a distributed run: the MPI_Comm (address of) whose
+                                     ranks share the scene (docs/scaling.md); needs a
+                                     build with -Dmpi=enabled. NULL: one rank */
 } sluice_load_options;
 
 typedef struct sluice_run_options {
@@ -97,6 +100,9 @@ uint64_t sluice_sim_pair_count(const sluice_sim *sim);
 uint64_t sluice_sim_neighbour_rebuilds(const sluice_sim *sim);
 uint64_t sluice_sim_particle_steps(const sluice_sim *sim);
 int sluice_sim_threads(const sluice_sim *sim);
+/* Rank and rank count of a distributed run (0 and 1 otherwise). */
+int sluice_sim_rank(const sluice_sim *sim);
+int sluice_sim_rank_count(const sluice_sim *sim);
 /* The messages of the last failure (watchdog, plugin error), or "". */
 const char *sluice_sim_failure(const sluice_sim *sim);
 

@@ -5,10 +5,12 @@
 
 #include <omp.h>
 
+#include "comm.h"
 #include "diag.h"
 #include "neighbours.h"
 #include "pairs.h"
 #include "particles.h"
+#include "ranks.h"
 #include "registry.h"
 #include "scene.h"
 #include "sim.h"
@@ -118,6 +120,8 @@ struct sluice_sim {
 
     sluice_grid grid;
     sluice_pair_engine engine;
+    sluice_comm comm;         /* the ranks of a distributed run (one by default) */
+    sluice_halo_lists halo;   /* this rank's slab and halo (ranks.h) */
     sluice_pass *passes;
     uint32_t pass_count;
     uint32_t *prepare; /* instances with a prepare callback, scene order */

@@ -1,0 +1,337 @@
+#include "ranks.h"
+
+#ifdef SLUICE_MPI
+
+#include <limits.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sim_internal.h"
+
+void sluice_ranks_free(sluice_halo_lists *lists)
+{
+    for (int s = 0; s < 2; s++) {
+        free(lists->send[s]);
+        free(lists->buffer[s]);
+    }
+    free(lists->slot);
+    memset(lists, 0, sizeof *lists);
+}
+
+static int compare_real(const void *a, const void *b)
+{
+    sluice_real x = *(const sluice_real *)a, y = *(const sluice_real *)b;
+    return (x > y) - (x < y);
+}
+
+static size_t row_bytes(const sluice_particles *p)
+{
+    size_t b = 0;
+    for (uint32_t c = 0; c < p->column_count; c++)
+        b += p->element_size[c];
+    return b;
+}
+
+static int grow(void **block, size_t *capacity, size_t bytes)
+{
+    if (bytes <= *capacity && *block)
+        return 0;
+    size_t cap = bytes + bytes / 4 + 64;
+    void *b = realloc(*block, cap);
+    if (!b)
+        return -1;
+    *block = b;
+    *capacity = cap;
+    return 0;
+}
+
+static int list_push(sluice_halo_lists *h, int side, sluice_index i)
+{
+    if (h->send_count[side] == h->send_capacity[side]) {
+        sluice_index cap = h->send_capacity[side] ? 2 * h->send_capacity[side] : 1024;
+        sluice_index *grown = realloc(h->send[side], (size_t)cap * sizeof *grown);
+        if (!grown)
+            return -1;
+        h->send[side] = grown;
+        h->send_capacity[side] = cap;
+    }
+    h->send[side][h->send_count[side]++] = i;
+    return 0;
+}
+
+/* Packs the rows send[0] (then send[1]) column by column into buffer[0]. */
+static int pack(sluice_sim *sim, sluice_halo_lists *h)
+{
+    const sluice_particles *p = &sim->particles;
+    const size_t row = row_bytes(p);
+    const size_t total = (size_t)(h->send_count[0] + h->send_count[1]) * row;
+    if (grow((void **)&h->buffer[0], &h->buffer_capacity[0], total) != 0)
+        return -1;
+    char *out = h->buffer[0];
+    for (int side = 0; side < 2; side++)
+        for (uint32_t c = 0; c < p->column_count; c++) {
+            const size_t e = p->element_size[c];
+            const char *base = p->columns[c];
+            const sluice_index *list = h->send[side];
+            for (sluice_index k = 0; k < h->send_count[side]; k++, out += e)
+                memcpy(out, base + (size_t)list[k] * e, e);
+        }
+    return 0;
+}
+
+/* Sends buffer[0] (the left block, then the right) to the neighbours and
+ * receives theirs into buffer[1] (from the left, then from the right);
+ * receive_count[] gets their counts. Collective over the neighbours. */
+static int swap(sluice_sim *sim, sluice_halo_lists *h)
+{
+    const sluice_comm *c = &sim->comm;
+    const int left = c->rank > 0 ? c->rank - 1 : MPI_PROC_NULL;
+    const int right = c->rank + 1 < c->size ? c->rank + 1 : MPI_PROC_NULL;
+    const size_t row = row_bytes(&sim->particles);
+    unsigned long long sent[2] = {h->send_count[0], h->send_count[1]}, got[2] = {0, 0};
+    MPI_Sendrecv(&sent[0], 1, MPI_UNSIGNED_LONG_LONG, left, 11, &got[1], 1,
+                 MPI_UNSIGNED_LONG_LONG, right, 11, c->comm, MPI_STATUS_IGNORE);
+    MPI_Sendrecv(&sent[1], 1, MPI_UNSIGNED_LONG_LONG, right, 12, &got[0], 1,
+                 MPI_UNSIGNED_LONG_LONG, left, 12, c->comm, MPI_STATUS_IGNORE);
+    if ((sent[0] + sent[1]) * row > INT_MAX || (got[0] + got[1]) * row > INT_MAX) {
+        sluice_sim_fail(sim, "rank %d: a halo or migration message exceeds 2 GB", c->rank);
+        return -1;
+    }
+    h->receive_count[0] = (sluice_index)got[0];
+    h->receive_count[1] = (sluice_index)got[1];
+    if (grow((void **)&h->buffer[1], &h->buffer_capacity[1], (size_t)(got[0] + got[1]) * row) !=
+        0) {
+        sluice_sim_fail(sim, "out of memory for the halo of rank %d", c->rank);
+        return -1;
+    }
+    /* blocks are column-major per side: [side 0: every column][side 1: ...] */
+    char *send_left = h->buffer[0], *send_right = h->buffer[0] + (size_t)sent[0] * row;
+    char *from_left = h->buffer[1], *from_right = h->buffer[1] + (size_t)got[0] * row;
+    MPI_Sendrecv(send_left, (int)(sent[0] * row), MPI_BYTE, left, 13, from_right,
+                 (int)(got[1] * row), MPI_BYTE, right, 13, c->comm, MPI_STATUS_IGNORE);
+    MPI_Sendrecv(send_right, (int)(sent[1] * row), MPI_BYTE, right, 14, from_left,
+                 (int)(got[0] * row), MPI_BYTE, left, 14, c->comm, MPI_STATUS_IGNORE);
+    return 0;
+}
+
+/* Writes the received rows (from the left, then from the right) to the store
+ * rows first + k, or first + slot[k] when slot is given. */
+static void unpack(sluice_particles *p, const sluice_halo_lists *h, sluice_index first,
+                   const sluice_index *slot)
+{
+    const char *in = h->buffer[1];
+    sluice_index k0 = 0;
+    for (int side = 0; side < 2; side++) {
+        const sluice_index n = h->receive_count[side];
+        for (uint32_t c = 0; c < p->column_count; c++) {
+            const size_t e = p->element_size[c];
+            char *base = p->columns[c];
+            for (sluice_index k = 0; k < n; k++, in += e) {
+                const sluice_index to = first + (slot ? slot[k0 + k] : k0 + k);
+                memcpy(base + (size_t)to * e, in, e);
+            }
+        }
+        k0 += n;
+    }
+}
+
+int sluice_ranks_split(sluice_sim *sim)
+{
+    const sluice_comm *c = &sim->comm;
+    sluice_halo_lists *h = &sim->halo;
+    sluice_particles *p = &sim->particles;
+    h->width = (double)sim->grid.support + (double)sim->grid.skin;
+    if (sim->grid.periodic[0]) {
+        sluice_sim_fail(sim, "a periodic x axis cannot be split across ranks yet (%d ranks; "
+                             "docs/scaling.md)", c->size);
+        return -1;
+    }
+    const sluice_index n = p->count;
+    const sluice_real *x = p->columns[sim->position.column];
+    sluice_real *sorted = malloc(((size_t)n + 1) * sizeof *sorted);
+    double *bound = malloc(((size_t)c->size + 1) * sizeof *bound);
+    uint8_t *away = calloc((size_t)n + 1, 1);
+    if (!sorted || !bound || !away) {
+        free(sorted);
+        free(bound);
+        free(away);
+        sluice_sim_fail(sim, "out of memory splitting %u particles across %d ranks", n, c->size);
+        return -1;
+    }
+    memcpy(sorted, x, (size_t)n * sizeof *sorted);
+    qsort(sorted, n, sizeof *sorted, compare_real);
+    bound[0] = -INFINITY;
+    bound[c->size] = INFINITY;
+    for (int r = 1; r < c->size; r++) {
+        size_t k = (size_t)((uint64_t)r * n / (uint64_t)c->size);
+        bound[r] = k == 0 ? (double)sorted[0] : 0.5 * ((double)sorted[k - 1] + (double)sorted[k]);
+    }
+    int narrow = -1;
+    for (int r = 1; r + 1 < c->size; r++)
+        if (!(bound[r + 1] - bound[r] >= h->width))
+            narrow = r;
+    if (narrow >= 0) {
+        sluice_sim_fail(sim,
+                        "%d ranks split the %u particles into slabs along x narrower than the "
+                        "kernel support plus the neighbour skin (%.6g m): slab %d is [%.6g, "
+                        "%.6g) m; use fewer ranks",
+                        c->size, n, h->width, narrow, bound[narrow], bound[narrow + 1]);
+        free(sorted);
+        free(bound);
+        free(away);
+        return -1;
+    }
+    h->slab_lo = bound[c->rank];
+    h->slab_hi = bound[c->rank + 1];
+    for (sluice_index i = 0; i < n; i++)
+        away[i] = !((double)x[i] >= h->slab_lo && (double)x[i] < h->slab_hi);
+    sluice_particles_compact(p, away);
+    free(sorted);
+    free(bound);
+    free(away);
+    sluice_sim_refresh_view(sim);
+    return 0;
+}
+
+int sluice_ranks_migrate(sluice_sim *sim)
+{
+    sluice_halo_lists *h = &sim->halo;
+    sluice_particles *p = &sim->particles;
+    const sluice_index n = p->count;
+    const sluice_real *x = p->columns[sim->position.column];
+    h->send_count[0] = h->send_count[1] = 0;
+    int failed = 0;
+    for (sluice_index i = 0; i < n && !failed; i++) {
+        const double xi = (double)x[i];
+        if (xi < h->slab_lo)
+            failed = list_push(h, 0, i);
+        else if (xi >= h->slab_hi)
+            failed = list_push(h, 1, i);
+        /* NaN stays: the grid build reports it */
+    }
+    if (failed || pack(sim, h) != 0) {
+        sluice_sim_fail(sim, "out of memory migrating particles on rank %d", sim->comm.rank);
+        return -1;
+    }
+    if (swap(sim, h) != 0)
+        return -1;
+    const sluice_index leaving = h->send_count[0] + h->send_count[1];
+    if (leaving) {
+        uint8_t *away = calloc((size_t)n + 1, 1);
+        if (!away) {
+            sluice_sim_fail(sim, "out of memory migrating particles on rank %d", sim->comm.rank);
+            return -1;
+        }
+        for (int side = 0; side < 2; side++)
+            for (sluice_index k = 0; k < h->send_count[side]; k++)
+                away[h->send[side][k]] = 1;
+        sluice_particles_compact(p, away);
+        free(away);
+    }
+    const sluice_index arriving = h->receive_count[0] + h->receive_count[1];
+    if (arriving) {
+        sluice_index first = 0;
+        if (sluice_particles_append(p, arriving, &first) != 0) {
+            sluice_sim_fail(sim, "out of memory migrating particles on rank %d", sim->comm.rank);
+            return -1;
+        }
+        unpack(p, h, first, NULL);
+        h->arrived += arriving;
+        /* a particle may cross one slab boundary per rebuild (it moves less
+         * than the skin between rebuilds, and slabs are wider) */
+        const sluice_real *xn = p->columns[sim->position.column];
+        for (sluice_index k = first; k < p->count; k++)
+            if (!((double)xn[k] >= h->slab_lo && (double)xn[k] < h->slab_hi) &&
+                xn[k] == xn[k]) {
+                sluice_sim_fail(sim,
+                                "step %lld: particle id %llu at x = %.6g m crossed more than one "
+                                "slab (rank %d holds [%.6g, %.6g) m)",
+                                (long long)sim->step,
+                                (unsigned long long)((const sluice_id *)
+                                                         p->columns[sim->id.column])[k],
+                                (double)xn[k], sim->comm.rank, h->slab_lo, h->slab_hi);
+                return -1;
+            }
+    }
+    sluice_sim_refresh_view(sim);
+    return 0;
+}
+
+int sluice_ranks_collect_halo(void *context, sluice_particles *p, sluice_index *halo_count)
+{
+    sluice_sim *sim = context;
+    sluice_halo_lists *h = &sim->halo;
+    const sluice_index n = p->count;
+    const sluice_real *x = p->columns[sim->position.column];
+    h->send_count[0] = h->send_count[1] = 0;
+    int failed = 0;
+    for (sluice_index i = 0; i < n && !failed; i++) {
+        const double xi = (double)x[i];
+        if (xi < h->slab_lo + h->width && sim->comm.rank > 0)
+            failed = list_push(h, 0, i);
+        if (!failed && xi >= h->slab_hi - h->width && sim->comm.rank + 1 < sim->comm.size)
+            failed = list_push(h, 1, i);
+    }
+    if (failed || pack(sim, h) != 0) {
+        sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
+        return -1;
+    }
+    if (swap(sim, h) != 0)
+        return -1;
+    const sluice_index got = h->receive_count[0] + h->receive_count[1];
+    if (sluice_particles_reserve(p, n + got) != 0) {
+        sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
+        return -1;
+    }
+    unpack(p, h, n, NULL);
+    *halo_count = got;
+    return 0;
+}
+
+/* After the grid sorted the halo: the slot of each received entry. */
+static int halo_slots(sluice_sim *sim)
+{
+    sluice_halo_lists *h = &sim->halo;
+    const sluice_index got = sim->grid.halo_count;
+    if (got > h->slot_capacity) {
+        sluice_index cap = got + got / 4 + 64;
+        sluice_index *s = realloc(h->slot, (size_t)cap * sizeof *s);
+        if (!s)
+            return -1;
+        h->slot = s;
+        h->slot_capacity = cap;
+    }
+    for (sluice_index s = 0; s < got; s++)
+        h->slot[sim->grid.halo_order[s]] = s;
+    return 0;
+}
+
+int sluice_ranks_refresh_halo(sluice_sim *sim)
+{
+    sluice_halo_lists *h = &sim->halo;
+    if (h->slot_valid_at != sim->grid.rebuilds) {
+        if (halo_slots(sim) != 0) {
+            sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
+            return -1;
+        }
+        h->slot_valid_at = sim->grid.rebuilds;
+    }
+    if (pack(sim, h) != 0) {
+        sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
+        return -1;
+    }
+    const sluice_index expected0 = h->receive_count[0], expected1 = h->receive_count[1];
+    if (swap(sim, h) != 0)
+        return -1;
+    if (h->receive_count[0] != expected0 || h->receive_count[1] != expected1) {
+        sluice_sim_fail(sim, "rank %d: the halo changed size between rebuilds", sim->comm.rank);
+        return -1;
+    }
+    unpack(&sim->particles, h, sim->particles.count, h->slot);
+    return 0;
+}
+
+#else
+typedef int sluice_ranks_unused;
+#endif

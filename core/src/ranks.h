@@ -1,0 +1,50 @@
+/* Domain decomposition of a distributed run along x (docs/scaling.md). Each
+ * rank owns the particles of its slab [slab_lo, slab_hi) of x, kept in the
+ * store's [0, count); copies of the other ranks' particles within the list
+ * cutoff of its slab (the halo) follow them in [count, count + halo). The
+ * slabs are set once from the initial particles (equal counts). Particles
+ * that leave a slab move to the neighbouring rank at each neighbour-list
+ * rebuild; between rebuilds the halo's fields are refreshed before every
+ * pair pass. With one rank nothing here is called. */
+#ifndef SLUICE_RANKS_H
+#define SLUICE_RANKS_H
+
+#include "comm.h"
+#include "particles.h"
+
+typedef struct sluice_sim sluice_sim;
+
+typedef struct sluice_halo_lists {
+    double slab_lo, slab_hi; /* the slab, -inf / +inf at the ends */
+    double width;            /* halo width: support + skin */
+    sluice_index *send[2];   /* owned particles sent to the left (0) and right (1) rank */
+    sluice_index send_count[2], send_capacity[2];
+    sluice_index receive_count[2]; /* from the left and from the right */
+    sluice_index *slot;      /* received entry k -> halo slot (after the cell sort) */
+    sluice_index slot_capacity;
+    uint64_t slot_valid_at;  /* grid.rebuilds when slot was computed */
+    uint64_t arrived;        /* particles received from other ranks by migration */
+    char *buffer[2];         /* send and receive */
+    size_t buffer_capacity[2];
+} sluice_halo_lists;
+
+#ifdef SLUICE_MPI
+/* Splits the initial particles (every rank built all of them) into slabs of
+ * equal counts and keeps this rank's. Fails (message in sim) when a slab
+ * would be narrower than the halo width. */
+int sluice_ranks_split(sluice_sim *sim);
+/* Before a rebuild: sends the particles that left the slab to the rank
+ * that owns their x now. Collective. */
+int sluice_ranks_migrate(sluice_sim *sim);
+/* The grid's halo function (sluice_grid_halo_fn): sends copies of the
+ * particles within the halo width of the slab's sides, receives the
+ * neighbours' after the sorted particles. Collective. */
+int sluice_ranks_collect_halo(void *sim, sluice_particles *particles, sluice_index *halo_count);
+/* Refreshes every field of the halo from its owners. Collective. */
+int sluice_ranks_refresh_halo(sluice_sim *sim);
+void sluice_ranks_free(sluice_halo_lists *lists);
+#else
+static inline void sluice_ranks_free(sluice_halo_lists *lists) { (void)lists; }
+#endif
+
+#endif
