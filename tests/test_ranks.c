@@ -198,6 +198,27 @@ START_TEST(same_particles_as_one_rank)
 }
 END_TEST
 
+/* What is not done across ranks yet is refused, not run on one rank's part:
+ * an output directory, where every rank would write the same files. (The
+ * gauges and writers need one, and their tables are refused in the API.) */
+START_TEST(refused_across_ranks)
+{
+    int size = 1;
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+    if (size == 1)
+        return; /* one rank: everything is allowed */
+    MPI_Comm world = MPI_COMM_WORLD;
+    sluice_sim *sim = load_on(&world);
+    ck_assert_ptr_nonnull(sim);
+    char *dir = test_scratch("ranks-out");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_INPUT_ERROR);
+    ck_assert_msg(strstr(sluice_sim_failure(sim), "output directory is not supported") != NULL,
+                  "%s", sluice_sim_failure(sim));
+    sluice_sim_free(sim);
+    free(dir);
+}
+END_TEST
+
 int main(int argc, char **argv)
 {
     MPI_Init(&argc, &argv);
@@ -205,6 +226,7 @@ int main(int argc, char **argv)
     TCase *t = tcase_create("same_as_one_rank");
     tcase_set_timeout(t, 300);
     tcase_add_loop_test(t, same_particles_as_one_rank, 0, 2);
+    tcase_add_test(t, refused_across_ranks);
     suite_add_tcase(s, t);
     SRunner *runner = srunner_create(s);
     srunner_set_fork_status(runner, CK_NOFORK);

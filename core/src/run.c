@@ -455,6 +455,13 @@ static void schedule_next_checkpoint(sluice_sim *sim)
 
 int sluice_sim_begin(sluice_sim *sim, const char *output_directory)
 {
+    if (output_directory && sim->comm.size > 1) {
+        /* every rank would write the same files (docs/scaling.md) */
+        sluice_sim_fail(sim, "an output directory is not supported in a run across %d ranks yet "
+                             "(docs/scaling.md)",
+                        sim->comm.size);
+        return SLUICE_RUN_INPUT_ERROR;
+    }
     if (output_directory) {
         char error[1024];
         if (make_directory(output_directory, error, sizeof error) != 0) {
