@@ -119,6 +119,13 @@ START_TEST(same_particles_as_one_rank)
                 MPI_COMM_WORLD);
     unsigned long long arrived = sim->halo.arrived, arrived_total = 0;
     MPI_Reduce(&arrived, &arrived_total, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, 0, MPI_COMM_WORLD);
+    /* the halo of each rank at the end, and the bytes of one particle's row
+     * (the communication model of docs/scaling.md) */
+    unsigned long long halo = sim->grid.halo_count, halo_total = 0;
+    MPI_Reduce(&halo, &halo_total, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, 0, MPI_COMM_WORLD);
+    size_t row = 0;
+    for (uint32_t c = 0; c < sim->particles.column_count; c++)
+        row += sim->particles.element_size[c];
     long long steps = sluice_sim_steps(sim), steps_min = 0, steps_max = 0;
     MPI_Reduce(&steps, &steps_min, 1, MPI_LONG_LONG, MPI_MIN, 0, MPI_COMM_WORLD);
     MPI_Reduce(&steps, &steps_max, 1, MPI_LONG_LONG, MPI_MAX, 0, MPI_COMM_WORLD);
@@ -167,8 +174,8 @@ START_TEST(same_particles_as_one_rank)
         }
         fprintf(stderr,
                 "ranks: %d ranks, %d particles, %d steps to t = %.6g s, %llu particles moved "
-                "between ranks;",
-                size, total, STEPS, t_max, arrived_total);
+                "between ranks, %llu halo particles over all ranks (%zu bytes each);",
+                size, total, STEPS, t_max, arrived_total, halo_total, row);
         for (int c = 0; c < VALUES; c++)
             fprintf(stderr, " %s %.2e (of %.3g)", names[c], worst[c], scale[c]);
         fputc('\n', stderr);
