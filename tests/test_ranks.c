@@ -40,20 +40,41 @@ static const char *scene =
     "  time_step: {courant: 0.2}\n"
     "  symplectic: {}\n";
 
-static sluice_sim *load_on(const MPI_Comm *comm)
+static sluice_sim *load_text(const char *text, const MPI_Comm *comm, const char *needle)
 {
     char *dir = test_scratch("ranks");
-    char *path = test_write_file(dir, "scene.yaml", scene);
+    char *path = test_write_file(dir, "scene.yaml", text);
     sluice_diag *diag = sluice_diag_create();
     sluice_load_options options = {NULL, 0, 1, 0, 0, comm};
     sluice_sim *sim = sluice_sim_load(path, &options, diag);
-    if (!sim)
-        for (size_t i = 0; i < sluice_diag_count(diag); i++)
+    int found = 0;
+    for (size_t i = 0; i < sluice_diag_count(diag); i++) {
+        if (!sim)
             fprintf(stderr, "%s\n", sluice_diag_message(diag, i));
+        found |= needle && strstr(sluice_diag_message(diag, i), needle) != NULL;
+    }
+    if (needle)
+        ck_assert_msg(!sim && found, "expected a refusal with '%s'", needle);
     sluice_diag_destroy(diag);
     free(path);
     free(dir);
     return sim;
+}
+
+static sluice_sim *load_on(const MPI_Comm *comm)
+{
+    return load_text(scene, comm, NULL);
+}
+
+/* the scene with one line replaced */
+static char *scene_with(const char *from, const char *to)
+{
+    const char *at = strstr(scene, from);
+    ck_assert_ptr_nonnull(at);
+    char *text = NULL;
+    ck_assert_int_ge(asprintf(&text, "%.*s%s%s", (int)(at - scene), scene, to, at + strlen(from)),
+                     0);
+    return text;
 }
 
 /* the compared fields, 7 per particle: x, y, u, v, density, pressure, mass */
@@ -206,8 +227,10 @@ START_TEST(same_particles_as_one_rank)
 END_TEST
 
 /* What is not done across ranks yet is refused, not run on one rank's part:
- * an output directory, where every rank would write the same files. (The
- * gauges and writers need one, and their tables are refused in the API.) */
+ * an output directory, where every rank would write the same files (the
+ * gauges and writers need one, and their tables are refused in the API); a
+ * restart; and, at load, the plugins that reach other particles outside the
+ * pair passes. */
 START_TEST(refused_across_ranks)
 {
     int size = 1;
@@ -221,8 +244,19 @@ START_TEST(refused_across_ranks)
     ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_INPUT_ERROR);
     ck_assert_msg(strstr(sluice_sim_failure(sim), "output directory is not supported") != NULL,
                   "%s", sluice_sim_failure(sim));
+    char error[512];
+    ck_assert_int_eq(sluice_sim_restart(sim, "checkpoint.h5", error, sizeof error), SLUICE_ERROR);
+    ck_assert_msg(strstr(error, "restart across") != NULL, "%s", error);
     sluice_sim_free(sim);
     free(dir);
+    /* at load: a wall scheme that fills its ghosts with point passes, and a
+     * filter with a pair pass of its own between steps */
+    char *ghosts = scene_with("  dbc: {}\n", "  ghost_particles: {}\n");
+    load_text(ghosts, &world, "prepares each evaluation from other particles");
+    char *filter = scene_with("  symplectic: {}\n", "  symplectic: {}\n  pressure_smoothing: {}\n");
+    load_text(filter, &world, "runs pair passes of its own between steps");
+    free(ghosts);
+    free(filter);
 }
 END_TEST
 

@@ -920,6 +920,13 @@ static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
 
 int sluice_sim_restart(sluice_sim *sim, const char *path, char *error, size_t error_size)
 {
+    if (sim->comm.size > 1) {
+        snprintf(error, error_size,
+                 "cannot restart from checkpoint '%s': restart across %d ranks is not supported "
+                 "yet (docs/scaling.md)",
+                 path, sim->comm.size);
+        return SLUICE_ERROR;
+    }
     struct stat st;
     if (stat(path, &st) != 0) {
         snprintf(error, error_size, "cannot read checkpoint '%s': %s", path, strerror(errno));
