@@ -324,6 +324,25 @@ sluice_index sluice_grid_near_point(const sluice_grid *grid, sluice_real *const 
     return found;
 }
 
+/* Stable counting sort of n items by cell: order[] receives the items cell
+ * by cell, start[c] .. start[c + 1] the positions of cell c's, each plus
+ * `first` (the store index of the sorted block's first particle). */
+static void sort_by_cell(const sluice_grid *grid, const uint32_t *cell, sluice_index n,
+                         sluice_index first, sluice_index *start, sluice_index *order)
+{
+    memset(start, 0, (grid->cell_count + 1) * sizeof *start);
+    for (sluice_index i = 0; i < n; i++)
+        start[cell[i] + 1]++;
+    for (size_t c = 0; c < grid->cell_count; c++)
+        start[c + 1] += start[c];
+    for (sluice_index i = 0; i < n; i++)
+        order[start[cell[i]]++] = i;
+    /* restore start (it was advanced to the end of each cell) */
+    for (size_t c = grid->cell_count; c > 0; c--)
+        start[c] = start[c - 1] + first;
+    start[0] = first;
+}
+
 /* Sorts the halo [n, n + h) of the store by cell (h is small: one
  * temporary per column) and indexes it in grid->halo_start. */
 static int sort_halo(sluice_grid *grid, sluice_particles *particles, uint32_t position_column,
@@ -357,17 +376,7 @@ static int sort_halo(sluice_grid *grid, sluice_particles *particles, uint32_t po
         }
         cell[k] = (uint32_t)((c[2] * grid->cells[1] + c[1]) * grid->cells[0] + c[0]);
     }
-    sluice_index *start = grid->halo_start;
-    memset(start, 0, (grid->cell_count + 1) * sizeof *start);
-    for (sluice_index k = 0; k < h; k++)
-        start[cell[k] + 1]++;
-    for (size_t c = 0; c < grid->cell_count; c++)
-        start[c + 1] += start[c];
-    for (sluice_index k = 0; k < h; k++)
-        grid->halo_order[start[cell[k]]++] = k;
-    for (size_t c = grid->cell_count; c > 0; c--)
-        start[c] = start[c - 1] + n;
-    start[0] = n;
+    sort_by_cell(grid, cell, h, n, grid->halo_start, grid->halo_order);
     free(cell);
     /* permute the halo rows of every column */
     size_t widest = 1;
@@ -443,19 +452,7 @@ int sluice_grid_build_with_halo(sluice_grid *grid, sluice_particles *particles,
 
     /* 2. stable counting sort by cell */
     sluice_index *start = grid->cell_start;
-    memset(start, 0, (grid->cell_count + 1) * sizeof *start);
-    for (sluice_index i = 0; i < n; i++)
-        start[cell_of[i] + 1]++;
-    for (size_t c = 0; c < grid->cell_count; c++)
-        start[c + 1] += start[c];
-    for (sluice_index i = 0; i < n; i++) {
-        uint32_t c = cell_of[i];
-        grid->order[start[c]++] = i;
-    }
-    /* restore start (it was advanced to the end of each cell) */
-    for (size_t c = grid->cell_count; c > 0; c--)
-        start[c] = start[c - 1];
-    start[0] = 0;
+    sort_by_cell(grid, cell_of, n, 0, start, grid->order);
     if (sluice_particles_permute(particles, grid->order) != 0)
         return -1;
     for (uint32_t d = 0; d < dims; d++)

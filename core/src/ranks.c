@@ -136,6 +136,42 @@ static void unpack(sluice_particles *p, const sluice_halo_lists *h, sluice_index
     }
 }
 
+enum { SEND_MIGRANTS, SEND_HALO };
+
+/* Lists the rank's particles to send left and right (the particles that left
+ * the slab, or those within the halo width of its sides), packs them and
+ * swaps them with the neighbours' into buffer[1]. Collective. */
+static int send_to_neighbours(sluice_sim *sim, int what)
+{
+    sluice_halo_lists *h = &sim->halo;
+    const sluice_index n = sim->particles.count;
+    const sluice_real *x = sim->particles.columns[sim->position.column];
+    const int has_left = sim->comm.rank > 0, has_right = sim->comm.rank + 1 < sim->comm.size;
+    h->send_count[0] = h->send_count[1] = 0;
+    int failed = 0;
+    for (sluice_index i = 0; i < n && !failed; i++) {
+        const double xi = (double)x[i]; /* NaN stays: the grid build reports it */
+        if (what == SEND_MIGRANTS) {
+            if (xi < h->slab_lo)
+                failed = list_push(h, 0, i);
+            else if (xi >= h->slab_hi)
+                failed = list_push(h, 1, i);
+        } else {
+            if (has_left && xi < h->slab_lo + h->width)
+                failed = list_push(h, 0, i);
+            if (!failed && has_right && xi >= h->slab_hi - h->width)
+                failed = list_push(h, 1, i);
+        }
+    }
+    if (failed || pack(sim, h) != 0) {
+        sluice_sim_fail(sim, "out of memory %s on rank %d",
+                        what == SEND_MIGRANTS ? "migrating particles" : "for the halo",
+                        sim->comm.rank);
+        return -1;
+    }
+    return swap(sim, h);
+}
+
 int sluice_ranks_split(sluice_sim *sim)
 {
     const sluice_comm *c = &sim->comm;
@@ -199,22 +235,7 @@ int sluice_ranks_migrate(sluice_sim *sim)
     sluice_halo_lists *h = &sim->halo;
     sluice_particles *p = &sim->particles;
     const sluice_index n = p->count;
-    const sluice_real *x = p->columns[sim->position.column];
-    h->send_count[0] = h->send_count[1] = 0;
-    int failed = 0;
-    for (sluice_index i = 0; i < n && !failed; i++) {
-        const double xi = (double)x[i];
-        if (xi < h->slab_lo)
-            failed = list_push(h, 0, i);
-        else if (xi >= h->slab_hi)
-            failed = list_push(h, 1, i);
-        /* NaN stays: the grid build reports it */
-    }
-    if (failed || pack(sim, h) != 0) {
-        sluice_sim_fail(sim, "out of memory migrating particles on rank %d", sim->comm.rank);
-        return -1;
-    }
-    if (swap(sim, h) != 0)
+    if (send_to_neighbours(sim, SEND_MIGRANTS) != 0)
         return -1;
     const sluice_index leaving = h->send_count[0] + h->send_count[1];
     if (leaving) {
@@ -263,21 +284,7 @@ int sluice_ranks_collect_halo(void *context, sluice_particles *p, sluice_index *
     sluice_sim *sim = context;
     sluice_halo_lists *h = &sim->halo;
     const sluice_index n = p->count;
-    const sluice_real *x = p->columns[sim->position.column];
-    h->send_count[0] = h->send_count[1] = 0;
-    int failed = 0;
-    for (sluice_index i = 0; i < n && !failed; i++) {
-        const double xi = (double)x[i];
-        if (xi < h->slab_lo + h->width && sim->comm.rank > 0)
-            failed = list_push(h, 0, i);
-        if (!failed && xi >= h->slab_hi - h->width && sim->comm.rank + 1 < sim->comm.size)
-            failed = list_push(h, 1, i);
-    }
-    if (failed || pack(sim, h) != 0) {
-        sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
-        return -1;
-    }
-    if (swap(sim, h) != 0)
+    if (send_to_neighbours(sim, SEND_HALO) != 0)
         return -1;
     const sluice_index got = h->receive_count[0] + h->receive_count[1];
     if (sluice_particles_reserve(p, n + got) != 0) {
