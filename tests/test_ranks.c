@@ -5,6 +5,7 @@
  * rank to another (they keep their id and state: they are among those
  * compared), none lost or doubled.
  * Built only with -Dmpi=enabled. Check runs without fork (MPI). */
+#include <hdf5.h>
 #include <math.h>
 #include <mpi.h>
 
@@ -228,11 +229,276 @@ START_TEST(same_particles_as_one_rank)
 }
 END_TEST
 
+/* ------------------------------------------------- output across ranks -- */
+
+/* The dam break with what a user writes: snapshots (parallel HDF5 across
+ * ranks), a front gauge and a point gauge (tables written by rank 0 from
+ * reduced sums), and a checkpoint at t = 0.05 s (gathered on rank 0). */
+static const char *output_plugins =
+    "  front_gauge: {interval: 0.01, origin: 0.0}\n"
+    "  point_gauge: {interval: 0.01, points: [[1.0, 0.1], [0.5, 0.5], [2.0, 0.05]], fields: "
+    "\"pressure,velocity\"}\n"
+    "  hdf5: {interval: 0.05}\n";
+
+static char *output_scene(void)
+{
+    char *text = NULL;
+    const char *end = strstr(scene, "time: {end: 1.0}\n");
+    ck_assert_ptr_nonnull(end);
+    ck_assert_int_ge(asprintf(&text, "%.*stime: {end: 0.12}\ncheckpoint: {interval: 0.05}\n%s%s",
+                              (int)(end - scene), scene, end + strlen("time: {end: 1.0}\n"),
+                              output_plugins),
+                     0);
+    return text;
+}
+
+/* The same scratch directory on every rank (rank 0 makes it). */
+static char *shared_scratch(const char *tag, MPI_Comm comm)
+{
+    int rank = 0;
+    MPI_Comm_rank(comm, &rank);
+    char path[256] = "";
+    if (rank == 0) {
+        char *dir = test_scratch(tag);
+        ck_assert_ptr_nonnull(dir);
+        snprintf(path, sizeof path, "%s", dir);
+        free(dir);
+    }
+    MPI_Bcast(path, sizeof path, MPI_CHAR, 0, comm);
+    return strdup(path);
+}
+
+static int run_scene(const char *text, const MPI_Comm *comm, const char *dir, const char *restart)
+{
+    sluice_sim *sim = load_text(text, comm, NULL);
+    ck_assert_ptr_nonnull(sim);
+    if (restart) {
+        char error[1024];
+        ck_assert_msg(sluice_sim_restart(sim, restart, error, sizeof error) == SLUICE_OK, "%s",
+                      error);
+    }
+    sluice_run_options options = {dir, 0, 1};
+    int status = sluice_sim_run(sim, &options);
+    sluice_sim_free(sim);
+    return status;
+}
+
+/* A snapshot's particles: id and 6 values (x, y, u, v, density, pressure). */
+typedef struct snapshot {
+    size_t count;
+    unsigned long long *id;
+    double *value; /* 6 per particle, in the file's order */
+    double time;
+} snapshot;
+
+static void read_dataset(hid_t file, const char *name, hid_t type, void *out)
+{
+    hid_t set = H5Dopen2(file, name, H5P_DEFAULT);
+    ck_assert_msg(set >= 0, "no dataset '%s'", name);
+    ck_assert(H5Dread(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out) >= 0);
+    H5Dclose(set);
+}
+
+static int read_snapshot(const char *dir, int index, snapshot *s)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/particles_%06d.h5", dir, index);
+    if (access(path, R_OK) != 0)
+        return 0;
+    hid_t file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    ck_assert_msg(file >= 0, "cannot open %s", path);
+    unsigned long long count = 0;
+    hid_t attr = H5Aopen(file, "particle_count", H5P_DEFAULT);
+    ck_assert(H5Aread(attr, H5T_NATIVE_ULLONG, &count) >= 0);
+    H5Aclose(attr);
+    attr = H5Aopen(file, "time", H5P_DEFAULT);
+    ck_assert(H5Aread(attr, H5T_NATIVE_DOUBLE, &s->time) >= 0);
+    H5Aclose(attr);
+    s->count = count;
+    s->id = malloc((count + 1) * sizeof *s->id);
+    s->value = malloc((count * 6 + 1) * sizeof *s->value);
+    double *xy = malloc((count * 2 + 1) * sizeof *xy), *uv = malloc((count * 2 + 1) * sizeof *uv);
+    double *rho = malloc((count + 1) * sizeof *rho), *p = malloc((count + 1) * sizeof *p);
+    ck_assert(s->id && s->value && xy && uv && rho && p);
+    read_dataset(file, "id", H5T_NATIVE_ULLONG, s->id);
+    read_dataset(file, "position", H5T_NATIVE_DOUBLE, xy);
+    read_dataset(file, "velocity", H5T_NATIVE_DOUBLE, uv);
+    read_dataset(file, "density", H5T_NATIVE_DOUBLE, rho);
+    read_dataset(file, "pressure", H5T_NATIVE_DOUBLE, p);
+    for (size_t i = 0; i < count; i++) {
+        double *v = s->value + 6 * i;
+        v[0] = xy[2 * i], v[1] = xy[2 * i + 1], v[2] = uv[2 * i], v[3] = uv[2 * i + 1];
+        v[4] = rho[i], v[5] = p[i];
+    }
+    free(xy), free(uv), free(rho), free(p);
+    H5Fclose(file);
+    return 1;
+}
+
+/* The snapshots of `dir` against those of the one-rank run in `one`, by id
+ * (every particle once), to 1e-10 of each field's scale (round-off, as in
+ * same_particles_as_one_rank); from snapshot `first` on. Returns how many
+ * were compared. */
+static int compare_snapshots(const char *one, const char *dir, int first)
+{
+    int compared = 0;
+    for (int k = first;; k++) {
+        snapshot a = {0}, b = {0};
+        if (!read_snapshot(one, k, &a))
+            break;
+        ck_assert_msg(read_snapshot(dir, k, &b), "%s: snapshot %d is missing", dir, k);
+        ck_assert_int_eq(a.count, b.count);
+        ck_assert_msg(a.time == b.time, "snapshot %d at %.17g s and %.17g s", k, a.time, b.time);
+        unsigned long long top = 0;
+        for (size_t i = 0; i < a.count; i++)
+            top = a.id[i] > top ? a.id[i] : top;
+        long *where = malloc((top + 1) * sizeof *where);
+        ck_assert_ptr_nonnull(where);
+        for (size_t i = 0; i <= top; i++)
+            where[i] = -1;
+        for (size_t i = 0; i < b.count; i++) {
+            ck_assert_msg(b.id[i] <= top && where[b.id[i]] < 0, "id %llu unknown or twice",
+                          b.id[i]);
+            where[b.id[i]] = (long)i;
+        }
+        double worst[6] = {0}, scale[6] = {0};
+        for (size_t i = 0; i < a.count; i++) {
+            long j = where[a.id[i]];
+            ck_assert_msg(j >= 0, "id %llu lost", a.id[i]);
+            for (int c = 0; c < 6; c++) {
+                worst[c] = fmax(worst[c], fabs(a.value[6 * i + c] - b.value[6 * (size_t)j + c]));
+                scale[c] = fmax(scale[c], fabs(a.value[6 * i + c]));
+            }
+        }
+        for (int c = 0; c < 6; c++)
+            ck_assert_msg(worst[c] <= 1e-10 * scale[c], "%s snapshot %d: value %d differs by %g "
+                          "(scale %g)", dir, k, c, worst[c], scale[c]);
+        free(where), free(a.id), free(a.value), free(b.id), free(b.value);
+        compared++;
+    }
+    return compared;
+}
+
+/* A table of `dir` against the one-rank run's, row by row: the same times,
+ * and values to 1e-9 of each column's scale (they are printed with 10
+ * significant digits, and differ by round-off before that). */
+static void compare_table(const char *one, const char *dir, const char *name, int *rows)
+{
+    char a_path[512], b_path[512];
+    snprintf(a_path, sizeof a_path, "%s/%s", one, name);
+    snprintf(b_path, sizeof b_path, "%s/%s", dir, name);
+    char *a = test_read_file(a_path), *b = test_read_file(b_path);
+    ck_assert_msg(a && b, "%s or %s is missing", a_path, b_path);
+    char *sa = NULL, *sb = NULL;
+    char *la = strtok_r(a, "\n", &sa), *lb = strtok_r(b, "\n", &sb);
+    ck_assert_msg(la && lb && strcmp(la, lb) == 0, "%s: the headers differ", name);
+    double scale[64] = {0}, worst[64] = {0};
+    int columns = 0;
+    *rows = 0;
+    for (;;) {
+        la = strtok_r(NULL, "\n", &sa);
+        lb = strtok_r(NULL, "\n", &sb);
+        ck_assert_msg((la == NULL) == (lb == NULL), "%s: the row counts differ", name);
+        if (!la)
+            break;
+        char *pa = la, *pb = lb;
+        int c = 0;
+        while (*pa && *pb && c < 64) {
+            double x = strtod(pa, &pa), y = strtod(pb, &pb);
+            worst[c] = fmax(worst[c], fabs(x - y));
+            scale[c] = fmax(scale[c], fabs(x));
+            c++;
+            pa += *pa == ',';
+            pb += *pb == ',';
+        }
+        columns = c > columns ? c : columns;
+        (*rows)++;
+    }
+    ck_assert_msg(worst[0] == 0, "%s: the times differ", name);
+    for (int c = 0; c < columns; c++)
+        ck_assert_msg(worst[c] <= 1e-9 * scale[c] + 1e-300, "%s column %d differs by %g (scale %g)",
+                      name, c, worst[c], scale[c]);
+    free(a), free(b);
+}
+
+START_TEST(output_as_one_rank)
+{
+    int rank = 0, size = 1;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+    MPI_Comm world = MPI_COMM_WORLD;
+    char *text = output_scene();
+    char *across = shared_scratch("ranks-out", world);
+    char *again = shared_scratch("ranks-restart", world);
+    ck_assert_int_eq(run_scene(text, &world, across, NULL), SLUICE_RUN_COMPLETE);
+    char checkpoint[600];
+    snprintf(checkpoint, sizeof checkpoint, "%s/checkpoint_%09d.h5", across, 0);
+    /* the checkpoint at t = 0.05 s: its step number is in its name */
+    if (rank == 0) {
+        char command[800];
+        snprintf(command, sizeof command, "ls %s/checkpoint_*.h5 | head -n 1", across);
+        FILE *ls = popen(command, "r");
+        ck_assert_ptr_nonnull(ls);
+        ck_assert_ptr_nonnull(fgets(checkpoint, sizeof checkpoint, ls));
+        checkpoint[strcspn(checkpoint, "\n")] = '\0';
+        pclose(ls);
+    }
+    MPI_Bcast(checkpoint, sizeof checkpoint, MPI_CHAR, 0, world);
+    /* the same ranks continue from it, in a copy of the run's directory
+     * (so that the tables go on from their rows at the checkpoint) */
+    char command[1400];
+    snprintf(command, sizeof command, "cp -r %s/. %s", across, again);
+    if (rank == 0)
+        ck_assert_int_eq(system(command), 0);
+    MPI_Barrier(world);
+    ck_assert_int_eq(run_scene(text, &world, again, checkpoint), SLUICE_RUN_COMPLETE);
+    if (rank == 0) {
+        /* the scene on this rank alone, and a restart of the across-ranks
+         * checkpoint on one rank (another rank count) */
+        char *one = test_scratch("ranks-one"), *alone = test_scratch("ranks-alone");
+        ck_assert_int_eq(run_scene(text, NULL, one, NULL), SLUICE_RUN_COMPLETE);
+        snprintf(command, sizeof command, "cp -r %s/. %s", across, alone);
+        ck_assert_int_eq(system(command), 0);
+        ck_assert_int_eq(run_scene(text, NULL, alone, checkpoint), SLUICE_RUN_COMPLETE);
+        int snapshots = compare_snapshots(one, across, 0);
+        ck_assert_int_eq(snapshots, 4); /* t = 0, 0.05, 0.1 and the end, 0.12 s */
+        /* the restarts rewrite from the checkpoint's time on: t = 0.1 s and the end */
+        ck_assert_int_eq(compare_snapshots(one, again, 0), 4);
+        ck_assert_int_eq(compare_snapshots(one, alone, 0), 4);
+        int front_rows = 0, point_rows = 0;
+        compare_table(one, across, "front.csv", &front_rows);
+        compare_table(one, across, "points.csv", &point_rows);
+        ck_assert_int_eq(front_rows, 13); /* t = 0, 0.01, ..., 0.12 s */
+        ck_assert_int_eq(point_rows, 13);
+        for (int k = 0; k < 2; k++) {
+            const char *restarted = k == 0 ? again : alone;
+            compare_table(one, restarted, "front.csv", &front_rows);
+            compare_table(one, restarted, "points.csv", &point_rows);
+            ck_assert_int_eq(front_rows, 13);
+            ck_assert_int_eq(point_rows, 13);
+        }
+        /* run.json: the counts of every rank */
+        char path[600];
+        snprintf(path, sizeof path, "%s/run.json", across);
+        char *json = test_read_file(path);
+        ck_assert_ptr_nonnull(json);
+        ck_assert_msg(strstr(json, "\"particles_final\": 2016,") &&
+                          strstr(json, "\"particles_initial\": 2016,"),
+                      "%s", json);
+        char ranks_line[64];
+        snprintf(ranks_line, sizeof ranks_line, "\"ranks\": %d,", size);
+        ck_assert_msg(strstr(json, ranks_line) != NULL, "%s", json);
+        fprintf(stderr, "ranks: %d ranks: %d snapshots, %d + %d table rows and the restarts on "
+                        "%d and on 1 rank(s) equal the one-rank run\n",
+                size, snapshots, front_rows, point_rows, size);
+        free(json), free(one), free(alone);
+    }
+    free(text), free(across), free(again);
+}
+END_TEST
+
 /* What is not done across ranks yet is refused, not run on one rank's part:
- * an output directory, where every rank would write the same files (the
- * gauges and writers need one, and their tables are refused in the API); a
- * restart; and, at load, the plugins that reach other particles outside the
- * pair passes. */
+ * at load, the plugins that reach other particles outside the pair passes. */
 START_TEST(refused_across_ranks)
 {
     int size = 1;
@@ -242,15 +508,7 @@ START_TEST(refused_across_ranks)
     MPI_Comm world = MPI_COMM_WORLD;
     sluice_sim *sim = load_on(&world);
     ck_assert_ptr_nonnull(sim);
-    char *dir = test_scratch("ranks-out");
-    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_INPUT_ERROR);
-    ck_assert_msg(strstr(sluice_sim_failure(sim), "output directory is not supported") != NULL,
-                  "%s", sluice_sim_failure(sim));
-    char error[512];
-    ck_assert_int_eq(sluice_sim_restart(sim, "checkpoint.h5", error, sizeof error), SLUICE_ERROR);
-    ck_assert_msg(strstr(error, "restart across") != NULL, "%s", error);
     sluice_sim_free(sim);
-    free(dir);
     /* at load: a wall scheme that fills its ghosts with point passes, and a
      * filter with a pair pass of its own between steps */
     char *ghosts = scene_with("  dbc: {}\n", "  ghost_particles: {}\n");
@@ -269,6 +527,7 @@ int main(int argc, char **argv)
     TCase *t = tcase_create("same_as_one_rank");
     tcase_set_timeout(t, 300);
     tcase_add_loop_test(t, same_particles_as_one_rank, 0, 2);
+    tcase_add_test(t, output_as_one_rank);
     tcase_add_test(t, refused_across_ranks);
     suite_add_tcase(s, t);
     SRunner *runner = srunner_create(s);

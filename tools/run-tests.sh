@@ -1,7 +1,7 @@
 #!/bin/sh
 # Builds Sluice and runs the whole test suite three times: in the optimised
 # release build, in the same with MPI (-Dmpi=enabled, which adds the runs
-# across 1, 2 and 4 ranks, docs/scaling.md), and in a build with
+# across 1, 2 and 4 ranks and parallel HDF5, docs/scaling.md), and in a build with
 # AddressSanitizer and UndefinedBehaviorSanitizer (any report fails the run);
 # then fuzzes the scene loader for 60 s
 # (tools/fuzz.sh; any crash fails the run). Installs the Debian 12 build dependencies first
@@ -14,7 +14,7 @@ for tool in gcc clang make meson ninja pkg-config mpicc mpiexec; do
     command -v "$tool" >/dev/null 2>&1 || missing=yes
 done
 if [ -z "$missing" ]; then
-    pkg-config --exists yaml-0.1 hdf5 check 2>/dev/null || missing=yes
+    pkg-config --exists yaml-0.1 hdf5 hdf5-openmpi check 2>/dev/null || missing=yes
     # libFuzzer's runtime (the short fuzz run at the end)
     [ -f "$(clang -print-file-name=libclang_rt.fuzzer-x86_64.a 2>/dev/null)" ] || missing=yes
 fi
@@ -27,7 +27,7 @@ if [ -n "$missing" ]; then
     apt-get update -qq
     apt-get install -y -qq --no-install-recommends build-essential meson ninja-build \
         pkg-config libyaml-dev libhdf5-dev check clang libclang-rt-14-dev libopenmpi-dev \
-        openmpi-bin >/dev/null
+        openmpi-bin libhdf5-openmpi-dev >/dev/null
 fi
 
 jobs=$(nproc 2>/dev/null || echo 2)

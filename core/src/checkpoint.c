@@ -41,6 +41,7 @@
 #include <hdf5.h>
 
 #include "build_config.h"
+#include "ranks.h"
 #include "schema.h"
 #include "sim_internal.h"
 #include "yaml_tree.h"
@@ -258,7 +259,9 @@ static void write_state(sluice_sim *sim, hid_t file, ck_error *e)
         fail(e, "out of memory");
     int version = CHECKPOINT_VERSION, major = SLUICE_ABI_MAJOR, minor = SLUICE_ABI_MINOR;
     int real_size = (int)sizeof(sluice_real), dimensions = (int)dims;
-    int grid_valid = sim->grid.valid && sim->grid.count == n;
+    /* across ranks the particles are the gathered ones and the grids are
+     * the ranks' own: the restart rebuilds the neighbour lists */
+    int grid_valid = sim->comm.size == 1 && sim->grid.valid && sim->grid.count == n;
     uint64_t count = n, next_id = sim->next_id, removed = sim->removed,
              initial = sim->particles_initial, steps = sim->particle_steps,
              rebuilds = sim->grid.rebuilds;
@@ -431,27 +434,61 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
     const double started = sluice_wall_clock();
     void *image = NULL;
     size_t size = 0;
-    char why[1024];
-    int rc = checkpoint_image(sim, &image, &size, why, sizeof why);
-    sim->state_file = NULL;
-    if (rc != 0) {
-        sluice_sim_fail(sim, "cannot write checkpoint '%s' (step %lld, t = %.9g s): %s", path,
-                        (long long)sim->step, sim->time, why);
-        return SLUICE_ERROR;
+    char why[1400] = "";
+    int rc = 0;
+#ifdef SLUICE_MPI
+    /* Across ranks rank 0 writes the one-process checkpoint of every rank's
+     * particles (gathered in rank order) and of its plugins' state, which a
+     * plugin keeps alike on every rank; a restart on any number of ranks
+     * reads it (docs/scaling.md). */
+    sluice_particles all, own;
+    uint64_t own_removed = sim->removed, own_steps = sim->particle_steps;
+    if (sim->comm.size > 1) {
+        double sums[2] = {(double)sim->removed, (double)sim->particle_steps};
+        if (sluice_ranks_gather(sim, &all) != 0 ||
+            sluice_comm_reduce(&sim->comm, sums, 2, 1) != 0) {
+            sim->state_file = NULL;
+            sluice_sim_fail(sim, "cannot write checkpoint '%s' (step %lld, t = %.9g s): out of "
+                                 "memory or MPI failed gathering the particles on rank 0",
+                            path, (long long)sim->step, sim->time);
+            return SLUICE_ERROR;
+        }
+        if (sim->comm.rank == 0) {
+            own = sim->particles;
+            sim->particles = all;
+            sim->removed = (uint64_t)sums[0];
+            sim->particle_steps = (uint64_t)sums[1];
+        }
     }
-    rc = sluice_write_file_atomic(path, image, size, error, sizeof error);
+    if (sim->comm.rank == 0)
+        rc = checkpoint_image(sim, &image, &size, why, sizeof why);
+    if (sim->comm.size > 1 && sim->comm.rank == 0) {
+        sim->particles = own;
+        sluice_particles_free(&all);
+        sim->removed = own_removed;
+        sim->particle_steps = own_steps;
+    }
+#else
+    rc = checkpoint_image(sim, &image, &size, why, sizeof why);
+#endif
+    sim->state_file = NULL;
+    if (rc == 0 && sim->comm.rank == 0) {
+        rc = sluice_write_file_atomic(path, image, size, error, sizeof error);
+        if (rc != 0)
+            snprintf(why, sizeof why, "%s", error);
+    }
     free(image);
-    if (rc != 0) {
-        sluice_sim_fail(sim, "%s", error);
+    if (sluice_comm_any(&sim->comm, rc != 0)) {
+        sluice_sim_fail(sim, "cannot write checkpoint '%s' (step %lld, t = %.9g s): %s", path,
+                        (long long)sim->step, sim->time, why[0] ? why : "rank 0 failed");
         return SLUICE_ERROR;
     }
     sim->checkpoint_step = sim->step;
-    if (!sim->quiet)
-        fprintf(stderr, "%ssluice: checkpoint %s: step %lld, t = %.9g s, %u particles, %zu bytes, "
-                        "%.3f s\n",
-                sim->progress ? "\n" : "", path, (long long)sim->step, sim->time,
-                sim->particles.count, size, sluice_wall_clock() - started);
-    if (path != full)
+    if (!sim->quiet && sim->comm.rank == 0)
+        fprintf(stderr, "%ssluice: checkpoint %s: step %lld, t = %.9g s, %zu bytes, %.3f s\n",
+                sim->progress ? "\n" : "", path, (long long)sim->step, sim->time, size,
+                sluice_wall_clock() - started);
+    if (path != full || sim->comm.rank != 0)
         return SLUICE_OK;
     /* this run's checkpoints in the output directory: keep the newest */
     char **grown = realloc(sim->checkpoint_files,
@@ -820,6 +857,22 @@ static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
     sim->particles_initial = (sluice_index)initial;
     sim->particle_steps = steps;
     sim->max_density_deviation = deviation;
+#ifdef SLUICE_MPI
+    /* Across ranks every rank read every particle (the checkpoint may come
+     * from another rank count): split them into slabs anew, before the
+     * plugins load their state. The run's sums are rank 0's to carry on. */
+    if (sim->comm.size > 1) {
+        grid_valid = 0;
+        if (sim->comm.rank != 0) {
+            sim->removed = 0;
+            sim->particle_steps = 0;
+        }
+        if (sluice_ranks_split(sim) != 0) {
+            fail(e, "%s", sim->failure);
+            return;
+        }
+    }
+#endif
 
     /* core: requests, tables, neighbour list */
     group = H5Gopen2(file, "core", H5P_DEFAULT);
@@ -920,13 +973,6 @@ static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
 
 int sluice_sim_restart(sluice_sim *sim, const char *path, char *error, size_t error_size)
 {
-    if (sim->comm.size > 1) {
-        snprintf(error, error_size,
-                 "cannot restart from checkpoint '%s': restart across %d ranks is not supported "
-                 "yet (docs/scaling.md)",
-                 path, sim->comm.size);
-        return SLUICE_ERROR;
-    }
     struct stat st;
     if (stat(path, &st) != 0) {
         snprintf(error, error_size, "cannot read checkpoint '%s': %s", path, strerror(errno));

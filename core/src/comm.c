@@ -67,6 +67,31 @@ int sluice_comm_any(const sluice_comm *c, int value)
     return out;
 }
 
+int sluice_comm_reduce(const sluice_comm *c, double *values, uint32_t count, int op)
+{
+    if (c->size == 1 || count == 0)
+        return 0;
+    MPI_Op mpi_op = op == 2 ? MPI_MIN : op == 3 ? MPI_MAX : MPI_SUM;
+    return MPI_Allreduce(MPI_IN_PLACE, values, (int)count, MPI_DOUBLE, mpi_op, c->comm) ==
+                   MPI_SUCCESS
+               ? 0
+               : -1;
+}
+
+int sluice_comm_offset(const sluice_comm *c, uint64_t count, uint64_t *offset, uint64_t *total)
+{
+    *offset = 0;
+    *total = count;
+    if (c->size == 1)
+        return 0;
+    uint64_t before = 0;
+    if (MPI_Exscan(&count, &before, 1, MPI_UINT64_T, MPI_SUM, c->comm) != MPI_SUCCESS ||
+        MPI_Allreduce(&count, total, 1, MPI_UINT64_T, MPI_SUM, c->comm) != MPI_SUCCESS)
+        return -1;
+    *offset = c->rank == 0 ? 0 : before; /* MPI_Exscan leaves rank 0's undefined */
+    return 0;
+}
+
 #else
 /* ISO C forbids an empty translation unit */
 typedef int sluice_comm_unused;

@@ -5,6 +5,10 @@
 #include <string.h>
 #include <unistd.h>
 
+#ifdef SLUICE_MPI
+#include <mpi.h>
+#endif
+
 #include "build_config.h"
 #include "diag.h"
 #include "sim.h"
@@ -117,16 +121,31 @@ static int parse(int argc, char **argv, int first, arguments *a, int allow_out)
     return 0;
 }
 
-static sluice_sim *load(const arguments *a, int check_only)
+/* This process's rank in a run across MPI ranks (docs/scaling.md), 0 otherwise.
+ * Messages every rank would print alike are printed by rank 0. */
+static int world_rank(void)
+{
+#ifdef SLUICE_MPI
+    int initialised = 0, rank = 0;
+    if (MPI_Initialized(&initialised) == MPI_SUCCESS && initialised)
+        MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    return rank;
+#else
+    return 0;
+#endif
+}
+
+static sluice_sim *load(const arguments *a, int check_only, const void *communicator)
 {
     sluice_diag *diag = sluice_diag_create();
     if (!diag) {
         fprintf(stderr, "sluice: error: out of memory\n");
         return NULL;
     }
-    sluice_load_options options = {a->sets, a->set_count, a->threads, check_only, 0, NULL};
+    sluice_load_options options = {a->sets, a->set_count, a->threads, check_only, 0, communicator};
     sluice_sim *sim = sluice_sim_load_variant(a->scene, a->variant, &options, diag);
-    sluice_diag_print(diag, stderr);
+    if (world_rank() == 0)
+        sluice_diag_print(diag, stderr);
     sluice_diag_destroy(diag);
     return sim;
 }
@@ -145,33 +164,45 @@ static int command_run(int argc, char **argv)
         free(a.sets);
         return 2;
     }
-    sluice_sim *sim = load(&a, 0);
+#ifdef SLUICE_MPI
+    /* under mpiexec: one run across the ranks of MPI_COMM_WORLD */
+    MPI_Comm world = MPI_COMM_WORLD;
+    sluice_sim *sim = load(&a, 0, &world);
+#else
+    sluice_sim *sim = load(&a, 0, NULL);
+#endif
+    const int quiet_rank = world_rank() != 0;
     free(a.sets);
     if (!sim)
         return 2;
     if (a.restart) {
         char error[2048];
         if (sluice_sim_restart(sim, a.restart, error, sizeof error) != 0) {
-            fprintf(stderr, "sluice: error: %s\n", error);
+            if (!quiet_rank)
+                fprintf(stderr, "sluice: error: %s\n", error);
             sluice_sim_free(sim);
             return 2;
         }
-        if (!a.quiet)
+        if (!a.quiet && !quiet_rank)
             fprintf(stderr, "sluice: restarting from %s at step %lld, t = %.9g s\n", a.restart,
                     (long long)sluice_sim_steps(sim), sluice_sim_time(sim));
     }
-    if (sluice_install_stop_handlers() != 0)
+    if (sluice_install_stop_handlers() != 0 && !quiet_rank)
         fprintf(stderr, "sluice: warning: cannot catch SIGINT/SIGTERM; an interrupted run "
                         "writes no checkpoint\n");
-    sluice_run_options options = {a.out, a.progress >= 0 ? a.progress : isatty(STDERR_FILENO),
-                                  a.quiet};
+    sluice_run_options options = {a.out,
+                                  !quiet_rank &&
+                                      (a.progress >= 0 ? a.progress : isatty(STDERR_FILENO)),
+                                  a.quiet || quiet_rank};
     int status = sluice_sim_run(sim, &options);
-    const sluice_view *v = sluice_sim_view(sim);
-    if (status == SLUICE_RUN_COMPLETE) {
+    const unsigned long long particles = sluice_sim_particle_total(sim);
+    if (quiet_rank) {
+        /* a failing step ended every rank with its own message (MPI_Abort) */
+    } else if (status == SLUICE_RUN_COMPLETE) {
         if (!a.quiet)
-            fprintf(stderr, "sluice: completed %lld steps, %.6g s simulated, %u particles; output "
+            fprintf(stderr, "sluice: completed %lld steps, %.6g s simulated, %llu particles; output "
                             "in %s\n",
-                    (long long)sluice_sim_steps(sim), sluice_sim_time(sim), v->count, a.out);
+                    (long long)sluice_sim_steps(sim), sluice_sim_time(sim), particles, a.out);
     } else if (status == SLUICE_RUN_INTERRUPTED) {
         fprintf(stderr, "sluice: stopped by a signal after step %lld, t = %.9g s; continue with "
                         "--restart %s/checkpoint_%09lld.h5%s%s\n",
@@ -199,7 +230,7 @@ static int command_check(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    sluice_sim *sim = load(&a, 1);
+    sluice_sim *sim = load(&a, 1, NULL);
     free(a.sets);
     if (!sim)
         return 2;
@@ -260,8 +291,20 @@ int main(int argc, char **argv)
         return 2;
     }
     const char *command = argv[1];
-    if (strcmp(command, "run") == 0)
+    if (strcmp(command, "run") == 0) {
+#ifdef SLUICE_MPI
+        int provided = 0;
+        if (MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) {
+            fprintf(stderr, "sluice: error: MPI could not start\n");
+            return 4;
+        }
+        int status = command_run(argc, argv);
+        MPI_Finalize();
+        return status;
+#else
         return command_run(argc, argv);
+#endif
+    }
     if (strcmp(command, "check") == 0)
         return command_check(argc, argv);
     if (strcmp(command, "inspect") == 0)

@@ -19,6 +19,55 @@ void sluice_ranks_free(sluice_halo_lists *lists)
     memset(lists, 0, sizeof *lists);
 }
 
+int sluice_ranks_gather(sluice_sim *sim, sluice_particles *all)
+{
+    const sluice_comm *c = &sim->comm;
+    const sluice_particles *p = &sim->particles;
+    memset(all, 0, sizeof *all);
+    int *counts = c->rank == 0 ? calloc((size_t)c->size, sizeof *counts) : NULL;
+    int *bytes = c->rank == 0 ? calloc((size_t)c->size, sizeof *bytes) : NULL;
+    int *offsets = c->rank == 0 ? calloc((size_t)c->size, sizeof *offsets) : NULL;
+    int failed = c->rank == 0 && (!counts || !bytes || !offsets);
+    const int own = (int)p->count;
+    if (MPI_Gather(&own, 1, MPI_INT, counts, 1, MPI_INT, 0, c->comm) != MPI_SUCCESS)
+        failed = 1;
+    uint64_t total = 0;
+    if (c->rank == 0 && !failed) {
+        for (int r = 0; r < c->size; r++)
+            total += (uint64_t)counts[r];
+        if (total > (uint64_t)INT_MAX / 8 ||
+            sluice_particles_init(all, p->column_count, p->element_size) != 0 ||
+            sluice_particles_append(all, (sluice_index)total, NULL) != 0)
+            failed = 1;
+    }
+    if (sluice_comm_any(c, failed)) {
+        free(counts), free(bytes), free(offsets);
+        sluice_particles_free(all);
+        memset(all, 0, sizeof *all);
+        return -1;
+    }
+    for (uint32_t col = 0; col < p->column_count && !failed; col++) {
+        const int size = p->element_size[col];
+        if (c->rank == 0)
+            for (int r = 0, at = 0; r < c->size; r++) {
+                bytes[r] = counts[r] * size;
+                offsets[r] = at;
+                at += bytes[r];
+            }
+        if (MPI_Gatherv(p->columns[col], own * size, MPI_BYTE,
+                        c->rank == 0 ? all->columns[col] : NULL, bytes, offsets, MPI_BYTE, 0,
+                        c->comm) != MPI_SUCCESS)
+            failed = 1;
+    }
+    free(counts), free(bytes), free(offsets);
+    if (failed) {
+        sluice_particles_free(all);
+        memset(all, 0, sizeof *all);
+        return -1;
+    }
+    return 0;
+}
+
 static int compare_real(const void *a, const void *b)
 {
     sluice_real x = *(const sluice_real *)a, y = *(const sluice_real *)b;

@@ -43,6 +43,10 @@ int sluice_ranks_collect_halo(void *sim, sluice_particles *particles, sluice_ind
 /* Refreshes every field of the halo from its owners. Collective. */
 int sluice_ranks_refresh_halo(sluice_sim *sim);
 void sluice_ranks_free(sluice_halo_lists *lists);
+/* Every rank's own particles, in rank order, into `all` on rank 0 (a store
+ * of the same columns, initialised here; left empty on the other ranks).
+ * Collective. 0, or -1 (out of memory or MPI; on any rank, every rank). */
+int sluice_ranks_gather(sluice_sim *sim, sluice_particles *all);
 #else
 static inline void sluice_ranks_free(sluice_halo_lists *lists) { (void)lists; }
 #endif

@@ -453,31 +453,38 @@ static void schedule_next_checkpoint(sluice_sim *sim)
     sluice_sim_request_time(sim, (double)sim->checkpoint_next * interval);
 }
 
+static int end_every_rank_on_failure(sluice_sim *sim, int status);
+
 int sluice_sim_begin(sluice_sim *sim, const char *output_directory)
 {
-    if (output_directory && sim->comm.size > 1) {
-        /* every rank would write the same files (docs/scaling.md) */
-        sluice_sim_fail(sim, "an output directory is not supported in a run across %d ranks yet "
-                             "(docs/scaling.md)",
-                        sim->comm.size);
-        return SLUICE_RUN_INPUT_ERROR;
-    }
     if (output_directory) {
-        char error[1024];
-        if (make_directory(output_directory, error, sizeof error) != 0) {
-            sluice_sim_fail(sim, "%s", error);
+        /* across ranks rank 0 makes the directory and writes the scene; the
+         * others wait for it (the reduction) before anything is written */
+        char error[1024] = "";
+        int failed = 0;
+        if (sim->comm.rank == 0) {
+            if (make_directory(output_directory, error, sizeof error) != 0) {
+                failed = 1;
+            } else {
+                char path[4096];
+                snprintf(path, sizeof path, "%s/scene.resolved.yaml", output_directory);
+                if (sluice_write_file_atomic(path, sim->resolved_scene,
+                                             strlen(sim->resolved_scene), error,
+                                             sizeof error) != 0)
+                    failed = 1;
+            }
+        }
+        if (sluice_comm_any(&sim->comm, failed)) {
+            if (failed)
+                sluice_sim_fail(sim, "%s", error);
+            else
+                sluice_sim_fail(sim, "rank 0 could not prepare the output directory '%s'",
+                                output_directory);
             return SLUICE_RUN_FAILED;
         }
         sim->output_directory = strdup(output_directory);
         if (!sim->output_directory)
             return SLUICE_RUN_FAILED;
-        char path[4096];
-        snprintf(path, sizeof path, "%s/scene.resolved.yaml", output_directory);
-        if (sluice_write_file_atomic(path, sim->resolved_scene, strlen(sim->resolved_scene), error,
-                                     sizeof error) != 0) {
-            sluice_sim_fail(sim, "%s", error);
-            return SLUICE_RUN_FAILED;
-        }
     }
     sim->wall_start = sluice_wall_clock();
     /* the watchdog's wall check: cells about a kernel support wide */
@@ -503,9 +510,10 @@ int sluice_sim_begin(sluice_sim *sim, const char *output_directory)
         sim->checkpoint_next = 1;
         schedule_next_checkpoint(sim);
     }
-    /* after a restart the hooks ran already on this state, before the checkpoint */
+    /* after a restart the hooks ran already on this state, before the
+     * checkpoint; a hook failing on one rank ends every rank */
     if (!sim->restarted && call_hooks(sim, 1) != 0)
-        return SLUICE_RUN_FAILED;
+        return end_every_rank_on_failure(sim, SLUICE_RUN_FAILED);
     return SLUICE_RUN_COMPLETE;
 }
 
@@ -526,21 +534,27 @@ static int periodic_checkpoint(sluice_sim *sim)
 
 static int step(sluice_sim *sim);
 
-int sluice_sim_step(sluice_sim *sim)
+/* A rank that fails leaves the others waiting in a halo exchange or a
+ * reduction: in a run across ranks a failure ends every rank, with the
+ * failing rank's diagnostic (docs/scaling.md). */
+static int end_every_rank_on_failure(sluice_sim *sim, int status)
 {
-    int status = step(sim);
 #ifdef SLUICE_MPI
-    /* A rank that fails leaves the others waiting in a halo exchange or a
-     * reduction: in a run across ranks a failure ends every rank, with the
-     * failing rank's diagnostic (docs/scaling.md). */
     if (status != SLUICE_RUN_COMPLETE && sim->comm.size > 1) {
         fprintf(stderr, "sluice: rank %d of %d: error: %s\n", sim->comm.rank, sim->comm.size,
                 sim->failure[0] ? sim->failure : "the step failed");
         fflush(stderr);
         MPI_Abort(sim->comm.comm, status);
     }
+#else
+    (void)sim;
 #endif
     return status;
+}
+
+int sluice_sim_step(sluice_sim *sim)
+{
+    return end_every_rank_on_failure(sim, step(sim));
 }
 
 static int step(sluice_sim *sim)
@@ -594,49 +608,62 @@ static void json_string(FILE *f, const char *s)
 
 static int write_run_json(sluice_sim *sim, int status)
 {
+    /* across ranks: the counts of every rank, written by rank 0 (the
+     * reduction is collective, so every rank comes here) */
+    const size_t state_bytes = sluice_particles_bytes(&sim->particles) +
+                               sluice_grid_bytes(&sim->grid) +
+                               sluice_pair_engine_bytes(&sim->engine);
+    struct rusage usage;
+    double peak = getrusage(RUSAGE_SELF, &usage) == 0 ? (double)usage.ru_maxrss * 1024 : -1;
+    double sums[5] = {(double)sim->particles.count, (double)sim->removed,
+                      (double)sim->particle_steps,
+                      (double)sluice_pair_engine_pairs(&sim->engine), (double)state_bytes};
+    double maxima[3] = {peak, sim->max_density_deviation, (double)sim->next_id};
+    if (sluice_comm_reduce(&sim->comm, sums, 5, 1) != 0 ||
+        sluice_comm_reduce(&sim->comm, maxima, 3, 3) != 0)
+        return -1;
+    if (sim->comm.rank != 0)
+        return 0;
+    const double particles_final = sums[0], removed = sums[1], particle_steps = sums[2],
+                 pairs = sums[3], bytes = sums[4], max_deviation = maxima[1],
+                 next_id = maxima[2];
+    peak = maxima[0];
     char *text = NULL;
     size_t size = 0;
     FILE *f = open_memstream(&text, &size);
     if (!f)
         return -1;
     const char *names[] = {"complete", "?", "input_error", "unstable", "failed", "interrupted"};
-    double rate = sim->wall_seconds > 0 ? (double)sim->particle_steps / sim->wall_seconds : 0;
+    double rate = sim->wall_seconds > 0 ? particle_steps / sim->wall_seconds : 0;
     fprintf(f, "{\n  \"status\": \"%s\",\n", status >= 0 && status <= 5 ? names[status] : "failed");
     fprintf(f, "  \"scene\": ");
     json_string(f, sim->scene.path);
     fprintf(f, ",\n  \"sluice_version\": \"%s\",\n", SLUICE_VERSION);
     fprintf(f, "  \"dimensions\": %u,\n", sim->scene.dimensions);
+    fprintf(f, "  \"ranks\": %d,\n", sim->comm.size);
     fprintf(f, "  \"particles_initial\": %u,\n", sim->particles_initial);
-    fprintf(f, "  \"particles_final\": %u,\n", sim->particles.count);
-    fprintf(f, "  \"particles_added\": %llu,\n",
-            (unsigned long long)(sim->next_id - sim->particles_initial));
-    fprintf(f, "  \"particles_removed\": %llu,\n", (unsigned long long)sim->removed);
+    fprintf(f, "  \"particles_final\": %.0f,\n", particles_final);
+    fprintf(f, "  \"particles_added\": %.0f,\n", next_id - (double)sim->particles_initial);
+    fprintf(f, "  \"particles_removed\": %.0f,\n", removed);
     fprintf(f, "  \"steps\": %lld,\n", (long long)sim->step);
     fprintf(f, "  \"simulated_time\": %.12g,\n", sim->time);
     fprintf(f, "  \"end_time\": %.12g,\n", sim->end);
     fprintf(f, "  \"wall_seconds\": %.6f,\n", sim->wall_seconds);
-    fprintf(f, "  \"particle_steps\": %llu,\n", (unsigned long long)sim->particle_steps);
+    fprintf(f, "  \"particle_steps\": %.0f,\n", particle_steps);
     fprintf(f, "  \"particle_steps_per_second\": %.6g,\n", rate);
-    fprintf(f, "  \"pair_interactions\": %llu,\n",
-            (unsigned long long)sluice_pair_engine_pairs(&sim->engine));
+    fprintf(f, "  \"pair_interactions\": %.0f,\n", pairs);
     fprintf(f, "  \"pair_interactions_per_second\": %.6g,\n",
-            sim->wall_seconds > 0
-                ? (double)sluice_pair_engine_pairs(&sim->engine) / sim->wall_seconds
-                : 0.0);
+            sim->wall_seconds > 0 ? pairs / sim->wall_seconds : 0.0);
     fprintf(f, "  \"neighbour_list_rebuilds\": %llu,\n", (unsigned long long)sim->grid.rebuilds);
     /* memory: the particle store, the grid and the Verlet list, and the
-     * pair engine's buffers, per particle at the end; the process's peak
-     * resident set (program and libraries included, about 10 MB) */
-    const size_t state_bytes = sluice_particles_bytes(&sim->particles) +
-                               sluice_grid_bytes(&sim->grid) +
-                               sluice_pair_engine_bytes(&sim->engine);
+     * pair engine's buffers, per particle at the end (over every rank); the
+     * process's peak resident set (program and libraries included, about
+     * 10 MB; across ranks the largest rank's) */
     fprintf(f, "  \"state_bytes_per_particle\": %.1f,\n",
-            sim->particles.count ? (double)state_bytes / (double)sim->particles.count : 0.0);
-    struct rusage usage;
-    long long peak = getrusage(RUSAGE_SELF, &usage) == 0 ? (long long)usage.ru_maxrss * 1024 : -1;
-    fprintf(f, "  \"peak_memory_bytes\": %lld,\n", peak);
+            particles_final > 0 ? bytes / particles_final : 0.0);
+    fprintf(f, "  \"peak_memory_bytes\": %.0f,\n", peak);
     fprintf(f, "  \"threads\": %d,\n", sim->threads);
-    fprintf(f, "  \"max_density_deviation\": %.6g,\n", sim->max_density_deviation);
+    fprintf(f, "  \"max_density_deviation\": %.6g,\n", max_deviation);
     fprintf(f, "  \"smoothing_length\": %.9g,\n", (double)sim->smoothing_length);
     fprintf(f, "  \"spacing\": %.9g,\n", (double)sim->spacing);
     fprintf(f, "  \"failure\": ");
@@ -726,7 +753,8 @@ int sluice_sim_run(sluice_sim *sim, const sluice_run_options *options)
     }
     const double end = sim->end;
     while (sim->time < end - 1e-12 * (end > 1 ? end : 1)) {
-        if (stop_signal) {
+        /* across ranks every rank stops after the same step */
+        if (sim->comm.size > 1 ? sluice_comm_any(&sim->comm, stop_signal != 0) : stop_signal != 0) {
             /* SIGINT/SIGTERM: the last step is whole; keep it */
             status = SLUICE_RUN_INTERRUPTED;
             if (sim->output_directory && sim->checkpoint_step != sim->step &&

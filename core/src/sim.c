@@ -435,6 +435,25 @@ static int one_rank_only(sluice_host *host, const char *what)
     return SLUICE_ERROR;
 }
 
+/* Output and point passes across ranks: only for a component written for
+ * them (SLUICE_COMPONENT_ACROSS_RANKS, 1.8), which combines its ranks'
+ * figures with api->reduce; any other is refused, never left to write one
+ * rank's part as if it were the whole. */
+static int across_ranks_only(sluice_host *host, const char *what)
+{
+    const sluice_sim *sim = host->sim;
+    if (sim->comm.size == 1)
+        return SLUICE_OK;
+    const sluice_instance *in = &sim->instances[host->instance];
+    if (in->library->abi_minor >= 8 && (in->component->flags & SLUICE_COMPONENT_ACROSS_RANKS))
+        return SLUICE_OK;
+    api_error(host, "%s in a run across %d ranks needs a component written for it (flag "
+                    "SLUICE_COMPONENT_ACROSS_RANKS: it combines its ranks' figures with "
+                    "api->reduce; docs/plugin-abi.md)",
+              what, sim->comm.size);
+    return SLUICE_ERROR;
+}
+
 static int api_add_particles(sluice_host *host, uint8_t kind, const sluice_real *positions,
                              sluice_index count, sluice_index *first)
 {
@@ -824,7 +843,7 @@ void sluice_sim_request_time(sluice_sim *sim, double t)
 static int api_output_path(sluice_host *host, const char *name, char *buffer, size_t size)
 {
     sluice_sim *sim = host->sim;
-    if (one_rank_only(host, "writing output files (api->output_path)") != SLUICE_OK)
+    if (across_ranks_only(host, "writing output files (api->output_path)") != SLUICE_OK)
         return SLUICE_ERROR;
     if (!sim->output_directory) {
         if (size)
@@ -896,7 +915,7 @@ int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t len
 static sluice_table *api_table_open(sluice_host *host, const char *file_name, const char *header)
 {
     sluice_sim *sim = host->sim;
-    if (one_rank_only(host, "writing tables (api->table_open)") != SLUICE_OK)
+    if (across_ranks_only(host, "writing tables (api->table_open)") != SLUICE_OK)
         return NULL;
     if (!file_name || !*file_name || strchr(file_name, '/')) {
         api_error(host, "table file name '%s' must be a plain file name in the run directory",
@@ -937,6 +956,8 @@ static int api_table_row(sluice_table *table, const double *values, uint32_t cou
         return SLUICE_ERROR;
     if (!table->sim->output_directory)
         return SLUICE_OK; /* sluice check: nothing is written */
+    if (table->sim->comm.rank != 0)
+        return SLUICE_OK; /* across ranks, rank 0 writes the (reduced) rows */
     /* at most 24 characters a value ("%.10g" and a comma) */
     char stack[4096];
     size_t size = 24 * (size_t)count + 2;
@@ -964,8 +985,10 @@ static int api_table_row(sluice_table *table, const double *values, uint32_t cou
 
 static int api_write_file_atomic(sluice_host *host, const char *path, const void *data, size_t size)
 {
-    if (one_rank_only(host, "writing files (api->write_file_atomic)") != SLUICE_OK)
+    if (across_ranks_only(host, "writing files (api->write_file_atomic)") != SLUICE_OK)
         return SLUICE_ERROR;
+    if (host->sim->comm.rank != 0)
+        return SLUICE_OK; /* across ranks, rank 0 writes the file */
     char error[512];
     if (sluice_write_file_atomic(path, data, size, error, sizeof error) != 0) {
         api_error(host, "%s", error);
@@ -1087,7 +1110,7 @@ static int api_point_pass(sluice_host *host, const sluice_real *points, sluice_i
                           uint32_t kinds, sluice_point_fn fn, void *context)
 {
     sluice_sim *sim = host->sim;
-    if (one_rank_only(host, "a point pass (api->point_pass)") != SLUICE_OK)
+    if (across_ranks_only(host, "a point pass (api->point_pass)") != SLUICE_OK)
         return SLUICE_ERROR;
     if (!fn || (count > 0 && !points)) {
         api_error(host, "api->point_pass called without points or without a callback");
@@ -1157,6 +1180,47 @@ static int api_restrict_reach(sluice_host *host, const char *field, uint32_t val
     return SLUICE_OK;
 }
 
+/* ---------------------------------------------------------- across ranks -- */
+
+static int api_reduce(sluice_host *host, double *values, uint32_t count, sluice_reduce_op op)
+{
+    sluice_sim *sim = host->sim;
+    if (count > 0 && !values) {
+        api_error(host, "reduce: no values");
+        return SLUICE_ERROR;
+    }
+    if (op != SLUICE_REDUCE_SUM && op != SLUICE_REDUCE_MIN && op != SLUICE_REDUCE_MAX) {
+        api_error(host, "reduce: unknown operation %d", (int)op);
+        return SLUICE_ERROR;
+    }
+    if (sim->comm.size == 1 || count == 0)
+        return SLUICE_OK;
+    if (sluice_comm_reduce(&sim->comm, values, count, (int)op) != 0) {
+        api_error(host, "reduce: MPI failed");
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
+static int api_ranks(sluice_host *host, sluice_ranks *out)
+{
+    sluice_sim *sim = host->sim;
+    memset(out, 0, sizeof *out);
+    out->rank = sim->comm.rank;
+    out->count = sim->comm.size;
+    out->particle_total = sim->particles.count;
+    if (sim->comm.size > 1 &&
+        sluice_comm_offset(&sim->comm, sim->particles.count, &out->particle_offset,
+                           &out->particle_total) != 0) {
+        api_error(host, "ranks: MPI failed");
+        return SLUICE_ERROR;
+    }
+#ifdef SLUICE_MPI
+    out->communicator = sim->comm.size > 1 ? (const void *)&sim->comm.comm : NULL;
+#endif
+    return SLUICE_OK;
+}
+
 static const sluice_api api_table = {
     sizeof(sluice_api),
     SLUICE_ABI_MAJOR,
@@ -1202,6 +1266,8 @@ static const sluice_api api_table = {
     sluice_api_state_length,
     api_request_reach,
     api_restrict_reach,
+    api_reduce,
+    api_ranks,
 };
 
 /* ------------------------------------------------------------ schedule -- */
@@ -2428,12 +2494,15 @@ static int load(sluice_sim *sim, const char *scene_path, const char *variant,
             return 1;
         }
     }
+    /* every rank built every particle: the scene's count, before the split */
+    sim->particles_initial = sim->particles.count;
     if (sim->comm.size > 1 && !sim->check_only && sluice_ranks_split(sim) != 0) {
         sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, scene->path, 0, 0, "%s", sim->failure);
         return 1;
     }
-#endif
+#else
     sim->particles_initial = sim->particles.count;
+#endif
 
     sim->resolved_scene = sluice_yaml_emit(scene->root);
     if (!sim->resolved_scene)
@@ -2567,6 +2636,11 @@ int sluice_sim_rank(const sluice_sim *sim)
 int sluice_sim_rank_count(const sluice_sim *sim)
 {
     return sim->comm.size;
+}
+
+uint64_t sluice_sim_particle_total(const sluice_sim *sim)
+{
+    return sluice_comm_sum_u64(&sim->comm, sim->particles.count);
 }
 
 const sluice_view *sluice_sim_view(sluice_sim *sim)

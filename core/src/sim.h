@@ -103,6 +103,8 @@ int sluice_sim_threads(const sluice_sim *sim);
 /* Rank and rank count of a distributed run (0 and 1 otherwise). */
 int sluice_sim_rank(const sluice_sim *sim);
 int sluice_sim_rank_count(const sluice_sim *sim);
+/* The particles of every rank (collective across ranks). */
+uint64_t sluice_sim_particle_total(const sluice_sim *sim);
 /* The messages of the last failure (watchdog, plugin error), or "". */
 const char *sluice_sim_failure(const sluice_sim *sim);
 

@@ -45,7 +45,17 @@
  *
  * At the end of a run, finish() adds a row for the state the run ended or
  * stopped at (watchdog, failure, signal) when it lies after the last row, so
- * the table's last row is the energy at the end or at the stop. Checkpoints store the rows written and E_0, P_0, S. */
+ * the table's last row is the energy at the end or at the stop. Checkpoints store the rows written and E_0, P_0, S.
+ *
+ * Across MPI ranks (ABI 1.8, SLUICE_COMPONENT_ACROSS_RANKS): each rank sums
+ * K, P, U and the fluid mass over its own particles and finds its lowest
+ * -g . x_i (+inf without fluid); the gauge adds the sums and takes the
+ * minimum over the ranks (two api->reduce calls) before it forms E, the
+ * drift and the initial E_0, P_0, S, so these and the checkpointed state are
+ * the same on every rank; rank 0 writes the row. Whether a row is written
+ * (here and in finish()) depends only on the time, so every rank reduces at
+ * the same points. The rows are the one-rank rows up to the order of the
+ * sums. */
 #include <math.h>
 
 #include "plugin_util.h"
@@ -284,6 +294,16 @@ static int energy_row(energy_state *s, sluice_host *host)
     double elastic = 0;
     if (s->elastic && elastic_energy(s, host, v, &elastic) != SLUICE_OK)
         return SLUICE_ERROR;
+    /* over the ranks (collective; the identity on one rank), before anything
+     * is formed from them */
+    double sums[4] = {kinetic, potential, elastic, fluid_mass};
+    if (s->api->reduce(host, sums, 4, SLUICE_REDUCE_SUM) != SLUICE_OK ||
+        s->api->reduce(host, &lowest, 1, SLUICE_REDUCE_MIN) != SLUICE_OK)
+        return SLUICE_ERROR;
+    kinetic = sums[0];
+    potential = sums[1];
+    elastic = sums[2];
+    fluid_mass = sums[3];
     if (!s->have_initial) {
         s->potential0 = potential;
         s->total0 = kinetic + elastic;
@@ -365,6 +385,7 @@ static const sluice_component components[] = {{
     .reference = "elastic energy de = p/rho^2 drho of a barotropic fluid (Monaghan 1992, "
                  "Annu. Rev. Astron. Astrophys. 30, sec. 3)",
     .dimensions = SLUICE_DIMS_ALL,
+    .flags = SLUICE_COMPONENT_ACROSS_RANKS,
     .params = params,
     .param_count = SLUICE_COUNT(params),
     .config_size = sizeof(energy_config),
@@ -380,5 +401,5 @@ static const sluice_component components[] = {{
     .load_state = energy_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("energy_gauge", "1.0.0", "energy budget gauge", SLUICE_DIMS_ALL,
+SLUICE_DEFINE_LIBRARY("energy_gauge", "1.1.0", "energy budget gauge", SLUICE_DIMS_ALL,
                       components)

@@ -28,7 +28,13 @@
  *
  * Cost: one api->point_pass over every sample of every column per output row;
  * the samples are bounded (MAX_SAMPLES; the scene is refused beyond it).
- * Columns: time, eta_x<k> (m) for k = 0, 1, ... in the order of `positions`. */
+ * Columns: time, eta_x<k> (m) for k = 0, 1, ... in the order of `positions`.
+ *
+ * Across MPI ranks (ABI 1.8, SLUICE_COMPONENT_ACROSS_RANKS): each rank's
+ * point pass sums over its own particles only, so the gauge adds the ranks'
+ * kernel sums of every sample (one api->reduce) before it looks for the
+ * threshold crossing; rank 0 writes the row. The rows are the one-rank rows
+ * up to the order of the sums. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -287,6 +293,10 @@ static int fs_after_step(void *state, sluice_host *host)
     if (api->point_pass(host, s->points, total, SLUICE_KIND_MASK(SLUICE_KIND_FLUID), kernel_sums,
                         s) != SLUICE_OK)
         return SLUICE_ERROR;
+    /* across ranks each rank summed its own particles: add the ranks' sums
+     * (collective; the identity on one rank) before the threshold */
+    if (api->reduce(host, s->sum, total, SLUICE_REDUCE_SUM) != SLUICE_OK)
+        return SLUICE_ERROR;
     v = api->view(host);
     s->row[0] = v->time;
     for (sluice_index k = 0; k < s->columns; k++)
@@ -319,6 +329,7 @@ static const sluice_component components[] = {{
     .reference = "seed 002 (Lin et al. 2025) free-surface profiles; DualSPHysics MeasureTool "
                  "(kernel sum 0.5)",
     .dimensions = SLUICE_DIMS_ALL,
+    .flags = SLUICE_COMPONENT_ACROSS_RANKS,
     .params = params,
     .param_count = SLUICE_COUNT(params),
     .config_size = sizeof(fs_config),
@@ -333,5 +344,5 @@ static const sluice_component components[] = {{
     .load_state = fs_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("free_surface_gauge", "1.0.0", "free-surface elevation gauges",
+SLUICE_DEFINE_LIBRARY("free_surface_gauge", "1.1.0", "free-surface elevation gauges",
                       SLUICE_DIMS_ALL, components)

@@ -1,6 +1,11 @@
 /* Surge-front gauge for dam breaks: the largest x of any fluid particle,
  * measured from `origin` (the left wall), written to a CSV time series
- * `time,x_front` at a fixed interval. */
+ * `time,x_front` at a fixed interval (-inf when there is no fluid).
+ *
+ * Across MPI ranks (ABI 1.8, SLUICE_COMPONENT_ACROSS_RANKS): each rank finds
+ * the largest x of its own fluid particles (-inf without any) and the gauge
+ * takes the maximum over the ranks (api->reduce) before rank 0 writes the
+ * row, which is exactly the one-rank row. */
 #include <math.h>
 
 #include "plugin_util.h"
@@ -65,6 +70,9 @@ static int front_after_step(void *state, sluice_host *host)
     for (sluice_index i = 0; i < v->count; i++)
         if (v->kind[i] == SLUICE_KIND_FLUID && (double)v->position[0][i] > front)
             front = (double)v->position[0][i];
+    /* the largest over the ranks (collective; the identity on one rank) */
+    if (s->api->reduce(host, &front, 1, SLUICE_REDUCE_MAX) != SLUICE_OK)
+        return SLUICE_ERROR;
     double row[2] = {v->time, front - (double)s->origin};
     if (s->api->table_row(s->table, row, 2) != SLUICE_OK)
         return SLUICE_ERROR;
@@ -91,6 +99,7 @@ static const sluice_component components[] = {{
     .name = "front_gauge",
     .summary = "dam-break surge front: largest x of the fluid, as time,x_front",
     .dimensions = SLUICE_DIMS_ALL,
+    .flags = SLUICE_COMPONENT_ACROSS_RANKS,
     .params = params,
     .param_count = SLUICE_COUNT(params),
     .config_size = sizeof(front_config),
@@ -102,4 +111,4 @@ static const sluice_component components[] = {{
     .load_state = front_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("front_gauge", "1.0.0", "surge-front gauge", SLUICE_DIMS_ALL, components)
+SLUICE_DEFINE_LIBRARY("front_gauge", "1.1.0", "surge-front gauge", SLUICE_DIMS_ALL, components)

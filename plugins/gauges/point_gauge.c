@@ -21,7 +21,13 @@
  * gauge with `phase: water` gives the water's velocity and the air fraction
  * at the same points), and nan where the sum over all fluid particles is
  * below `min_kernel_sum`. It is 0 where no air particle lies within the
- * kernel support (2h) of the point and 1 where no water particle does. */
+ * kernel support (2h) of the point and 1 where no water particle does.
+ *
+ * Across MPI ranks (ABI 1.8, SLUICE_COMPONENT_ACROSS_RANKS): each rank's
+ * point pass sums over its own particles only, so the gauge adds the ranks'
+ * sums (every numerator and denominator of every point, one api->reduce)
+ * before it divides or compares with min_kernel_sum; rank 0 writes the row.
+ * The rows are the one-rank rows up to the order of the sums. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -238,6 +244,10 @@ static int gauge_bind(void *state, sluice_host *host)
         s->value_count += field.components;
     }
     s->stride = 1 + s->real_values + (s->air_fraction ? 2 : 0);
+    if ((uint64_t)s->count * s->stride > UINT32_MAX) {
+        api->error(host, "%u points x %u sums are too many", (unsigned)s->count, s->stride);
+        return SLUICE_ERROR;
+    }
     s->sums = calloc((size_t)s->count * s->stride, sizeof *s->sums);
     s->row = calloc((size_t)s->count * s->value_count + 1, sizeof *s->row);
     if (!s->sums || !s->row) {
@@ -367,6 +377,10 @@ static int gauge_after_step(void *state, sluice_host *host)
     if (api->point_pass(host, s->points, s->count, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
                         s->air_fraction ? accumulate_air : accumulate, s) != SLUICE_OK)
         return SLUICE_ERROR;
+    /* across ranks each rank summed its own particles: add the ranks' sums
+     * (collective; the identity on one rank) before any division */
+    if (api->reduce(host, s->sums, s->count * stride, SLUICE_REDUCE_SUM) != SLUICE_OK)
+        return SLUICE_ERROR;
     v = api->view(host);
     s->row[0] = v->time;
     size_t column = 1;
@@ -411,6 +425,7 @@ static const sluice_component components[] = {{
     .summary = "fields interpolated at fixed points (Shepard kernel sum), as a CSV time series",
     .reference = "Shepard (1968) normalised SPH interpolation",
     .dimensions = SLUICE_DIMS_ALL,
+    .flags = SLUICE_COMPONENT_ACROSS_RANKS,
     .params = params,
     .param_count = SLUICE_COUNT(params),
     .config_size = sizeof(gauge_config),
@@ -425,4 +440,4 @@ static const sluice_component components[] = {{
     .load_state = gauge_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("point_gauge", "1.2.0", "point gauges", SLUICE_DIMS_ALL, components)
+SLUICE_DEFINE_LIBRARY("point_gauge", "1.3.0", "point gauges", SLUICE_DIMS_ALL, components)

@@ -42,7 +42,13 @@
  * (position, velocity, mass, density): no evaluation is needed. Cost: one
  * api->point_pass over all samples per output row (bounded by MAX_SAMPLES).
  * Columns: time, then for each section k: d_x<k> (m), q_x<k> (m^2 s^-1),
- * U_x<k> (m s^-1), Fr_x<k> (1). */
+ * U_x<k> (m s^-1), Fr_x<k> (1).
+ *
+ * Across MPI ranks (ABI 1.8, SLUICE_COMPONENT_ACROSS_RANKS): each rank's
+ * point pass sums over its own particles only, so the gauge adds the ranks'
+ * S and sum_j V_j u_j W of every sample (one api->reduce) before it divides,
+ * compares with the threshold or integrates; rank 0 writes the row. The rows
+ * are the one-rank rows up to the order of the sums. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -348,6 +354,10 @@ static int sg_after_step(void *state, sluice_host *host)
     if (api->point_pass(host, s->points, total, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
                         section_sums, s) != SLUICE_OK)
         return SLUICE_ERROR;
+    /* across ranks each rank summed its own particles: add the ranks' sums
+     * (collective; the identity on one rank) before any division */
+    if (api->reduce(host, s->sums, 2 * total, SLUICE_REDUCE_SUM) != SLUICE_OK)
+        return SLUICE_ERROR;
     v = api->view(host);
     s->row[0] = v->time;
     for (sluice_index k = 0; k < s->sections; k++)
@@ -380,6 +390,7 @@ static const sluice_component components[] = {{
     .reference = "seed 000 (Jonsson et al. 2016) sequent depth at a section; seed 004 (De Padova "
                  "et al. 2017) Fr = V / sqrt(g y); DualSPHysics MeasureTool kernel sum",
     .dimensions = SLUICE_DIMS_2,
+    .flags = SLUICE_COMPONENT_ACROSS_RANKS,
     .params = params,
     .param_count = SLUICE_COUNT(params),
     .config_size = sizeof(sg_config),
@@ -394,5 +405,5 @@ static const sluice_component components[] = {{
     .load_state = sg_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("section_gauge", "1.0.0", "2D section gauges: depth, discharge, Froude",
+SLUICE_DEFINE_LIBRARY("section_gauge", "1.1.0", "2D section gauges: depth, discharge, Froude",
                       SLUICE_DIMS_2, components)

@@ -14,7 +14,20 @@
  *   near_wall      particles within 2 h of a wall.
  * Written to `file` as time,crossed,crossed_total,gap_min,gap_layer,near_wall.
  * With stop_on_crossing the run stops at the first sample with a particle
- * behind a wall, naming the particle, its position and the wall. */
+ * behind a wall, naming the particle, its position and the wall.
+ *
+ * Across MPI ranks (ABI 1.8, SLUICE_COMPONENT_ACROSS_RANKS): each rank
+ * measures its own fluid particles. The gauge takes the smallest gap over the
+ * ranks before it selects the first layer (which depends on it), then adds
+ * the ranks' counts and layer sums; two api->reduce calls per sample. The
+ * ids newly seen behind a wall are gathered from every rank in the same
+ * reduction (each rank fills its own slots of a zeroed array, id + 1 as an
+ * exact double, and the sum is the concatenation), so every rank keeps the
+ * same set of ids and crossed_total counts a particle once even when it
+ * changes rank; the checkpoint (rank 0's) is that set. rank 0 writes the row;
+ * the rows are the one-rank rows up to the order of the layer sum. With
+ * stop_on_crossing every rank stops at the same sample; each rank holding a
+ * particle behind a wall names its first one. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -39,7 +52,13 @@ typedef struct monitor_state {
     size_t crossed_count, crossed_capacity;
     double *distance;
     uint8_t *behind;
+    sluice_id *fresh; /* this sample's ids behind a wall not yet in crossed_ids */
     sluice_index capacity;
+    /* across ranks (api->ranks, at the first sample): this rank and how many */
+    int ranks_known;
+    uint32_t rank, rank_count;
+    double *gather; /* the reduction's array */
+    size_t gather_capacity;
 } monitor_state;
 
 static const sluice_param_spec params[] = {
@@ -82,6 +101,8 @@ static void monitor_destroy(void *state)
     free(s->crossed_ids);
     free(s->distance);
     free(s->behind);
+    free(s->fresh);
+    free(s->gather);
     free(s);
 }
 
@@ -151,6 +172,9 @@ static int remember(monitor_state *s, sluice_id id)
     return 0;
 }
 
+/* ids are gathered as id + 1 in doubles, exact below 2^53 */
+#define ID_LIMIT 9007199254740991.0
+
 static int monitor_after_step(void *state, sluice_host *host)
 {
     monitor_state *s = state;
@@ -160,6 +184,16 @@ static int monitor_after_step(void *state, sluice_host *host)
     double tolerance = 1e-9 * (double)s->interval;
     if (v->time + tolerance < next)
         return SLUICE_OK;
+    if (!s->ranks_known) {
+        /* collective: every rank samples first at the same step */
+        sluice_ranks ranks;
+        if (api->ranks(host, &ranks) != SLUICE_OK)
+            return SLUICE_ERROR;
+        s->rank = (uint32_t)ranks.rank;
+        s->rank_count = ranks.count > 0 ? (uint32_t)ranks.count : 1;
+        s->ranks_known = 1;
+        v = api->view(host);
+    }
     if (v->count > s->capacity) {
         double *d = realloc(s->distance, (size_t)v->count * sizeof *d);
         if (d)
@@ -167,7 +201,10 @@ static int monitor_after_step(void *state, sluice_host *host)
         uint8_t *b = realloc(s->behind, (size_t)v->count);
         if (b)
             s->behind = b;
-        if (!d || !b) {
+        sluice_id *f = realloc(s->fresh, (size_t)v->count * sizeof *f);
+        if (f)
+            s->fresh = f;
+        if (!d || !b || !f) {
             api->error(host, "out of memory");
             return SLUICE_ERROR;
         }
@@ -176,7 +213,7 @@ static int monitor_after_step(void *state, sluice_host *host)
     distance_job job = {s, host};
     api->parallel_for(host, v->count, distances, &job);
     double gap_min = INFINITY;
-    sluice_index crossed = 0, near = 0, first_bad = v->count;
+    sluice_index crossed = 0, near = 0, first_bad = v->count, fresh = 0;
     for (sluice_index i = 0; i < v->count; i++) {
         if (v->kind[i] != SLUICE_KIND_FLUID)
             continue;
@@ -186,12 +223,20 @@ static int monitor_after_step(void *state, sluice_host *host)
             crossed++;
             if (first_bad == v->count)
                 first_bad = i;
-            if (remember(s, v->id[i]) != 0) {
-                api->error(host, "out of memory");
-                return SLUICE_ERROR;
-            }
+            const sluice_id id = v->id[i];
+            if (!(s->crossed_count &&
+                  bsearch(&id, s->crossed_ids, s->crossed_count, sizeof id, compare_ids)))
+                s->fresh[fresh++] = id;
         }
     }
+    /* over the ranks (collective; the identity on one rank): the smallest
+     * gap, which the first layer below depends on, and the largest number of
+     * new ids of a rank (as its negative), which sizes the gathering */
+    double smallest[2] = {gap_min, -(double)fresh};
+    if (api->reduce(host, smallest, 2, SLUICE_REDUCE_MIN) != SLUICE_OK)
+        return SLUICE_ERROR;
+    gap_min = smallest[0];
+    const size_t slots = (size_t)-smallest[1];
     const double band = 2 * (double)s->h;
     double layer_sum = 0;
     sluice_index layer = 0;
@@ -204,15 +249,63 @@ static int monitor_after_step(void *state, sluice_host *host)
             layer++;
         }
     }
+    /* the sums, and the new ids of every rank: rank r fills slots
+     * [r slots, (r + 1) slots) of a zeroed array with id + 1, so the sum
+     * over the ranks holds every rank's ids exactly */
+    const size_t length = 4 + (size_t)s->rank_count * slots;
+    if (length > UINT32_MAX) {
+        api->error(host, "%zu particles newly behind walls on a rank: too many to gather", slots);
+        return SLUICE_ERROR;
+    }
+    if (length > s->gather_capacity) {
+        double *grown = realloc(s->gather, length * sizeof *grown);
+        if (!grown) {
+            api->error(host, "out of memory");
+            return SLUICE_ERROR;
+        }
+        s->gather = grown;
+        s->gather_capacity = length;
+    }
+    double *gather = s->gather;
+    memset(gather, 0, length * sizeof *gather);
+    gather[0] = layer_sum;
+    gather[1] = (double)layer;
+    gather[2] = (double)near;
+    gather[3] = (double)crossed;
+    for (sluice_index k = 0; k < fresh; k++) {
+        if (!((double)s->fresh[k] < ID_LIMIT)) {
+            api->error(host, "particle id %llu is too large to gather across ranks",
+                       (unsigned long long)s->fresh[k]);
+            return SLUICE_ERROR;
+        }
+        gather[4 + (size_t)s->rank * slots + k] = (double)s->fresh[k] + 1;
+    }
+    if (api->reduce(host, gather, (uint32_t)length, SLUICE_REDUCE_SUM) != SLUICE_OK)
+        return SLUICE_ERROR;
+    for (size_t k = 4; k < length; k++)
+        if (gather[k] > 0 && remember(s, (sluice_id)gather[k] - 1) != 0) {
+            api->error(host, "out of memory");
+            return SLUICE_ERROR;
+        }
+    layer_sum = gather[0];
+    const double layer_count = gather[1], near_count = gather[2], crossed_count = gather[3];
     double row[6] = {v->time,
-                     (double)crossed,
+                     crossed_count,
                      (double)s->crossed_count,
                      isfinite(gap_min) ? gap_min : NAN,
-                     layer ? layer_sum / (double)layer : NAN,
-                     (double)near};
+                     layer_count > 0 ? layer_sum / layer_count : NAN,
+                     near_count};
     if (api->table_row(s->table, row, 6) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (s->stop && crossed > 0) {
+    if (s->stop && crossed_count > 0) {
+        /* every rank stops; those holding a particle behind a wall name one */
+        if (crossed == 0) {
+            api->error(host,
+                       "step %lld, t = %.9g s: %.0f fluid particles are behind walls, on other "
+                       "ranks (whose messages name one)",
+                       (long long)v->step, v->time, crossed_count);
+            return SLUICE_ERROR;
+        }
         const sluice_index i = first_bad;
         sluice_real p[3] = {v->position[0][i], v->position[1][i],
                             v->dimensions == 3 ? v->position[2][i] : 0};
@@ -221,11 +314,11 @@ static int monitor_after_step(void *state, sluice_host *host)
         const sluice_wall *wall = api->wall(host, w.wall);
         api->error(host,
                    "step %lld, t = %.9g s: fluid particle id %llu at (%g, %g, %g) m is %.3g m "
-                   "behind wall %u%s%s%s (scheme %s); %u fluid particles are behind walls",
+                   "behind wall %u%s%s%s (scheme %s); %.0f fluid particles are behind walls",
                    (long long)v->step, v->time, (unsigned long long)v->id[i], (double)p[0],
                    (double)p[1], (double)p[2], -(double)w.distance, w.wall,
                    wall && wall->name[0] ? " '" : "", wall ? wall->name : "",
-                   wall && wall->name[0] ? "'" : "", wall ? wall->scheme : "?", crossed);
+                   wall && wall->name[0] ? "'" : "", wall ? wall->scheme : "?", crossed_count);
         return SLUICE_ERROR;
     }
     while ((double)s->written * (double)s->interval <= v->time + tolerance)
@@ -269,6 +362,7 @@ static const sluice_component components[] = {{
     .name = "wall_monitor",
     .summary = "fluid against the walls: particles behind walls, smallest gap, first-layer gap",
     .dimensions = SLUICE_DIMS_ALL,
+    .flags = SLUICE_COMPONENT_ACROSS_RANKS,
     .params = params,
     .param_count = SLUICE_COUNT(params),
     .config_size = sizeof(monitor_config),
@@ -280,4 +374,4 @@ static const sluice_component components[] = {{
     .load_state = monitor_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("wall_monitor", "1.0.0", "wall monitor", SLUICE_DIMS_ALL, components)
+SLUICE_DEFINE_LIBRARY("wall_monitor", "1.1.0", "wall monitor", SLUICE_DIMS_ALL, components)

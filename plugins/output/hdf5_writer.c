@@ -31,10 +31,16 @@
  * Ids are declared Int (ParaView reads UInt of precision 8 as 32-bit). File
  * names in it are relative, so the run directory can be moved.
  *
+ * Across MPI ranks (1.1.0, parallel HDF5): the same files. Every rank
+ * writes its particles at its offset (the ranks' particles in rank order)
+ * into one snapshot, opened collectively as <name>.partial and renamed by
+ * rank 0 once complete; rank 0 writes the XDMF index and the vertex file.
+ *
  * Fields written: `fields: ""` (the default) writes every field flagged
  * SLUICE_FIELD_OUTPUT; otherwise `fields` is a comma-separated list of field
  * names, and position, kind and id are always written in addition. */
 #define _POSIX_C_SOURCE 200809L
+#include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -650,13 +656,23 @@ static void interleave(unsigned char *out, void *const *columns, int32_t column,
     }
 }
 
+/* The rows this process writes: its n particles at `offset` of `total`
+ * (across ranks; on one rank offset 0 and total n), with the transfer
+ * property list for them (collective across ranks). */
+typedef struct h5w_part {
+    uint64_t offset, total;
+    hid_t transfer;
+} h5w_part;
+
 static int write_field(h5w_state *s, hid_t file, const h5w_field *field, const sluice_view *v,
-                       h5w_failure *f)
+                       const h5w_part *part, h5w_failure *f)
 {
     const size_t n = v->count;
     const uint32_t components = field->components;
     const int rank = components == 1 ? 1 : 2;
-    hsize_t dims[2] = {(hsize_t)n, (hsize_t)components};
+    hsize_t dims[2] = {(hsize_t)part->total, (hsize_t)components};
+    const int shared = part->total != (uint64_t)n || part->offset != 0;
+    hid_t memory = H5W_NONE;
     const size_t size = element_size(field->type);
     hid_t space = H5W_NONE, dcpl = H5W_NONE, dset = H5W_NONE;
     const void *data = NULL;
@@ -690,12 +706,13 @@ static int write_field(h5w_state *s, hid_t file, const h5w_field *field, const s
         fail(f, "H5Pcreate for field '%s' failed", field->name);
         goto done;
     }
-    if (s->compression > 0 && n > 0) {
+    if (s->compression > 0 && part->total > 0) {
         size_t row_bytes = (size_t)components * 8;
         size_t rows = H5W_CHUNK_BYTES / row_bytes;
         if (rows < 1)
             rows = 1;
-        hsize_t chunk[2] = {(hsize_t)(rows < n ? rows : n), (hsize_t)components};
+        hsize_t chunk[2] = {(hsize_t)(rows < part->total ? rows : part->total),
+                            (hsize_t)components};
         if (H5Pset_chunk(dcpl, rank, chunk) < 0 || H5Pset_shuffle(dcpl) < 0 ||
             H5Pset_deflate(dcpl, (unsigned)s->compression) < 0) {
             fail(f, "setting up compression of field '%s' failed", field->name);
@@ -707,8 +724,28 @@ static int write_field(h5w_state *s, hid_t file, const h5w_field *field, const s
         fail(f, "creating dataset '%s' failed", field->name);
         goto done;
     }
-    if (n > 0 &&
-        H5Dwrite(dset, memory_type(field->type), H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
+    if (shared) {
+        /* this rank's rows [offset, offset + n); a rank without particles
+         * still takes part in the collective write, with an empty selection */
+        hsize_t start[2] = {(hsize_t)part->offset, 0}, rows[2] = {(hsize_t)n, (hsize_t)components};
+        memory = H5Screate_simple(rank, rows, NULL);
+        herr_t selected = memory < 0 ? -1
+                          : n > 0    ? H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL,
+                                                           rows, NULL)
+                                     : H5Sselect_none(space);
+        if (selected >= 0 && n == 0)
+            selected = H5Sselect_none(memory);
+        if (selected < 0) {
+            fail(f, "selecting the rows of field '%s' failed", field->name);
+            goto done;
+        }
+        if (H5Dwrite(dset, memory_type(field->type), memory, space, part->transfer,
+                     n > 0 ? data : s) < 0) {
+            fail(f, "writing dataset '%s' failed", field->name);
+            goto done;
+        }
+    } else if (n > 0 &&
+               H5Dwrite(dset, memory_type(field->type), H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
         fail(f, "writing dataset '%s' failed", field->name);
         goto done;
     }
@@ -718,7 +755,35 @@ done:
     close_id(&dset, H5Dclose, f, "H5Dclose");
     close_id(&dcpl, H5Pclose, f, "H5Pclose");
     close_id(&space, H5Sclose, f, "H5Sclose");
+    if (memory >= 0)
+        close_id(&memory, H5Sclose, f, "H5Sclose");
     return f->text[0] ? -1 : 0;
+}
+
+/* The root attributes of a snapshot (the same on every rank). */
+static void write_attributes(h5w_state *s, hid_t file, const sluice_view *v, uint64_t count,
+                             const char *scene, const char *status, h5w_failure *f)
+{
+    double time = v->time, h = (double)v->smoothing_length, dx = (double)v->spacing;
+    int64_t step = v->step;
+    int dimensions = (int)v->dimensions;
+    int rc = attr_scalar(file, "time", H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE, &time, f);
+    if (rc == 0)
+        rc = attr_scalar(file, "step", H5T_NATIVE_INT64, H5T_NATIVE_INT64, &step, f);
+    if (rc == 0)
+        rc = attr_scalar(file, "dimensions", H5T_NATIVE_INT, H5T_NATIVE_INT, &dimensions, f);
+    if (rc == 0)
+        rc = attr_scalar(file, "particle_count", H5T_NATIVE_UINT64, H5T_NATIVE_UINT64, &count, f);
+    if (rc == 0)
+        rc = attr_scalar(file, "smoothing_length", H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE, &h, f);
+    if (rc == 0)
+        rc = attr_scalar(file, "spacing", H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE, &dx, f);
+    if (rc == 0)
+        rc = attr_string(file, "scene", scene, f);
+    if (rc == 0)
+        rc = attr_string(file, "plugins", s->plugins, f);
+    if (rc == 0)
+        attr_string(file, "status", status, f);
 }
 
 /* Builds the complete snapshot file in memory (HDF5's core driver, no
@@ -756,33 +821,11 @@ static int build_image(h5w_state *s, sluice_host *host, const sluice_view *v, co
         fail(f, "H5Fcreate failed");
         return -1;
     }
+    const h5w_part whole = {0, v->count, H5P_DEFAULT};
     for (uint32_t i = 0; i < s->field_count && !f->text[0]; i++)
-        write_field(s, file, &s->fields[i], v, f);
-    if (!f->text[0]) {
-        double time = v->time, h = (double)v->smoothing_length, dx = (double)v->spacing;
-        int64_t step = v->step;
-        int dimensions = (int)v->dimensions;
-        uint64_t count = v->count;
-        int rc = attr_scalar(file, "time", H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE, &time, f);
-        if (rc == 0)
-            rc = attr_scalar(file, "step", H5T_NATIVE_INT64, H5T_NATIVE_INT64, &step, f);
-        if (rc == 0)
-            rc = attr_scalar(file, "dimensions", H5T_NATIVE_INT, H5T_NATIVE_INT, &dimensions, f);
-        if (rc == 0)
-            rc = attr_scalar(file, "particle_count", H5T_NATIVE_UINT64, H5T_NATIVE_UINT64,
-                             &count, f);
-        if (rc == 0)
-            rc = attr_scalar(file, "smoothing_length", H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE, &h,
-                             f);
-        if (rc == 0)
-            rc = attr_scalar(file, "spacing", H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE, &dx, f);
-        if (rc == 0)
-            rc = attr_string(file, "scene", scene, f);
-        if (rc == 0)
-            rc = attr_string(file, "plugins", s->plugins, f);
-        if (rc == 0)
-            attr_string(file, "status", status, f);
-    }
+        write_field(s, file, &s->fields[i], v, &whole, f);
+    if (!f->text[0])
+        write_attributes(s, file, v, v->count, scene, status, f);
     if (!f->text[0] && H5Fflush(file, H5F_SCOPE_LOCAL) < 0)
         fail(f, "H5Fflush failed");
     if (!f->text[0]) {
@@ -810,6 +853,62 @@ static int build_image(h5w_state *s, sluice_host *host, const sluice_view *v, co
         return -1;
     }
     return 0;
+}
+
+/* Across ranks (parallel HDF5): every rank writes its particles at its
+ * offset into one file of the one-process layout, opened collectively
+ * under a temporary name in the output directory; rank 0 renames it once
+ * every rank has closed it, so a reader never sees a half-written
+ * snapshot here either. Every call below is collective. */
+static int write_shared(h5w_state *s, sluice_host *host, const sluice_view *v,
+                        const sluice_ranks *ranks, const char *path, const char *status,
+                        h5w_failure *f)
+{
+#ifdef H5_HAVE_PARALLEL
+    const sluice_api *api = s->api;
+    const char *scene = api->resolved_scene(host);
+    char partial[H5W_PATH_MAX + 16];
+    if (snprintf(partial, sizeof partial, "%s.partial", path) >= (int)sizeof partial) {
+        fail(f, "the path is too long");
+        return -1;
+    }
+    const MPI_Comm comm = *(const MPI_Comm *)ranks->communicator;
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), file = H5W_NONE;
+    h5w_part part = {ranks->particle_offset, ranks->particle_total, H5Pcreate(H5P_DATASET_XFER)};
+    if (fapl < 0 || part.transfer < 0 || H5Pset_fapl_mpio(fapl, comm, MPI_INFO_NULL) < 0 ||
+        H5Pset_dxpl_mpio(part.transfer, H5FD_MPIO_COLLECTIVE) < 0)
+        fail(f, "setting up parallel HDF5 failed");
+    else if ((file = H5Fcreate(partial, H5F_ACC_TRUNC, H5P_DEFAULT, fapl)) < 0)
+        fail(f, "H5Fcreate of '%s' failed", partial);
+    for (uint32_t i = 0; i < s->field_count && !f->text[0]; i++)
+        write_field(s, file, &s->fields[i], v, &part, f);
+    if (!f->text[0])
+        write_attributes(s, file, v, ranks->particle_total, scene ? scene : "", status, f);
+    if (file >= 0 && H5Fclose(file) < 0)
+        fail(f, "H5Fclose failed");
+    if (fapl >= 0)
+        H5Pclose(fapl);
+    if (part.transfer >= 0)
+        H5Pclose(part.transfer);
+    /* the file is whole once every rank has closed it */
+    double failed = f->text[0] ? 1 : 0;
+    if (api->reduce(host, &failed, 1, SLUICE_REDUCE_MAX) != SLUICE_OK)
+        return -1;
+    if (failed > 0 && !f->text[0])
+        fail(f, "another rank failed to write its part");
+    if (ranks->rank == 0) {
+        if (f->text[0])
+            unlink(partial);
+        else if (rename(partial, path) != 0)
+            fail(f, "cannot rename '%s' to '%s': %s", partial, path, strerror(errno));
+    }
+    return f->text[0] ? -1 : 0;
+#else
+    (void)s, (void)host, (void)v, (void)ranks, (void)path, (void)status;
+    fail(f, "this hdf5 writer was built with a serial HDF5; a run across ranks needs a parallel "
+            "HDF5 (Debian: libhdf5-openmpi-dev, meson -Dmpi=enabled)");
+    return -1;
+#endif
 }
 
 /* ---------------------------------------------------------------- XDMF -- */
@@ -911,7 +1010,8 @@ static int write_vertex_index(h5w_state *s, sluice_host *host, uint64_t capacity
 }
 
 /* Records one snapshot and rewrites the XDMF file from all records. */
-static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v, const char *stem)
+static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v, uint64_t count,
+                      const char *stem)
 {
     const sluice_api *api = s->api;
     if (s->prune_records) {
@@ -926,8 +1026,8 @@ static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v, con
         s->record_count = kept;
         s->prune_records = 0;
     }
-    if (v->count > s->vertex_capacity) {
-        uint64_t capacity = s->vertex_capacity * 2 > v->count ? s->vertex_capacity * 2 : v->count;
+    if (count > s->vertex_capacity) {
+        uint64_t capacity = s->vertex_capacity * 2 > count ? s->vertex_capacity * 2 : count;
         if (capacity < 1024)
             capacity = 1024;
         if (write_vertex_index(s, host, capacity) != SLUICE_OK)
@@ -946,7 +1046,7 @@ static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v, con
     h5w_record *rec = &s->records[s->record_count++];
     snprintf(rec->stem, sizeof rec->stem, "%s", stem);
     rec->time = v->time;
-    rec->count = v->count;
+    rec->count = count;
     rec->dimensions = v->dimensions;
 
     const h5w_field *position = NULL;
@@ -1042,9 +1142,16 @@ static int write_snapshot(h5w_state *s, sluice_host *host, const char *status)
     H5Eget_auto2(H5E_DEFAULT, &old_func, &old_data);
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
     h5w_failure failure = {{0}};
+    sluice_ranks ranks = {0, 1, 0, v->count, NULL};
+    if (api->abi_minor >= 8 && api->ranks(host, &ranks) != SLUICE_OK) {
+        s->broken = 1;
+        return SLUICE_ERROR;
+    }
     void *image = NULL;
     size_t image_size = 0;
-    int rc = build_image(s, host, v, name, status, &image, &image_size, &failure);
+    int rc = ranks.count > 1
+                 ? write_shared(s, host, v, &ranks, path, status, &failure)
+                 : build_image(s, host, v, name, status, &image, &image_size, &failure);
     H5Eclear2(H5E_DEFAULT);
     H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
     if (rc != 0) {
@@ -1055,7 +1162,7 @@ static int write_snapshot(h5w_state *s, sluice_host *host, const char *status)
     }
     /* a temporary file in the same directory, renamed once complete; the
      * core reports a failure with the path */
-    rc = api->write_file_atomic(host, path, image, image_size);
+    rc = ranks.count > 1 ? SLUICE_OK : api->write_file_atomic(host, path, image, image_size);
     free(image);
     if (rc != SLUICE_OK) {
         s->broken = 1;
@@ -1065,7 +1172,7 @@ static int write_snapshot(h5w_state *s, sluice_host *host, const char *status)
     s->have_last = 1;
     s->last_step = v->step;
     s->last_time = v->time;
-    if (write_xdmf(s, host, v, stem) != SLUICE_OK) {
+    if (write_xdmf(s, host, v, ranks.particle_total, stem) != SLUICE_OK) {
         s->broken = 1;
         return SLUICE_ERROR;
     }
@@ -1187,6 +1294,7 @@ static const sluice_component components[] = {{
     .summary = "particle snapshots in HDF5 (one file per output time) with an XDMF index",
     .reference = "HDF5 (The HDF Group); XDMF 3 (xdmf.org)",
     .dimensions = SLUICE_DIMS_ALL,
+    .flags = SLUICE_COMPONENT_ACROSS_RANKS,
     .params = params,
     .param_count = SLUICE_COUNT(params),
     .config_size = sizeof(h5w_config),
@@ -1200,5 +1308,5 @@ static const sluice_component components[] = {{
     .load_state = h5w_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("hdf5_writer", "1.0.0", "HDF5 particle snapshots with an XDMF index",
+SLUICE_DEFINE_LIBRARY("hdf5_writer", "1.1.0", "HDF5 particle snapshots with an XDMF index",
                       SLUICE_DIMS_ALL, components)

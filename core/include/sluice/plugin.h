@@ -33,7 +33,7 @@ extern "C" {
 #endif
 
 #define SLUICE_ABI_MAJOR 1
-#define SLUICE_ABI_MINOR 7
+#define SLUICE_ABI_MINOR 8
 #define SLUICE_PLUGIN_MAGIC 0x534c4349u /* "SLCI" */
 
 #if defined(__GNUC__)
@@ -282,6 +282,22 @@ typedef struct sluice_plugin_info {
 typedef void (*sluice_range_fn)(void *context, const sluice_view *view, sluice_index begin,
                                 sluice_index end);
 
+/* 1.8: how values combine across the ranks of a distributed run (api->reduce). */
+typedef enum sluice_reduce_op {
+    SLUICE_REDUCE_SUM = 1,
+    SLUICE_REDUCE_MIN = 2,
+    SLUICE_REDUCE_MAX = 3
+} sluice_reduce_op;
+
+/* 1.8: this rank's place in a distributed run (api->ranks). On one rank:
+ * rank 0 of 1, offset 0, total = view->count, communicator NULL. */
+typedef struct sluice_ranks {
+    int32_t rank, count;      /* this rank, and how many there are */
+    uint64_t particle_offset; /* particles of the ranks before this one */
+    uint64_t particle_total;  /* particles of every rank */
+    const void *communicator; /* the run's MPI_Comm (const MPI_Comm *), NULL without MPI */
+} sluice_ranks;
+
 /* The table of core services. Grows only at its end; `size` tells how much of
  * it this core provides. Every function taking a host must be called from the
  * thread that called the component, except those marked "thread-safe". */
@@ -441,6 +457,19 @@ typedef struct sluice_api {
      * core then leaves every other particle out of the term's pass, as
      * target and as neighbour, and the term is spared their traversal. */
     int (*restrict_reach)(sluice_host *host, const char *field, uint32_t value);
+
+    /* -- 1.8: runs across MPI ranks (docs/scaling.md). Each rank's components
+     * see the rank's own particles (view->count) and, in pair batches, the
+     * neighbours other ranks own. Both calls are collective: every rank calls
+     * them at the same point of the run, in the same order. */
+    /* Combines values[0 .. count) over the ranks, in place, on every rank:
+     * a gauge sums its particles' contributions with it before it writes.
+     * The identity on one rank. */
+    int (*reduce)(sluice_host *host, double *values, uint32_t count, sluice_reduce_op op);
+    /* This rank's place and the offset of its particles in the global order
+     * (ranks in order, each rank's particles in view order): where a writer
+     * puts them in a shared file. */
+    int (*ranks)(sluice_host *host, sluice_ranks *out);
 } sluice_api;
 
 /* ----------------------------------------------------------- components -- */
@@ -448,9 +477,18 @@ typedef struct sluice_api {
 enum sluice_component_flags {
     SLUICE_COMPONENT_NEEDS_KERNEL = 1u << 0, /* pair term reads batch->kernel */
     SLUICE_COMPONENT_WALL_SCHEME = 1u << 1,  /* handles the scene's walls (api->wall) */
-    SLUICE_COMPONENT_ON_DEMAND = 1u << 2     /* 1.1: its pair callback is not part of every
+    SLUICE_COMPONENT_ON_DEMAND = 1u << 2,    /* 1.1: its pair callback is not part of every
                                                 evaluation; it runs when the component calls
                                                 api->pair_pass() */
+    SLUICE_COMPONENT_ACROSS_RANKS = 1u << 3  /* 1.8: written for runs across ranks: it
+                                                combines what it sums or finds over its
+                                                rank's particles with api->reduce before it
+                                                writes or decides, so its output is the
+                                                one-rank output. Only such a component may
+                                                write files, tables or point passes in a run
+                                                across ranks; rank 0 alone writes its tables
+                                                and write_file_atomic files, and a writer of
+                                                shared files uses api->ranks. */
 };
 
 /* SLUICE_FINISH_INTERRUPTED (1.5): the run was stopped by SIGINT/SIGTERM after a
