@@ -497,6 +497,184 @@ START_TEST(output_as_one_rank)
 }
 END_TEST
 
+/* ------------------------------------------ inlets and outlets across ranks -- */
+
+/* A channel 1 m long (tests/test_open_boundaries.c's uniform channel): water
+ * 0.1 m deep at 0.5 m/s between a buffer inlet at x = 0, on the first
+ * rank's slab, and a free outlet at x = 1 m, on the last rank's; 0.5 s, in
+ * which the inlet adds 13 columns of 5 particles and the outlet removes
+ * about as many. */
+static const char *channel =
+    "dimensions: 2\n"
+    "particles: {spacing: 0.02, smoothing_length_ratio: 1.5}\n"
+    "time: {end: 0.5}\n"
+    "domain: {min: [-0.7, -0.1], max: [1.5, 0.6]}\n"
+    "geometry:\n"
+    "  fluid:\n"
+    "    - {shape: box, min: [0, 0], max: [1.0, 0.1], velocity: [0.5, 0]}\n"
+    "  walls:\n"
+    "    - {shape: polyline, points: [[-0.66, 0], [1.4, 0]], name: bed}\n"
+    "plugins:\n"
+    "  wendland_c2: {}\n"
+    "  tait: {speed_of_sound: 20}\n"
+    "  continuity: {}\n"
+    "  delta_sph: {delta: 0.1, form: fourtakas}\n"
+    "  pressure_gradient: {}\n"
+    "  artificial_viscosity: {alpha: 0.02}\n"
+    "  gravity: {}\n"
+    "  penalty_contact: {}\n"
+    "  time_step: {courant: 0.25}\n"
+    "  symplectic: {}\n"
+    "  inlet: {form: buffer, position: 0, depth: 0.1, velocity: 0.5, interval: 0.05}\n"
+    "  outlet: {form: free, position: 1.0, interval: 0.05}\n";
+
+/* Every rank's (id, x, y, u, v, density, kind) on rank 0. */
+static int gather_particles(sluice_sim *sim, MPI_Comm comm, unsigned long long **ids,
+                            double **values)
+{
+    int rank = 0, size = 1;
+    MPI_Comm_rank(comm, &rank);
+    MPI_Comm_size(comm, &size);
+    const sluice_view *v = sluice_sim_view(sim);
+    const int n = (int)v->count;
+    unsigned long long *my_ids = malloc(((size_t)n + 1) * sizeof *my_ids);
+    double *mine = malloc(((size_t)n * 6 + 1) * sizeof *mine);
+    ck_assert(my_ids && mine);
+    for (int i = 0; i < n; i++) {
+        my_ids[i] = v->id[i];
+        double *m = mine + 6 * (size_t)i;
+        m[0] = v->position[0][i], m[1] = v->position[1][i];
+        m[2] = test_column(sim, "velocity", 0)[i], m[3] = test_column(sim, "velocity", 1)[i];
+        m[4] = test_column(sim, "density", 0)[i], m[5] = v->kind[i];
+    }
+    int *counts = calloc((size_t)size, sizeof *counts), *at = calloc((size_t)size, sizeof *at);
+    int *counts6 = calloc((size_t)size, sizeof *counts6), *at6 = calloc((size_t)size, sizeof *at6);
+    ck_assert(counts && at && counts6 && at6);
+    MPI_Gather(&n, 1, MPI_INT, counts, 1, MPI_INT, 0, comm);
+    int total = 0;
+    for (int r = 0; r < size; r++) {
+        at[r] = total, at6[r] = 6 * total, counts6[r] = 6 * counts[r];
+        total += counts[r];
+    }
+    *ids = malloc(((size_t)total + 1) * sizeof **ids);
+    *values = malloc(((size_t)total * 6 + 1) * sizeof **values);
+    ck_assert(*ids && *values);
+    MPI_Gatherv(my_ids, n, MPI_UNSIGNED_LONG_LONG, *ids, counts, at, MPI_UNSIGNED_LONG_LONG, 0,
+                comm);
+    MPI_Gatherv(mine, 6 * n, MPI_DOUBLE, *values, counts6, at6, MPI_DOUBLE, 0, comm);
+    free(my_ids), free(mine), free(counts), free(at), free(counts6), free(at6);
+    return total;
+}
+
+START_TEST(inlet_and_outlet_on_other_ranks)
+{
+    int rank = 0, size = 1;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+    MPI_Comm world = MPI_COMM_WORLD;
+    char *across = shared_scratch("ranks-channel", world);
+    sluice_sim *sim = load_text(channel, &world, NULL);
+    ck_assert_ptr_nonnull(sim);
+    const uint64_t initial = sluice_sim_particle_total(sim);
+    /* the scene's ids end below `initial`: the run's new ones are above */
+    ck_assert_int_eq(sluice_sim_begin(sim, across), SLUICE_RUN_COMPLETE);
+    size_t capacity = 4096, steps = 0;
+    unsigned long long *totals = malloc(capacity * sizeof *totals);
+    ck_assert_ptr_nonnull(totals);
+    while (sluice_sim_time(sim) < 0.5 - 1e-12) {
+        ck_assert_int_eq(sluice_sim_step(sim), SLUICE_RUN_COMPLETE);
+        ck_assert(steps < capacity);
+        totals[steps++] = sluice_sim_particle_total(sim);
+    }
+    unsigned long long *ids = NULL;
+    double *values = NULL;
+    const int total = gather_particles(sim, world, &ids, &values);
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    sluice_sim_free(sim);
+    if (rank == 0) {
+        char *one_dir = test_scratch("ranks-channel-one");
+        sluice_sim *one = load_text(channel, NULL, NULL);
+        ck_assert_ptr_nonnull(one);
+        ck_assert_int_eq(sluice_sim_begin(one, one_dir), SLUICE_RUN_COMPLETE);
+        size_t step = 0;
+        uint64_t added_max = 0;
+        while (sluice_sim_time(one) < 0.5 - 1e-12) {
+            ck_assert_int_eq(sluice_sim_step(one), SLUICE_RUN_COMPLETE);
+            ck_assert(step < steps);
+            /* the global count of every step is the one-rank count */
+            ck_assert_msg(totals[step] == sluice_sim_view(one)->count,
+                          "step %zu: %llu particles across %d ranks, %u on one", step + 1,
+                          totals[step], size, sluice_sim_view(one)->count);
+            step++;
+        }
+        ck_assert_int_eq(step, steps);
+        const sluice_view *w = sluice_sim_view(one);
+        ck_assert_int_eq(total, (int)w->count);
+        /* ids: the scene's below `initial`, the run's rank r of R at
+         * initial + r + R k; here the inlet is on rank 0, so its k-th new
+         * particle is initial + R k across ranks and initial + k on one */
+        sluice_id top = 0;
+        for (sluice_index i = 0; i < w->count; i++)
+            top = w->id[i] > top ? w->id[i] : top;
+        long *where = malloc(((size_t)top + 1) * sizeof *where);
+        ck_assert_ptr_nonnull(where);
+        for (size_t k = 0; k <= (size_t)top; k++)
+            where[k] = -1;
+        for (int k = 0; k < total; k++) {
+            unsigned long long id = ids[k];
+            if (id >= initial) {
+                ck_assert_msg((id - initial) % (unsigned long long)size == 0,
+                              "id %llu was not added by rank 0", id);
+                id = initial + (id - initial) / (unsigned long long)size;
+                added_max = id > added_max ? id : added_max;
+            }
+            ck_assert_msg(id <= top && where[id] < 0, "id %llu unknown or on two ranks", ids[k]);
+            where[id] = k;
+        }
+        double worst[6] = {0}, scale[6] = {0};
+        for (sluice_index i = 0; i < w->count; i++) {
+            const long k = where[w->id[i]];
+            ck_assert_msg(k >= 0, "id %llu lost", (unsigned long long)w->id[i]);
+            const double mine[6] = {w->position[0][i], w->position[1][i],
+                                    test_column(one, "velocity", 0)[i],
+                                    test_column(one, "velocity", 1)[i],
+                                    test_column(one, "density", 0)[i], w->kind[i]};
+            for (int c = 0; c < 6; c++) {
+                worst[c] = fmax(worst[c], fabs(values[6 * (size_t)k + c] - mine[c]));
+                scale[c] = fmax(scale[c], fabs(mine[c]));
+            }
+        }
+        for (int c = 0; c < 6; c++)
+            ck_assert_msg(worst[c] <= 1e-10 * scale[c], "value %d differs by %g (scale %g)", c,
+                          worst[c], scale[c]);
+        ck_assert_int_eq(sluice_sim_end(one, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+        int inlet_rows = 0, outlet_rows = 0;
+        compare_table(one_dir, across, "inlet.csv", &inlet_rows);
+        compare_table(one_dir, across, "outlet.csv", &outlet_rows);
+        ck_assert_int_eq(inlet_rows, 11); /* t = 0, 0.05, ..., 0.5 s */
+        ck_assert_int_eq(outlet_rows, 11);
+        char path[600];
+        snprintf(path, sizeof path, "%s/run.json", across);
+        char *json = test_read_file(path);
+        ck_assert_ptr_nonnull(json);
+        char final[64];
+        snprintf(final, sizeof final, "\"particles_final\": %u,", w->count);
+        ck_assert_msg(strstr(json, final) != NULL, "%s", json);
+        fprintf(stderr, "ranks: channel across %d ranks: %zu steps, %llu -> %d particles "
+                        "(%llu added by the inlet), the global count of every step, the fields "
+                        "by id and inlet.csv / outlet.csv equal the one-rank run's; largest "
+                        "differences x %.1e m, u %.1e m/s, density %.1e kg/m^3\n",
+                size, steps, (unsigned long long)initial, total,
+                (unsigned long long)(added_max >= initial ? added_max - initial + 1 : 0),
+                worst[0], worst[2], worst[4]);
+        ck_assert_msg(added_max >= initial, "the inlet added no particle");
+        free(json), free(where), free(one_dir);
+        sluice_sim_free(one);
+    }
+    free(ids), free(values), free(totals), free(across);
+}
+END_TEST
+
 /* What is not done across ranks yet is refused, not run on one rank's part:
  * at load, the plugins that reach other particles outside the pair passes. */
 START_TEST(refused_across_ranks)
@@ -528,6 +706,7 @@ int main(int argc, char **argv)
     tcase_set_timeout(t, 300);
     tcase_add_loop_test(t, same_particles_as_one_rank, 0, 2);
     tcase_add_test(t, output_as_one_rank);
+    tcase_add_test(t, inlet_and_outlet_on_other_ranks);
     tcase_add_test(t, refused_across_ranks);
     suite_add_tcase(s, t);
     SRunner *runner = srunner_create(s);

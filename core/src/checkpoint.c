@@ -442,11 +442,15 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
      * plugin keeps alike on every rank; a restart on any number of ranks
      * reads it (docs/scaling.md). */
     sluice_particles all, own;
-    uint64_t own_removed = sim->removed, own_steps = sim->particle_steps;
+    uint64_t own_removed = sim->removed, own_steps = sim->particle_steps,
+             own_next_id = sim->next_id;
     if (sim->comm.size > 1) {
         double sums[2] = {(double)sim->removed, (double)sim->particle_steps};
+        /* the ids of every rank are below the largest next id */
+        double next_id = (double)sim->next_id;
         if (sluice_ranks_gather(sim, &all) != 0 ||
-            sluice_comm_reduce(&sim->comm, sums, 2, 1) != 0) {
+            sluice_comm_reduce(&sim->comm, sums, 2, 1) != 0 ||
+            sluice_comm_reduce(&sim->comm, &next_id, 1, 3) != 0) {
             sim->state_file = NULL;
             sluice_sim_fail(sim, "cannot write checkpoint '%s' (step %lld, t = %.9g s): out of "
                                  "memory or MPI failed gathering the particles on rank 0",
@@ -458,6 +462,7 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
             sim->particles = all;
             sim->removed = (uint64_t)sums[0];
             sim->particle_steps = (uint64_t)sums[1];
+            sim->next_id = (uint64_t)next_id;
         }
     }
     if (sim->comm.rank == 0)
@@ -467,6 +472,7 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
         sluice_particles_free(&all);
         sim->removed = own_removed;
         sim->particle_steps = own_steps;
+        sim->next_id = own_next_id;
     }
 #else
     rc = checkpoint_image(sim, &image, &size, why, sizeof why);

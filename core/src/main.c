@@ -150,7 +150,7 @@ static sluice_sim *load(const arguments *a, int check_only, const void *communic
     return sim;
 }
 
-static int command_run(int argc, char **argv)
+static int command_run(int argc, char **argv, int across_ranks)
 {
     arguments a;
     memset(&a, 0, sizeof a);
@@ -167,8 +167,9 @@ static int command_run(int argc, char **argv)
 #ifdef SLUICE_MPI
     /* under mpiexec: one run across the ranks of MPI_COMM_WORLD */
     MPI_Comm world = MPI_COMM_WORLD;
-    sluice_sim *sim = load(&a, 0, &world);
+    sluice_sim *sim = load(&a, 0, across_ranks ? &world : NULL);
 #else
+    (void)across_ranks;
     sluice_sim *sim = load(&a, 0, NULL);
 #endif
     const int quiet_rank = world_rank() != 0;
@@ -293,16 +294,20 @@ int main(int argc, char **argv)
     const char *command = argv[1];
     if (strcmp(command, "run") == 0) {
 #ifdef SLUICE_MPI
+        /* MPI only under a launcher (mpiexec sets these): a plain `sluice
+         * run` of the MPI build is one process without MPI, as without it */
+        if (!getenv("OMPI_COMM_WORLD_SIZE") && !getenv("PMIX_RANK") && !getenv("PMI_SIZE"))
+            return command_run(argc, argv, 0);
         int provided = 0;
         if (MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) {
             fprintf(stderr, "sluice: error: MPI could not start\n");
             return 4;
         }
-        int status = command_run(argc, argv);
+        int status = command_run(argc, argv, 1);
         MPI_Finalize();
         return status;
 #else
-        return command_run(argc, argv);
+        return command_run(argc, argv, 0);
 #endif
     }
     if (strcmp(command, "check") == 0)

@@ -618,15 +618,14 @@ static int write_run_json(sluice_sim *sim, int status)
     double sums[5] = {(double)sim->particles.count, (double)sim->removed,
                       (double)sim->particle_steps,
                       (double)sluice_pair_engine_pairs(&sim->engine), (double)state_bytes};
-    double maxima[3] = {peak, sim->max_density_deviation, (double)sim->next_id};
+    double maxima[2] = {peak, sim->max_density_deviation};
     if (sluice_comm_reduce(&sim->comm, sums, 5, 1) != 0 ||
-        sluice_comm_reduce(&sim->comm, maxima, 3, 3) != 0)
+        sluice_comm_reduce(&sim->comm, maxima, 2, 3) != 0)
         return -1;
     if (sim->comm.rank != 0)
         return 0;
     const double particles_final = sums[0], removed = sums[1], particle_steps = sums[2],
-                 pairs = sums[3], bytes = sums[4], max_deviation = maxima[1],
-                 next_id = maxima[2];
+                 pairs = sums[3], bytes = sums[4], max_deviation = maxima[1];
     peak = maxima[0];
     char *text = NULL;
     size_t size = 0;
@@ -643,7 +642,10 @@ static int write_run_json(sluice_sim *sim, int status)
     fprintf(f, "  \"ranks\": %d,\n", sim->comm.size);
     fprintf(f, "  \"particles_initial\": %u,\n", sim->particles_initial);
     fprintf(f, "  \"particles_final\": %.0f,\n", particles_final);
-    fprintf(f, "  \"particles_added\": %.0f,\n", next_id - (double)sim->particles_initial);
+    /* final = initial + added - removed (ids across ranks are interleaved:
+     * next_id does not count them) */
+    fprintf(f, "  \"particles_added\": %.0f,\n",
+            particles_final + removed - (double)sim->particles_initial);
     fprintf(f, "  \"particles_removed\": %.0f,\n", removed);
     fprintf(f, "  \"steps\": %lld,\n", (long long)sim->step);
     fprintf(f, "  \"simulated_time\": %.12g,\n", sim->time);

@@ -55,6 +55,15 @@ void sluice_sim_fail(sluice_sim *sim, const char *format, ...)
     va_end(ap);
 }
 
+/* A component written for runs across ranks (SLUICE_COMPONENT_ACROSS_RANKS, 1.8). */
+static int across_ranks_component(const sluice_sim *sim, uint32_t instance)
+{
+    if (instance >= sim->instance_count)
+        return 0;
+    const sluice_instance *in = &sim->instances[instance];
+    return in->library->abi_minor >= 8 && (in->component->flags & SLUICE_COMPONENT_ACROSS_RANKS);
+}
+
 static void host_message(sluice_host *host, sluice_severity severity, const char *format,
                          va_list ap)
 {
@@ -78,8 +87,14 @@ static void host_message(sluice_host *host, sluice_severity severity, const char
         } else if (severity == SLUICE_SEVERITY_ERROR && !sim->failure[0]) {
             /* the first error of a run is its failure, printed once by the caller */
             sluice_sim_fail(sim, "plugin '%s': %s", name, text);
-        } else {
+        } else if (sim->comm.size == 1) {
             fprintf(stderr, "%ssluice: %s: plugin '%s': %s\n", sim->progress ? "\n" : "",
+                    severity == SLUICE_SEVERITY_ERROR ? "error" : "warning", name, text);
+        } else if (sim->comm.rank == 0 || !across_ranks_component(sim, host->instance)) {
+            /* across ranks a component written for it warns alike on every
+             * rank: rank 0 speaks for it; any other says which rank it is */
+            fprintf(stderr, "%ssluice: rank %d: %s: plugin '%s': %s\n",
+                    sim->progress ? "\n" : "", sim->comm.rank,
                     severity == SLUICE_SEVERITY_ERROR ? "error" : "warning", name, text);
         }
     }
@@ -104,7 +119,8 @@ static void api_warning(sluice_host *host, const char *format, ...)
 
 static void api_info(sluice_host *host, const char *format, ...)
 {
-    if (host->sim->quiet)
+    /* across ranks every rank loads the same scene: rank 0 informs */
+    if (host->sim->quiet || host->sim->comm.rank != 0)
         return;
     va_list ap;
     va_start(ap, format);
@@ -407,7 +423,16 @@ static int add_particles(sluice_sim *sim, uint8_t kind, const sluice_real *posit
         for (uint32_t d = 0; d < dims; d++)
             ((sluice_real *)col[sim->position.column + d])[i] = positions[3 * (size_t)k + d];
         ((uint8_t *)col[sim->kind.column])[i] = kind;
-        ((sluice_id *)col[sim->id.column])[i] = sim->next_id++;
+        /* across ranks, during the run, rank r of R takes the ids
+         * next_id + r, + R, + 2R, ...: unique without a message, and the
+         * same ids as on one rank while the scene loads (every rank builds
+         * every particle then) */
+        if (sim->comm.size > 1 && sim->phase == SLUICE_PHASE_RUN) {
+            ((sluice_id *)col[sim->id.column])[i] = sim->next_id + (sluice_id)sim->comm.rank;
+            sim->next_id += (sluice_id)sim->comm.size;
+        } else {
+            ((sluice_id *)col[sim->id.column])[i] = sim->next_id++;
+        }
         if (sim->mass.column >= 0)
             ((sluice_real *)col[sim->mass.column])[i] =
                 (sluice_real)((double)sim->rest_density * volume);
@@ -444,8 +469,7 @@ static int across_ranks_only(sluice_host *host, const char *what)
     const sluice_sim *sim = host->sim;
     if (sim->comm.size == 1)
         return SLUICE_OK;
-    const sluice_instance *in = &sim->instances[host->instance];
-    if (in->library->abi_minor >= 8 && (in->component->flags & SLUICE_COMPONENT_ACROSS_RANKS))
+    if (across_ranks_component(sim, host->instance))
         return SLUICE_OK;
     api_error(host, "%s in a run across %d ranks needs a component written for it (flag "
                     "SLUICE_COMPONENT_ACROSS_RANKS: it combines its ranks' figures with "
@@ -461,7 +485,7 @@ static int api_add_particles(sluice_host *host, uint8_t kind, const sluice_real 
     /* while the scene loads, every rank builds every particle; the split
      * into slabs comes after */
     if (sim->phase == SLUICE_PHASE_RUN &&
-        one_rank_only(host, "adding particles (api->add_particles)") != SLUICE_OK)
+        across_ranks_only(host, "adding particles (api->add_particles)") != SLUICE_OK)
         return SLUICE_ERROR;
     if (sim->phase < SLUICE_PHASE_INITIALISE) {
         api_error(host, "adds particles before initialise(); add them in initialise() or later");
@@ -508,7 +532,7 @@ static int api_remove_particles(sluice_host *host, const sluice_index *indices, 
 {
     sluice_sim *sim = host->sim;
     if (sim->phase == SLUICE_PHASE_RUN &&
-        one_rank_only(host, "removing particles (api->remove_particles)") != SLUICE_OK)
+        across_ranks_only(host, "removing particles (api->remove_particles)") != SLUICE_OK)
         return SLUICE_ERROR;
     if (check_indices(host, "removes particles", indices, count) != SLUICE_OK)
         return SLUICE_ERROR;
@@ -1202,6 +1226,15 @@ static int api_reduce(sluice_host *host, double *values, uint32_t count, sluice_
     return SLUICE_OK;
 }
 
+static int api_owns(sluice_host *host, const sluice_real *point)
+{
+    const sluice_sim *sim = host->sim;
+    if (sim->comm.size == 1 || !point)
+        return 1;
+    const double x = (double)point[0];
+    return x >= sim->halo.slab_lo && x < sim->halo.slab_hi;
+}
+
 static int api_ranks(sluice_host *host, sluice_ranks *out)
 {
     sluice_sim *sim = host->sim;
@@ -1268,6 +1301,7 @@ static const sluice_api api_table = {
     api_restrict_reach,
     api_reduce,
     api_ranks,
+    api_owns,
 };
 
 /* ------------------------------------------------------------ schedule -- */

@@ -78,7 +78,15 @@
  * mass_total (kg since the start), open_particles (in its buffer), averaged
  * over each `interval`. When the scene has the field `phase` they count the
  * water only (air crosses, but is not counted), so that discharge is the
- * water's. */
+ * water's.
+ *
+ * Across MPI ranks (1.2.0, SLUICE_COMPONENT_ACROSS_RANKS): each rank moves,
+ * converts and removes its own particles; every step the boundary sums its
+ * ranks' mass and momentum through the plane and its open particles
+ * (api->reduce), so its sums, its table and its checkpoint state are alike on
+ * every rank; the inlet's new column is added by the rank that owns its place
+ * (api->owns); the vent sums the air's pressure over the ranks before it
+ * decides to let air out. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -742,12 +750,12 @@ static int write_flux_row(boundary_state *s, double time)
     return SLUICE_OK;
 }
 
-static int vent_row(boundary_state *s, const sluice_view *v, double time);
+static int vent_row(boundary_state *s, sluice_host *host, const sluice_view *v, double time);
 
 /* A row of the boundary's table: the fluxes, or the vent's row. */
 static int write_row(boundary_state *s, sluice_host *host, double time)
 {
-    return s->vent ? vent_row(s, s->api->view(host), time) : write_flux_row(s, time);
+    return s->vent ? vent_row(s, host, s->api->view(host), time) : write_flux_row(s, time);
 }
 
 /* Rows at multiples of the interval (the first at t = 0: zero flux). */
@@ -762,6 +770,22 @@ static int flux_rows(boundary_state *s, sluice_host *host, double time)
     while ((double)s->written * s->interval <= time + tolerance)
         s->written++;
     s->api->request_time(host, (double)s->written * s->interval);
+    return SLUICE_OK;
+}
+
+/* This step's water mass and x-momentum through the plane and the open
+ * particles, over the ranks (each rank counts its own particles; the
+ * identity on one rank), into the interval's sums: alike on every rank. */
+static int add_step(boundary_state *s, sluice_host *host, double mass, double momentum,
+                    sluice_index open)
+{
+    double sums[3] = {mass, momentum, (double)open};
+    if (s->api->reduce(host, sums, 3, SLUICE_REDUCE_SUM) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->mass_interval += sums[0];
+    s->momentum_interval += sums[1];
+    s->mass_total += sums[0];
+    s->open_count = (sluice_index)sums[2];
     return SLUICE_OK;
 }
 
@@ -781,6 +805,7 @@ static int inlet_after_step(void *state, sluice_host *host)
     const sluice_real shift = (sluice_real)(s->velocity * dt);
     const sluice_real plane = (sluice_real)s->position;
     sluice_index converted = 0, open = 0, returned = 0;
+    double step_mass = 0, step_momentum = 0;
     const sluice_real section_top = (sluice_real)(s->bed + (s->rows + s->air_rows) * s->dx);
     const sluice_real half_dx = (sluice_real)(0.5 * s->dx);
     for (sluice_index i = 0; i < v->count; i++) {
@@ -798,9 +823,8 @@ static int inlet_after_step(void *state, sluice_host *host)
             if (phase && phase[i])
                 continue;
             const sluice_real *u = sluice_real_column(v, s->velocity_field, 0);
-            s->mass_interval -= mass[i];
-            s->momentum_interval -= mass[i] * u[i];
-            s->mass_total -= mass[i];
+            step_mass -= mass[i];
+            step_momentum -= mass[i] * u[i];
             continue;
         }
         if (v->kind[i] != SLUICE_KIND_OPEN)
@@ -810,9 +834,8 @@ static int inlet_after_step(void *state, sluice_host *host)
             s->to_convert[converted++] = i;
             if (phase && phase[i])
                 continue; /* the fluxes are the water's */
-            s->mass_interval += mass[i];
-            s->momentum_interval += mass[i] * s->velocity;
-            s->mass_total += mass[i];
+            step_mass += mass[i];
+            step_momentum += mass[i] * s->velocity;
         } else {
             open++;
         }
@@ -821,13 +844,17 @@ static int inlet_after_step(void *state, sluice_host *host)
         return SLUICE_ERROR;
     if (returned && api->remove_particles(host, s->to_remove, returned) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->open_count = open;
+    if (add_step(s, host, step_mass, step_momentum, open) != SLUICE_OK)
+        return SLUICE_ERROR;
     s->newest_column += s->velocity * dt;
     if (s->form == INLET_BUFFER) {
         const double back = s->position - s->width;
         while (s->newest_column - s->dx >= back - 1e-9 * s->dx) {
             s->newest_column -= s->dx;
-            if (add_column(s, host, s->newest_column) != SLUICE_OK)
+            /* across ranks the rank that owns the column's place adds it */
+            const sluice_real where[3] = {(sluice_real)s->newest_column, (sluice_real)s->bed,
+                                          (sluice_real)s->span[0]};
+            if (api->owns(host, where) && add_column(s, host, s->newest_column) != SLUICE_OK)
                 return SLUICE_ERROR;
             s->open_count += (s->rows + s->air_rows) * s->lanes;
         }
@@ -879,6 +906,7 @@ static int outlet_after_step(void *state, sluice_host *host)
         pos[d] = (sluice_real *)v->position[d];
     }
     sluice_index converted = 0, removed = 0, open = 0;
+    double step_mass = 0, step_momentum = 0;
     for (sluice_index i = 0; i < v->count; i++) {
         if (!(pos[0][i] >= plane))
             continue;
@@ -907,9 +935,8 @@ static int outlet_after_step(void *state, sluice_host *host)
             continue;
         const int air = phase && phase[i];
         if (!air) { /* the fluxes are the water's */
-            s->mass_interval += mass[i];
-            s->momentum_interval += mass[i] * u[0][i];
-            s->mass_total += mass[i];
+            step_mass += mass[i];
+            step_momentum += mass[i] * u[0][i];
         }
         if (s->form == OUTLET_FREE) {
             s->to_remove[removed++] = i;
@@ -935,9 +962,9 @@ static int outlet_after_step(void *state, sluice_host *host)
     }
     /* kinds first (indices still valid), then removal */
     if (api->set_kind(host, s->to_convert, converted, SLUICE_KIND_OPEN) != SLUICE_OK ||
-        api->remove_particles(host, s->to_remove, removed) != SLUICE_OK)
+        api->remove_particles(host, s->to_remove, removed) != SLUICE_OK ||
+        add_step(s, host, step_mass, step_momentum, open) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->open_count = open;
     return flux_rows(s, host, v->time);
 }
 
@@ -1101,8 +1128,8 @@ static int vent_initialise(void *state, sluice_host *host)
 
 /* The mean pressure of the air within the kernel support outside the box
  * (what the vent holds at p_b), and how many particles that is. */
-static double vent_pressure_near(const boundary_state *s, const sluice_view *v,
-                                 sluice_index *count)
+static double vent_pressure_near(const boundary_state *s, sluice_host *host,
+                                 const sluice_view *v, double *count)
 {
     const sluice_real *p = sluice_real_column(v, s->pressure_field, 0);
     const uint8_t *phase = (const uint8_t *)v->columns[s->phase_field.column];
@@ -1116,18 +1143,24 @@ static double vent_pressure_near(const boundary_state *s, const sluice_view *v,
             n++;
         }
     }
-    *count = n;
-    return n ? sum / (double)n : 0;
+    /* over the ranks: every rank's air next to the box */
+    double sums[2] = {sum, (double)n};
+    if (s->api->reduce(host, sums, 2, SLUICE_REDUCE_SUM) != SLUICE_OK)
+        return NAN;
+    *count = sums[1];
+    return sums[1] > 0 ? sums[0] / sums[1] : 0;
 }
 
-static int vent_row(boundary_state *s, const sluice_view *v, double time)
+static int vent_row(boundary_state *s, sluice_host *host, const sluice_view *v, double time)
 {
     const double span = time - s->row_time;
-    sluice_index near = 0;
-    const double pressure = s->has_pressure ? vent_pressure_near(s, v, &near) : 0;
+    double near = 0;
+    const double pressure = s->has_pressure ? vent_pressure_near(s, host, v, &near) : 0;
+    if (isnan(pressure))
+        return SLUICE_ERROR;
     const double flux = span > 0 ? s->mass_interval / span : 0;
     const double row[7] = {time, flux, flux / s->rho_a, s->mass_total, s->water_total,
-                           pressure, (double)near};
+                           pressure, near};
     if (s->api->table_row(s->table, row, 7) != SLUICE_OK)
         return SLUICE_ERROR;
     s->mass_interval = 0;
@@ -1157,16 +1190,20 @@ static int vent_after_step(void *state, sluice_host *host)
                 sum += (double)p[i];
                 n++;
             }
+        /* over the ranks, so that every rank decides alike */
+        double sums[2] = {sum, (double)n};
+        if (api->reduce(host, sums, 2, SLUICE_REDUCE_SUM) != SLUICE_OK)
+            return SLUICE_ERROR;
         /* an exponential average over the response time: the air's
          * acoustic sloshing, let out at its peaks only, would drain it */
-        const double mean = n ? sum / (double)n : s->p_ref;
+        const double mean = sums[1] > 0 ? sums[0] / sums[1] : s->p_ref;
         const double dt = v->time - s->last_time, weight = fmin(1.0, dt / s->response_time);
         s->air_pressure += (mean - s->air_pressure) * weight;
         compressed = s->air_pressure > s->p_ref;
     }
     const double touch2 = 0.25 * s->dx * s->dx;
     sluice_index removed = 0;
-    double water = 0;
+    double air = 0, water = 0;
     for (sluice_index i = 0; i < v->count; i++) {
         if (v->kind[i] != SLUICE_KIND_FLUID)
             continue;
@@ -1178,13 +1215,18 @@ static int vent_after_step(void *state, sluice_host *host)
         if (gap2 > 0 && !(compressed && gap2 < touch2 && phase[i]))
             continue;
         s->to_remove[removed++] = i;
-        if (phase[i]) {
-            s->mass_interval += mass[i];
-            s->mass_total += mass[i];
-        } else {
+        if (phase[i])
+            air += mass[i];
+        else
             water += mass[i];
-        }
     }
+    /* over the ranks: the air and water that left, alike on every rank */
+    double left[2] = {air, water};
+    if (api->reduce(host, left, 2, SLUICE_REDUCE_SUM) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->mass_interval += left[0];
+    s->mass_total += left[0];
+    water = left[1];
     if (water > 0) {
         s->water_total += water;
         if (!s->water_warned)
@@ -1297,6 +1339,7 @@ static const sluice_component components[] = {
                    "open particles (seed 004) or a pre-placed block (seed 000)",
         .reference = "De Padova et al. (2017) section 2.3; Jonsson et al. (2016) section 2.3",
         .dimensions = SLUICE_DIMS_ALL,
+        .flags = SLUICE_COMPONENT_ACROSS_RANKS,
         .params = inlet_params,
         .param_count = SLUICE_COUNT(inlet_params),
         .config_size = sizeof(boundary_config),
@@ -1317,6 +1360,7 @@ static const sluice_component components[] = {
                    "(seed 004), with the flux through the plane",
         .reference = "Lin et al. (2025); Jonsson et al. (2016); De Padova et al. (2017)",
         .dimensions = SLUICE_DIMS_ALL,
+        .flags = SLUICE_COMPONENT_ACROSS_RANKS,
         .params = outlet_params,
         .param_count = SLUICE_COUNT(outlet_params),
         .config_size = sizeof(boundary_config),
@@ -1338,6 +1382,7 @@ static const sluice_component components[] = {
         .reference = "Sluice (docs/physics.md, \"Air vent\"); p_b after Colagrossi & "
                      "Landrini (2003)",
         .dimensions = SLUICE_DIMS_ALL,
+        .flags = SLUICE_COMPONENT_ACROSS_RANKS,
         .params = vent_params,
         .param_count = SLUICE_COUNT(vent_params),
         .config_size = sizeof(boundary_config),
@@ -1354,6 +1399,6 @@ static const sluice_component components[] = {
     },
 };
 
-SLUICE_DEFINE_LIBRARY("open_boundaries", "1.1.0",
+SLUICE_DEFINE_LIBRARY("open_boundaries", "1.2.0",
                       "inlets and outlets for channel flows, and an air vent", SLUICE_DIMS_ALL,
                       components)

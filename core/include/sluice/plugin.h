@@ -334,6 +334,10 @@ typedef struct sluice_api {
      * of the first one; indices of existing particles do not change. */
     int (*add_particles)(sluice_host *host, uint8_t kind, const sluice_real *positions,
                          sluice_index count, sluice_index *first);
+    /* (Across ranks, 1.8: during the run only components flagged
+     * SLUICE_COMPONENT_ACROSS_RANKS add or remove particles; new ids are
+     * unique over the ranks, and a particle added outside the rank's slab
+     * moves to its owner at the next neighbour-list rebuild.) */
     uint32_t (*wall_count)(sluice_host *host);
     const sluice_wall *(*wall)(sluice_host *host, uint32_t index);
     /* Lattice points (spacing dx, aligned with the fluid lattice) behind a wall,
@@ -418,7 +422,8 @@ typedef struct sluice_api {
     int (*remove_particles)(sluice_host *host, const sluice_index *indices, sluice_index count);
     int (*set_kind)(sluice_host *host, const sluice_index *indices, sluice_index count,
                     uint8_t kind);
-    /* Particles removed since the start of the run (all kinds). */
+    /* Particles removed since the start of the run (all kinds; across
+     * ranks, by this rank). */
     uint64_t (*removed_count)(sluice_host *host);
 
     /* -- 1.5: plugin state in checkpoints (docs/reliability.md, "Checkpoints
@@ -470,6 +475,11 @@ typedef struct sluice_api {
      * (ranks in order, each rank's particles in view order): where a writer
      * puts them in a shared file. */
     int (*ranks)(sluice_host *host, sluice_ranks *out);
+    /* 1 when this rank owns the particles at `point` (3 reals; its slab
+     * holds the point's x), 0 otherwise; always 1 on one rank. Not
+     * collective: the rank that owns a place adds the particles there (an
+     * inlet's new column), the others leave it. */
+    int (*owns)(sluice_host *host, const sluice_real *point);
 } sluice_api;
 
 /* ----------------------------------------------------------- components -- */
