@@ -2,7 +2,7 @@
 # Strong and weak scaling across MPI ranks on this machine (docs/scaling.md).
 #
 #   tools/scaling.sh [BUILD_DIR]      (default build-mpi: meson -Dmpi=enabled)
-#   REPEATS=3 OUT=runs/scaling CSV=docs/data/scaling/scaling.csv STEPS_END=0.04
+#   REPEATS=3 OUT=runs/scaling CSV=docs/data/scaling/scaling.csv STEPS_END=0.02
 #
 # Strong: the 3D dam break (configs/dam_break_3d.yaml) at dx = 0.025 m, the
 # same scene on 1 rank x 1 thread, 1 rank x 2 threads (OpenMP) and 2 ranks x
@@ -19,9 +19,11 @@ build=${1:-build-mpi}
 repeats=${REPEATS:-3}
 out=${OUT:-runs/scaling}
 csv=${CSV:-docs/data/scaling/scaling.csv}
-end=${STEPS_END:-0.04}
+end=${STEPS_END:-0.02}
 ranks_list=${RANKS:-"1 2"}
-mpiexec="mpiexec --oversubscribe"
+# --bind-to none: Open MPI binds each rank to one core by default, which
+# would put the OpenMP threads of a rank on the same core
+mpiexec="mpiexec --oversubscribe --bind-to none"
 [ "$(id -u)" = 0 ] && mpiexec="$mpiexec --allow-run-as-root"
 mkdir -p "$out" "$(dirname "$csv")"
 pick() { sed -n "s/.*\"$1\": \\([^,]*\\),.*/\\1/p" "$2" | head -n 1; }

@@ -279,6 +279,103 @@ int sluice_ranks_split(sluice_sim *sim)
     return 0;
 }
 
+int sluice_ranks_balance(sluice_sim *sim)
+{
+    const sluice_comm *c = &sim->comm;
+    sluice_halo_lists *h = &sim->halo;
+    const int balance = sim->scene.ranks.balance;
+    if (balance == SLUICE_BALANCE_NONE ||
+        sim->step < h->balance_step + sim->scene.ranks.every)
+        return 0;
+    h->balance_step = sim->step;
+    const int size = c->size;
+    /* every rank's work (time, or particles) and particles */
+    double mine[2] = {balance == SLUICE_BALANCE_TIME ? h->busy_seconds
+                                                     : (double)sim->particles.count,
+                      (double)sim->particles.count};
+    double *all = malloc(2 * (size_t)size * sizeof *all);
+    double *bound = malloc(((size_t)size + 1) * sizeof *bound);
+    double *proposed = malloc(((size_t)size + 1) * sizeof *proposed);
+    int failed = !all || !bound || !proposed;
+    if (sluice_comm_any(c, failed)) {
+        free(all), free(bound), free(proposed);
+        sluice_sim_fail(sim, "out of memory balancing the ranks");
+        return -1;
+    }
+    MPI_Allgather(mine, 2, MPI_DOUBLE, all, 2, MPI_DOUBLE, c->comm);
+    /* the current boundaries: rank r's slab starts at bound[r] */
+    double slab_lo = h->slab_lo;
+    MPI_Allgather(&slab_lo, 1, MPI_DOUBLE, bound, 1, MPI_DOUBLE, c->comm);
+    bound[size] = INFINITY;
+    h->busy_seconds = 0;
+    double total = 0, largest = 0;
+    for (int r = 0; r < size; r++) {
+        total += all[2 * r];
+        largest = all[2 * r] > largest ? all[2 * r] : largest;
+    }
+    const double mean = total / size;
+    for (int k = 0; k <= size; k++)
+        proposed[k] = -INFINITY;
+    if (mean > 0 && largest > (1 + (double)sim->scene.ranks.tolerance) * mean) {
+        /* boundary k (between ranks k - 1 and k): the work left of it
+         * against its share; the rank with the excess gives half of it, in
+         * particles at its cost per particle, from its side of the boundary */
+        double left = 0;
+        for (int k = 1; k < size; k++) {
+            left += all[2 * (k - 1)];
+            const double excess = 0.5 * (left - k * mean);
+            const int giver = excess > 0 ? k - 1 : k;
+            if (giver != c->rank)
+                continue;
+            const double count = all[2 * giver + 1], cost = count > 0 ? all[2 * giver] / count : 0;
+            if (!(cost > 0) || count < 2)
+                continue;
+            sluice_index move = (sluice_index)fmin(fabs(excess) / cost, count / 2);
+            if (move == 0)
+                continue;
+            /* the cut among this rank's x, sorted */
+            const sluice_index n = sim->particles.count;
+            const sluice_real *x = sim->particles.columns[sim->position.column];
+            sluice_real *sorted = malloc(((size_t)n + 1) * sizeof *sorted);
+            if (!sorted)
+                continue; /* no move: the balance waits for the next time */
+            memcpy(sorted, x, (size_t)n * sizeof *sorted);
+            qsort(sorted, n, sizeof *sorted, compare_real);
+            const sluice_index at = excess > 0 ? n - move : move;
+            double cut = 0.5 * ((double)sorted[at - 1] + (double)sorted[at]);
+            /* within the old neighbouring slabs, each at least the halo
+             * width wide, so that a particle crosses one boundary only */
+            const double floor_at = bound[k - 1] + h->width, ceiling = bound[k + 1] - h->width;
+            if (cut < floor_at)
+                cut = floor_at;
+            if (cut > ceiling)
+                cut = ceiling;
+            if (cut > floor_at && cut < ceiling)
+                proposed[k] = cut;
+            free(sorted);
+        }
+    }
+    MPI_Allreduce(MPI_IN_PLACE, proposed, size + 1, MPI_DOUBLE, MPI_MAX, c->comm);
+    /* boundaries moved both ways may come too close: keep the slabs wide */
+    int moved = 0;
+    for (int k = 1; k < size; k++) {
+        if (!(proposed[k] > -INFINITY))
+            continue;
+        /* bound[k - 1] is final here, bound[k + 1] not yet moved */
+        if (proposed[k] - bound[k - 1] < h->width || bound[k + 1] - proposed[k] < h->width)
+            continue;
+        bound[k] = proposed[k];
+        moved = 1;
+    }
+    if (moved) {
+        h->slab_lo = c->rank == 0 ? -INFINITY : bound[c->rank];
+        h->slab_hi = c->rank + 1 == size ? INFINITY : bound[c->rank + 1];
+        h->balances++;
+    }
+    free(all), free(bound), free(proposed);
+    return moved;
+}
+
 int sluice_ranks_migrate(sluice_sim *sim)
 {
     sluice_halo_lists *h = &sim->halo;

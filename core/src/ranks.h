@@ -24,6 +24,10 @@ typedef struct sluice_halo_lists {
     sluice_index slot_capacity;
     uint64_t slot_valid_at;  /* grid.rebuilds when slot was computed */
     uint64_t arrived;        /* particles received from other ranks by migration */
+    /* load balance by measured time (sluice_ranks_balance) */
+    double busy_seconds;     /* this rank's time in the passes since the last balance */
+    int64_t balance_step;    /* the step of the last balance */
+    uint64_t balances;       /* slab boundaries moved so far (times) */
     char *buffer[2];         /* send and receive */
     size_t buffer_capacity[2];
 } sluice_halo_lists;
@@ -33,6 +37,14 @@ typedef struct sluice_halo_lists {
  * equal counts and keeps this rank's. Fails (message in sim) when a slab
  * would be narrower than the halo width. */
 int sluice_ranks_split(sluice_sim *sim);
+/* Every ranks.every steps (scene), before the neighbour search: when the
+ * ranks' work since the last balance (their measured time in the passes,
+ * or their particle counts: ranks.balance) differs by more than
+ * ranks.tolerance of the mean, moves the slab boundaries so that each
+ * rank's share is equal (half the way, within the neighbouring slabs).
+ * Returns 1 when they moved (the caller rebuilds: the migration moves the
+ * particles), 0 when not, -1 on failure. Collective. */
+int sluice_ranks_balance(sluice_sim *sim);
 /* Before a rebuild: sends the particles that left the slab to the rank
  * that owns their x now. Collective. */
 int sluice_ranks_migrate(sluice_sim *sim);

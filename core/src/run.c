@@ -622,6 +622,10 @@ static int write_run_json(sluice_sim *sim, int status)
     if (sluice_comm_reduce(&sim->comm, sums, 5, 1) != 0 ||
         sluice_comm_reduce(&sim->comm, maxima, 2, 3) != 0)
         return -1;
+    /* the balance of the ranks: their fewest and most particles */
+    double spread[2] = {-(double)sim->particles.count, (double)sim->particles.count};
+    if (sluice_comm_reduce(&sim->comm, spread, 2, 3) != 0)
+        return -1;
     if (sim->comm.rank != 0)
         return 0;
     const double particles_final = sums[0], removed = sums[1], particle_steps = sums[2],
@@ -640,6 +644,11 @@ static int write_run_json(sluice_sim *sim, int status)
     fprintf(f, ",\n  \"sluice_version\": \"%s\",\n", SLUICE_VERSION);
     fprintf(f, "  \"dimensions\": %u,\n", sim->scene.dimensions);
     fprintf(f, "  \"ranks\": %d,\n", sim->comm.size);
+    if (sim->comm.size > 1)
+        fprintf(f,
+                "  \"rank_particles_fewest\": %.0f,\n  \"rank_particles_most\": %.0f,\n"
+                "  \"slab_rebalances\": %llu,\n",
+                -spread[0], spread[1], (unsigned long long)sim->halo.balances);
     fprintf(f, "  \"particles_initial\": %u,\n", sim->particles_initial);
     fprintf(f, "  \"particles_final\": %.0f,\n", particles_final);
     /* final = initial + added - removed (ids across ranks are interleaved:

@@ -127,6 +127,28 @@ static const sluice_param_spec checkpoint_specs[] = {
      NULL, 0},
 };
 
+typedef struct {
+    int balance;
+    int64_t every;
+    sluice_real tolerance;
+} ranks_config;
+
+static const sluice_param_spec ranks_specs[] = {
+    {"balance", SLUICE_PARAM_ENUM, OFF(ranks_config, balance), "time", 0, 0, 0, "1",
+     "in a run across MPI ranks (docs/scaling.md), what the slab boundaries are moved to "
+     "equalise during the run: the ranks' measured time in the passes, their particle counts "
+     "(reproducible from run to run), or nothing (the slabs of the start)",
+     "time|count|none", 0},
+    {"every", SLUICE_PARAM_INT, OFF(ranks_config, every), "50", 1, 1000000000,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
+     "steps between two looks at the balance (a move rebuilds the neighbour lists)", NULL,
+     0},
+    {"tolerance", SLUICE_PARAM_REAL, OFF(ranks_config, tolerance), "0.05", 0, 10,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_HAS_MAX, "1",
+     "the boundaries move when the largest rank's share exceeds the mean by this fraction",
+     NULL, 0},
+};
+
 /* ------------------------------------------------------------ geometry -- */
 
 typedef struct {
@@ -356,7 +378,7 @@ static const sluice_param_spec piece_steps_specs[] = {
 static const char *const top_level_keys[] = {
     "title",    "description", "dimensions", "particles", "time",       "domain",
     "geometry", "initial",     "neighbour_search", "watchdog", "plugins", "plugin_path",
-    "checkpoint", "variants", "variant",
+    "checkpoint", "ranks", "variants", "variant",
 };
 
 const char *sluice_node_file(const sluice_node *node, const sluice_scene *scene)
@@ -1391,7 +1413,7 @@ int sluice_scene_load_variant(sluice_scene *scene, const char *path, const char 
             error_at(diag, scene, scene->root->keys[i],
                      "unknown key '%s' at the top level (valid keys: title, description, "
                      "dimensions, particles, time, domain, geometry, initial, neighbour_search, "
-                     "watchdog, checkpoint, plugins, plugin_path, variants, variant)",
+                     "watchdog, checkpoint, ranks, plugins, plugin_path, variants, variant)",
                      key);
         errors++;
     }
@@ -1493,6 +1515,13 @@ int sluice_scene_load_variant(sluice_scene *scene, const char *path, const char 
                            &kc, diag);
     scene->checkpoint.interval = kc.interval;
     scene->checkpoint.keep = kc.keep;
+
+    ranks_config rc;
+    memset(&rc, 0, sizeof rc);
+    errors += bind_section(scene, "ranks", ranks_specs, SLUICE_COUNT(ranks_specs), &rc, diag);
+    scene->ranks.balance = rc.balance;
+    scene->ranks.every = rc.every;
+    scene->ranks.tolerance = rc.tolerance;
 
     sluice_node **geometry_slot = section_slot(scene->root, "geometry", 0);
     if (geometry_slot) {

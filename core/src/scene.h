@@ -80,6 +80,11 @@ typedef struct sluice_scene {
         sluice_real interval; /* s; 0: no periodic checkpoints */
         int64_t keep;         /* newest checkpoints kept; 0: all */
     } checkpoint;
+    struct {
+        int balance;          /* SLUICE_BALANCE_TIME, _COUNT or _NONE */
+        int64_t every;        /* steps between balances */
+        sluice_real tolerance; /* largest share over the mean, minus 1 */
+    } ranks;
     char **plugin_path; /* absolute directories */
     size_t plugin_path_count;
 
@@ -111,5 +116,7 @@ void sluice_scene_free(sluice_scene *scene);
 
 /* Position helpers for messages about a node. */
 const char *sluice_node_file(const sluice_node *node, const sluice_scene *scene);
+
+enum { SLUICE_BALANCE_TIME = 0, SLUICE_BALANCE_COUNT = 1, SLUICE_BALANCE_NONE = 2 };
 
 #endif

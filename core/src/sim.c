@@ -669,8 +669,16 @@ static int update_neighbours(sluice_sim *sim)
 {
     sluice_sim_refresh_view(sim);
     int rebuild = sluice_grid_needs_rebuild(&sim->grid, &sim->view);
-    if (sim->comm.size > 1)
-        rebuild = sluice_comm_any(&sim->comm, rebuild);
+#ifdef SLUICE_MPI
+    if (sim->comm.size > 1) {
+        /* the slabs follow the work (docs/scaling.md); a move is decided
+         * alike on every rank, and the rebuild migrates the particles */
+        const int moved = sluice_ranks_balance(sim);
+        if (moved < 0)
+            return SLUICE_ERROR;
+        rebuild = sluice_comm_any(&sim->comm, rebuild) || moved;
+    }
+#endif
     if (rebuild) {
         sluice_index bad = 0;
         int rc;
@@ -735,13 +743,21 @@ static int evaluate(sluice_sim *sim)
         sluice_sim_refresh_view(sim);
     }
     zero_accumulators(sim);
+    /* across ranks: this rank's time in the passes, without the halo's
+     * exchanges (the measured work that balances the slabs) */
+    double busy_from = sim->comm.size > 1 ? sluice_wall_clock() : 0;
     for (uint32_t p = 0; p < sim->pass_count; p++) {
         const sluice_pass *pass = &sim->passes[p];
         if (pass->is_pair) {
 #ifdef SLUICE_MPI
             /* the other ranks' particles as they are now, every field */
-            if (sim->comm.size > 1 && sluice_ranks_refresh_halo(sim) != 0)
-                return SLUICE_ERROR;
+            if (sim->comm.size > 1) {
+                const double now = sluice_wall_clock();
+                sim->halo.busy_seconds += now - busy_from;
+                if (sluice_ranks_refresh_halo(sim) != 0)
+                    return SLUICE_ERROR;
+                busy_from = sluice_wall_clock();
+            }
 #endif
             if (sluice_pair_pass_run(&sim->engine, &pass->pair, &sim->grid, &sim->view) != 0) {
                 sluice_sim_fail(sim, "out of memory in a pair pass");
@@ -752,6 +768,8 @@ static int evaluate(sluice_sim *sim)
             run_particle_pass(sim, in->component, in->state);
         }
     }
+    if (sim->comm.size > 1)
+        sim->halo.busy_seconds += sluice_wall_clock() - busy_from;
     return SLUICE_OK;
 }
 
