@@ -180,6 +180,21 @@ START_TEST(out_of_range)
 }
 END_TEST
 
+/* An output interval of 1e-300 s (found by the fuzzer: the gauge's schedule
+ * then counted 1e296 sample times after the first step) is refused at load:
+ * every interval is at least 1e-6 s, and a step ends on each sample time. */
+START_TEST(interval_too_small)
+{
+    char *text = scene_text(20, "  artificial_viscosity: {alpha: 0.1}\n  wall_monitor: {interval: 1e-300}",
+                            NULL);
+    outcome o = run_case(text, NULL);
+    expect_error(&o, 21, 28, "plugins.wall_monitor.interval");
+    ck_assert(strstr(o.output, "range"));
+    done(&o);
+    free(text);
+}
+END_TEST
+
 START_TEST(missing_plugin_suggests)
 {
     char *text = scene_text(16, "  taitt:", NULL);
@@ -591,6 +606,7 @@ int main(void)
     tcase_add_test(tc, unknown_top_level_key_suggests);
     tcase_add_test(tc, wrong_type);
     tcase_add_test(tc, out_of_range);
+    tcase_add_test(tc, interval_too_small);
     tcase_add_test(tc, missing_plugin_suggests);
     tcase_add_test(tc, plugin_wrong_abi_major);
     tcase_add_test(tc, plugin_newer_abi_minor);

@@ -85,8 +85,8 @@ typedef struct energy_state {
 } energy_state;
 
 static const sluice_param_spec params[] = {
-    {"interval", SLUICE_PARAM_REAL, offsetof(energy_config, interval), "0.01", 0, 0,
-     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between samples", NULL, 0},
+    {"interval", SLUICE_PARAM_REAL, offsetof(energy_config, interval), "0.01", 1e-6, 0,
+     SLUICE_PARAM_HAS_MIN, "s", "time between samples", NULL, 0},
     {"file", SLUICE_PARAM_STRING, offsetof(energy_config, file), "energy.csv", 0, 0, 0, NULL,
      "output file in the run directory", NULL, 0},
 };

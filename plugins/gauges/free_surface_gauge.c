@@ -91,8 +91,8 @@ static const sluice_param_spec params[] = {
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_HAS_MAX |
          SLUICE_PARAM_MAX_EXCLUSIVE,
      "1", "kernel sum sum_j V_j W at the free surface (1/2 on a flat surface)", NULL, 0},
-    {"interval", SLUICE_PARAM_REAL, offsetof(fs_config, interval), "0.01", 0, 0,
-     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between samples", NULL, 0},
+    {"interval", SLUICE_PARAM_REAL, offsetof(fs_config, interval), "0.01", 1e-6, 0,
+     SLUICE_PARAM_HAS_MIN, "s", "time between samples", NULL, 0},
     {"file", SLUICE_PARAM_STRING, offsetof(fs_config, file), "free_surface.csv", 0, 0, 0, NULL,
      "output file in the run directory", NULL, 0},
     SLUICE_PHASE_PARAM(fs_config, phase),

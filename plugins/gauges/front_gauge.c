@@ -24,8 +24,8 @@ typedef struct front_state {
 } front_state;
 
 static const sluice_param_spec params[] = {
-    {"interval", SLUICE_PARAM_REAL, offsetof(front_config, interval), "0.01", 0, 0,
-     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between samples", NULL, 0},
+    {"interval", SLUICE_PARAM_REAL, offsetof(front_config, interval), "0.01", 1e-6, 0,
+     SLUICE_PARAM_HAS_MIN, "s", "time between samples", NULL, 0},
     {"origin", SLUICE_PARAM_REAL, offsetof(front_config, origin), "0", 0, 0, 0, "m",
      "x of the wall the front is measured from", NULL, 0},
     {"file", SLUICE_PARAM_STRING, offsetof(front_config, file), "front.csv", 0, 0, 0, NULL,

@@ -89,8 +89,8 @@ static const sluice_param_spec params[] = {
      "`phase` says, and nan where that sum is below min_kernel_sum; it needs the field 'phase' "
      "of the two_phase plugin",
      NULL, 0},
-    {"interval", SLUICE_PARAM_REAL, offsetof(gauge_config, interval), "0.01", 0, 0,
-     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between samples", NULL, 0},
+    {"interval", SLUICE_PARAM_REAL, offsetof(gauge_config, interval), "0.01", 1e-6, 0,
+     SLUICE_PARAM_HAS_MIN, "s", "time between samples", NULL, 0},
     {"min_kernel_sum", SLUICE_PARAM_REAL, offsetof(gauge_config, min_kernel_sum), "0.5", 0, 1,
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "1",
      "points whose kernel sum sum_j V_j W (over the particles `phase` selects; for "

@@ -61,8 +61,8 @@ typedef struct vort_state {
 } vort_state;
 
 static const sluice_param_spec params[] = {
-    {"interval", SLUICE_PARAM_REAL, offsetof(vort_config, interval), "0.05", 0, 0,
-     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s",
+    {"interval", SLUICE_PARAM_REAL, offsetof(vort_config, interval), "0.05", 1e-6, 0,
+     SLUICE_PARAM_HAS_MIN, "s",
      "time between computations: the hdf5 writer's interval (the default is its default) or a "
      "divisor of it",
      NULL, 0},

@@ -62,8 +62,8 @@ typedef struct monitor_state {
 } monitor_state;
 
 static const sluice_param_spec params[] = {
-    {"interval", SLUICE_PARAM_REAL, offsetof(monitor_config, interval), "0.01", 0, 0,
-     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between samples", NULL, 0},
+    {"interval", SLUICE_PARAM_REAL, offsetof(monitor_config, interval), "0.01", 1e-6, 0,
+     SLUICE_PARAM_HAS_MIN, "s", "time between samples", NULL, 0},
     {"stop_on_crossing", SLUICE_PARAM_BOOL, offsetof(monitor_config, stop_on_crossing), "false",
      0, 0, 0, NULL, "stop the run when a fluid particle is found behind a wall", NULL, 0},
     {"file", SLUICE_PARAM_STRING, offsetof(monitor_config, file), "walls.csv", 0, 0, 0, NULL,

@@ -196,8 +196,8 @@ static const sluice_param_spec inlet_params[] = {
      offsetof(boundary_config, mixing_length_factor), "0.5", 0, 0,
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "1",
      "with k-epsilon: eps = c_mu^(3/4) k^(3/2) / (factor d1) (seed 004: 0.5)", NULL, 0},
-    {"interval", SLUICE_PARAM_REAL, offsetof(boundary_config, interval), "0.05", 0, 0,
-     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between flux rows", NULL, 0},
+    {"interval", SLUICE_PARAM_REAL, offsetof(boundary_config, interval), "0.05", 1e-6, 0,
+     SLUICE_PARAM_HAS_MIN, "s", "time between flux rows", NULL, 0},
     {"file", SLUICE_PARAM_STRING, offsetof(boundary_config, file), "inlet.csv", 0, 0, 0, NULL,
      "flux time series in the run directory", NULL, 0},
 };
@@ -227,8 +227,8 @@ static const sluice_param_spec outlet_params[] = {
      "water or air only (field 'phase' of two_phase, which must then be loaded); the other "
      "phase stays ordinary fluid past the plane",
      "all|water|air", 0},
-    {"interval", SLUICE_PARAM_REAL, offsetof(boundary_config, interval), "0.05", 0, 0,
-     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between flux rows", NULL, 0},
+    {"interval", SLUICE_PARAM_REAL, offsetof(boundary_config, interval), "0.05", 1e-6, 0,
+     SLUICE_PARAM_HAS_MIN, "s", "time between flux rows", NULL, 0},
     {"file", SLUICE_PARAM_STRING, offsetof(boundary_config, file), "outlet.csv", 0, 0, 0, NULL,
      "flux time series in the run directory", NULL, 0},
 };
@@ -244,8 +244,8 @@ static const sluice_param_spec vent_params[] = {
      "time over which the air's mean pressure is averaged before the vent lets air out "
      "(longer than the air box's acoustic period, length / c0_air)",
      NULL, 0},
-    {"interval", SLUICE_PARAM_REAL, offsetof(boundary_config, interval), "0.05", 0, 0,
-     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "time between rows", NULL, 0},
+    {"interval", SLUICE_PARAM_REAL, offsetof(boundary_config, interval), "0.05", 1e-6, 0,
+     SLUICE_PARAM_HAS_MIN, "s", "time between rows", NULL, 0},
     {"file", SLUICE_PARAM_STRING, offsetof(boundary_config, file), "air_vent.csv", 0, 0, 0, NULL,
      "air outflow time series in the run directory", NULL, 0},
 };

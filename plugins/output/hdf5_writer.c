@@ -124,8 +124,8 @@ typedef struct h5w_state {
 } h5w_state;
 
 static const sluice_param_spec params[] = {
-    {"interval", SLUICE_PARAM_REAL, offsetof(h5w_config, interval), "0.05", 0, 0,
-     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s",
+    {"interval", SLUICE_PARAM_REAL, offsetof(h5w_config, interval), "0.05", 1e-6, 0,
+     SLUICE_PARAM_HAS_MIN, "s",
      "simulated time between snapshots (the first is at t = 0; a final one is written at the "
      "end of the run)",
      NULL, 0},
