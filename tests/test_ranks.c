@@ -94,6 +94,25 @@ static void values_of(sluice_sim *sim, sluice_index i, double *out)
     out[6] = (double)test_column(sim, "mass", 0)[i];
 }
 
+/* An index by id, 0 .. top, every entry -1 (no particle yet). */
+static long *id_index(unsigned long long top)
+{
+    long *where = malloc(((size_t)top + 1) * sizeof *where);
+    ck_assert_ptr_nonnull(where);
+    for (size_t k = 0; k <= (size_t)top; k++)
+        where[k] = -1;
+    return where;
+}
+
+/* The largest id of a view. */
+static sluice_id top_id(const sluice_view *w)
+{
+    sluice_id top = 0;
+    for (sluice_index i = 0; i < w->count; i++)
+        top = w->id[i] > top ? w->id[i] : top;
+    return top;
+}
+
 /* The third run moves the slab boundaries during the run to balance the
  * ranks' particle counts (reproducible, unlike a balance by measured time),
  * every 20 steps at 1 % imbalance: as the surge carries particles
@@ -182,13 +201,8 @@ START_TEST(same_particles_as_one_rank)
                       sluice_sim_time(one));
         ck_assert_int_eq(total, (int)w->count);
         /* by id: every particle exactly once */
-        sluice_id top = 0;
-        for (sluice_index i = 0; i < w->count; i++)
-            top = w->id[i] > top ? w->id[i] : top;
-        long *where = malloc(((size_t)top + 1) * sizeof *where);
-        ck_assert_ptr_nonnull(where);
-        for (size_t k = 0; k <= (size_t)top; k++)
-            where[k] = -1;
+        const sluice_id top = top_id(w);
+        long *where = id_index(top);
         for (int k = 0; k < total; k++) {
             ck_assert_msg(all_ids[k] <= (unsigned long long)top, "unknown id %llu", all_ids[k]);
             ck_assert_msg(where[all_ids[k]] < 0, "id %llu on two ranks", all_ids[k]);
@@ -369,10 +383,7 @@ static int compare_snapshots(const char *one, const char *dir, int first)
         unsigned long long top = 0;
         for (size_t i = 0; i < a.count; i++)
             top = a.id[i] > top ? a.id[i] : top;
-        long *where = malloc((top + 1) * sizeof *where);
-        ck_assert_ptr_nonnull(where);
-        for (size_t i = 0; i <= top; i++)
-            where[i] = -1;
+        long *where = id_index(top);
         for (size_t i = 0; i < b.count; i++) {
             ck_assert_msg(b.id[i] <= top && where[b.id[i]] < 0, "id %llu unknown or twice",
                           b.id[i]);
@@ -630,13 +641,8 @@ START_TEST(inlet_and_outlet_on_other_ranks)
         /* ids: the scene's below `initial`, the run's rank r of R at
          * initial + r + R k; here the inlet is on rank 0, so its k-th new
          * particle is initial + R k across ranks and initial + k on one */
-        sluice_id top = 0;
-        for (sluice_index i = 0; i < w->count; i++)
-            top = w->id[i] > top ? w->id[i] : top;
-        long *where = malloc(((size_t)top + 1) * sizeof *where);
-        ck_assert_ptr_nonnull(where);
-        for (size_t k = 0; k <= (size_t)top; k++)
-            where[k] = -1;
+        const sluice_id top = top_id(w);
+        long *where = id_index(top);
         for (int k = 0; k < total; k++) {
             unsigned long long id = ids[k];
             if (id >= initial) {

@@ -449,8 +449,8 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
         /* the ids of every rank are below the largest next id */
         double next_id = (double)sim->next_id;
         if (sluice_ranks_gather(sim, &all) != 0 ||
-            sluice_comm_reduce(&sim->comm, sums, 2, 1) != 0 ||
-            sluice_comm_reduce(&sim->comm, &next_id, 1, 3) != 0) {
+            sluice_comm_reduce(&sim->comm, sums, 2, SLUICE_REDUCE_SUM) != 0 ||
+            sluice_comm_reduce(&sim->comm, &next_id, 1, SLUICE_REDUCE_MAX) != 0) {
             sim->state_file = NULL;
             sluice_sim_fail(sim, "cannot write checkpoint '%s' (step %lld, t = %.9g s): out of "
                                  "memory or MPI failed gathering the particles on rank 0",

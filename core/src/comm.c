@@ -1,5 +1,7 @@
 #include "comm.h"
 
+#include "sluice/plugin.h"
+
 #ifdef SLUICE_MPI
 
 int sluice_comm_from_mpi(sluice_comm *c, MPI_Comm comm)
@@ -71,7 +73,7 @@ int sluice_comm_reduce(const sluice_comm *c, double *values, uint32_t count, int
 {
     if (c->size == 1 || count == 0)
         return 0;
-    MPI_Op mpi_op = op == 2 ? MPI_MIN : op == 3 ? MPI_MAX : MPI_SUM;
+    MPI_Op mpi_op = op == SLUICE_REDUCE_MIN ? MPI_MIN : op == SLUICE_REDUCE_MAX ? MPI_MAX : MPI_SUM;
     return MPI_Allreduce(MPI_IN_PLACE, values, (int)count, MPI_DOUBLE, mpi_op, c->comm) ==
                    MPI_SUCCESS
                ? 0

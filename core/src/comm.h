@@ -41,8 +41,8 @@ double sluice_comm_sum(const sluice_comm *c, double value);
 uint64_t sluice_comm_sum_u64(const sluice_comm *c, uint64_t value);
 /* 1 when value is nonzero on any rank */
 int sluice_comm_any(const sluice_comm *c, int value);
-/* values[0 .. count) combined over the ranks in place; op: 1 sum, 2 min,
- * 3 max (sluice_reduce_op). 0, or -1 when MPI fails. */
+/* values[0 .. count) combined over the ranks in place; op: a
+ * sluice_reduce_op (SLUICE_REDUCE_SUM, _MIN, _MAX). 0, or -1 when MPI fails. */
 int sluice_comm_reduce(const sluice_comm *c, double *values, uint32_t count, int op);
 /* The sum of count over the ranks before this one, and over all. */
 int sluice_comm_offset(const sluice_comm *c, uint64_t count, uint64_t *offset, uint64_t *total);

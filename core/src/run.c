@@ -619,12 +619,12 @@ static int write_run_json(sluice_sim *sim, int status)
                       (double)sim->particle_steps,
                       (double)sluice_pair_engine_pairs(&sim->engine), (double)state_bytes};
     double maxima[2] = {peak, sim->max_density_deviation};
-    if (sluice_comm_reduce(&sim->comm, sums, 5, 1) != 0 ||
-        sluice_comm_reduce(&sim->comm, maxima, 2, 3) != 0)
+    if (sluice_comm_reduce(&sim->comm, sums, 5, SLUICE_REDUCE_SUM) != 0 ||
+        sluice_comm_reduce(&sim->comm, maxima, 2, SLUICE_REDUCE_MAX) != 0)
         return -1;
     /* the balance of the ranks: their fewest and most particles */
     double spread[2] = {-(double)sim->particles.count, (double)sim->particles.count};
-    if (sluice_comm_reduce(&sim->comm, spread, 2, 3) != 0)
+    if (sluice_comm_reduce(&sim->comm, spread, 2, SLUICE_REDUCE_MAX) != 0)
         return -1;
     if (sim->comm.rank != 0)
         return 0;
