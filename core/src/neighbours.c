@@ -77,6 +77,8 @@ void sluice_grid_free(sluice_grid *grid)
     free(grid->thread_counts);
     free(grid->halo_start);
     free(grid->halo_order);
+    for (int d = 0; d < 3; d++)
+        free(grid->halo_built[d]);
     memset(grid, 0, sizeof *grid);
 }
 
@@ -262,8 +264,8 @@ static inline sluice_index visit(const sluice_grid *grid, sluice_real *const pos
 }
 
 sluice_index sluice_grid_near_point(const sluice_grid *grid, sluice_real *const pos[3],
-                                    const double p[3], double radius2, sluice_index *out,
-                                    sluice_index capacity)
+                                    const double p[3], double radius2, int with_halo,
+                                    sluice_index *out, sluice_index capacity)
 {
     const uint32_t dims = grid->dimensions;
     int64_t c[3] = {0, 0, 0};
@@ -304,18 +306,22 @@ sluice_index sluice_grid_near_point(const sluice_grid *grid, sluice_real *const 
                 size_t cell = ((size_t)cz * (size_t)grid->cells[1] + (size_t)cy) *
                                   (size_t)grid->cells[0] +
                               (size_t)cx;
-                for (sluice_index j = grid->cell_start[cell]; j < grid->cell_start[cell + 1]; j++) {
-                    double s = 0;
-                    for (uint32_t d = 0; d < dims; d++) {
-                        double e = p[d] - (double)pos[d][j];
-                        if (grid->periodic[d])
-                            e = minimum_image(e, grid->length[d]);
-                        s += e * e;
-                    }
-                    if (s < radius2) {
-                        if (found < capacity)
-                            out[found] = j;
-                        found++;
+                const int sources = with_halo && grid->halo_count ? 2 : 1;
+                for (int source = 0; source < sources; source++) {
+                    const sluice_index *start = source ? grid->halo_start : grid->cell_start;
+                    for (sluice_index j = start[cell]; j < start[cell + 1]; j++) {
+                        double s = 0;
+                        for (uint32_t d = 0; d < dims; d++) {
+                            double e = p[d] - (double)pos[d][j];
+                            if (grid->periodic[d])
+                                e = minimum_image(e, grid->length[d]);
+                            s += e * e;
+                        }
+                        if (s < radius2) {
+                            if (found < capacity)
+                                out[found] = j;
+                            found++;
+                        }
                     }
                 }
             }
@@ -481,6 +487,18 @@ int sluice_grid_build_with_halo(sluice_grid *grid, sluice_particles *particles,
             pos[d] = particles->columns[position_column + d];
         if (dims == 2)
             pos[2] = pos[1];
+        if (h > grid->halo_built_capacity) {
+            const sluice_index cap = h + h / 4 + 64;
+            for (uint32_t d = 0; d < dims; d++) {
+                sluice_real *grown = realloc(grid->halo_built[d], (size_t)cap * sizeof *grown);
+                if (!grown)
+                    return -1;
+                grid->halo_built[d] = grown;
+            }
+            grid->halo_built_capacity = cap;
+        }
+        for (uint32_t d = 0; d < dims; d++)
+            memcpy(grid->halo_built[d], pos[d] + n, (size_t)h * sizeof(sluice_real));
     }
 
     /* 4. Verlet list: count, prefix sum, fill */

@@ -47,6 +47,10 @@ typedef struct sluice_grid {
     sluice_index *halo_start;
     sluice_index *halo_order;
     sluice_index halo_capacity;
+    /* the halo's positions at the last build, slot s at halo_built[d][s]
+     * (the passes beyond the support list their pairs from them) */
+    sluice_real *halo_built[3];
+    sluice_index halo_built_capacity;
 
     /* Figures for benchmarks. */
     uint64_t rebuilds;
@@ -89,10 +93,11 @@ int sluice_grid_build_with_halo(sluice_grid *grid, sluice_particles *particles,
  * no particle has moved more than skin/2 since). Writes at most `capacity`
  * indices to out and returns how many there are (call again with a larger
  * array when that exceeds capacity). p may lie anywhere; periodic axes use
- * the minimum image. */
+ * the minimum image. with_halo: the halo's particles too (after the own
+ * ones of each cell row). */
 sluice_index sluice_grid_near_point(const sluice_grid *grid, sluice_real *const pos[3],
-                                    const double p[3], double radius2, sluice_index *out,
-                                    sluice_index capacity);
+                                    const double p[3], double radius2, int with_halo,
+                                    sluice_index *out, sluice_index capacity);
 
 /* Wraps coordinates of periodic directions into [lo, hi). */
 void sluice_grid_wrap(const sluice_grid *grid, sluice_real *position[3], sluice_index count);

@@ -322,16 +322,53 @@ void sluice_reach_list_free(sluice_reach_list *list)
     free(list);
 }
 
+/* The candidates of target i within `cutoff` (m) among the particles
+ * j0 .. j1 (sorted by cell), whose positions at the last build are
+ * position[d][j - base]; appends them to out (when not NULL) after `found`
+ * and returns the new count. */
+static inline sluice_index reach_range(const sluice_grid *grid, const sluice_view *view,
+                                       sluice_real *const position[3], sluice_index base,
+                                       sluice_index j0, sluice_index j1, sluice_index i,
+                                       const double xi[3], uint32_t mask, const uint8_t *select,
+                                       uint8_t wanted, double cutoff2, sluice_index *out,
+                                       sluice_index found)
+{
+    const uint32_t dims = view->dimensions;
+    const uint8_t *restrict kinds = view->kind;
+    const int periodic = grid->periodic[0] || grid->periodic[1] || grid->periodic[2];
+    for (sluice_index j = j0; j < j1; j++) {
+        if (j == i || !((mask >> kinds[j]) & 1u) || (select && select[j] != wanted))
+            continue;
+        const sluice_index at = j - base;
+        double s2 = 0;
+        for (uint32_t d = 0; d < dims; d++) {
+            double e = xi[d] - (double)position[d][at];
+            if (periodic && grid->periodic[d])
+                e = minimum_image(e, grid->length[d]);
+            s2 += e * e;
+        }
+        if (!(s2 < cutoff2))
+            continue;
+        if (out)
+            out[found] = j;
+        found++;
+    }
+    return found;
+}
+
 /* The candidates of target i within `cutoff` (m) at the positions of the
- * grid's last build (grid->built): the selected particles of the kinds in
- * `mask` in the cells around i's cell that the reach spans, in scan order
- * (rows of cells, then index). Writes them to out when out is not NULL;
- * returns their count. */
+ * grid's last build (grid->built, and grid->halo_built for the halo of a
+ * distributed run): the selected particles of the kinds in `mask` in the
+ * cells around i's cell that the reach spans, in scan order (rows of cells,
+ * then index; each row's own particles, then its halo). Writes them to out
+ * when out is not NULL; returns their count. */
 static sluice_index reach_scan(const sluice_pair_pass *pass, const sluice_grid *grid,
                                const sluice_view *view, sluice_index i, uint32_t mask,
                                double cutoff, sluice_index *out)
 {
-    const sluice_real *const *position = (const sluice_real *const *)grid->built;
+    sluice_real *const *position = grid->built;
+    sluice_real *const *halo_position = grid->halo_built;
+    const int halo = grid->halo_count > 0;
     const uint32_t dims = view->dimensions;
     const double cutoff2 = cutoff * cutoff;
     const uint32_t cell = grid->cell_of[i];
@@ -347,7 +384,6 @@ static sluice_index reach_scan(const sluice_pair_pass *pass, const sluice_grid *
     const uint8_t *restrict select =
         pass->select_column >= 0 ? view->columns[pass->select_column] : NULL;
     const uint8_t wanted = pass->select_value;
-    const uint8_t *restrict kinds = view->kind;
     const double xi[3] = {(double)position[0][i], (double)position[1][i],
                           dims == 3 ? (double)position[2][i] : 0.0};
     sluice_index found = 0;
@@ -360,25 +396,18 @@ static sluice_index reach_scan(const sluice_pair_pass *pass, const sluice_grid *
         const int64_t y1 = c[1] + range[1] < grid->cells[1] - 1 ? c[1] + range[1] : grid->cells[1] - 1;
         const int64_t z0 = c[2] - range[2] > 0 ? c[2] - range[2] : 0;
         const int64_t z1 = c[2] + range[2] < grid->cells[2] - 1 ? c[2] + range[2] : grid->cells[2] - 1;
-        const sluice_real *restrict px = position[0], *restrict py = position[1];
-        const sluice_real *restrict pz = dims == 3 ? position[2] : NULL;
         for (int64_t cz = z0; cz <= z1; cz++)
             for (int64_t cy = y0; cy <= y1; cy++) {
                 const size_t row = ((size_t)cz * (size_t)grid->cells[1] + (size_t)cy) *
                                    (size_t)grid->cells[0];
-                const sluice_index j0 = grid->cell_start[row + (size_t)x0];
-                const sluice_index j1 = grid->cell_start[row + (size_t)x1 + 1];
-                for (sluice_index j = j0; j < j1; j++) {
-                    if (j == i || !((mask >> kinds[j]) & 1u) || (select && select[j] != wanted))
-                        continue;
-                    const double e0 = xi[0] - (double)px[j], e1 = xi[1] - (double)py[j];
-                    const double e2 = pz ? xi[2] - (double)pz[j] : 0.0;
-                    if (!(e0 * e0 + e1 * e1 + e2 * e2 < cutoff2))
-                        continue;
-                    if (out)
-                        out[found] = j;
-                    found++;
-                }
+                found = reach_range(grid, view, position, 0, grid->cell_start[row + (size_t)x0],
+                                    grid->cell_start[row + (size_t)x1 + 1], i, xi, mask, select,
+                                    wanted, cutoff2, out, found);
+                if (halo)
+                    found = reach_range(grid, view, halo_position, grid->count,
+                                        grid->halo_start[row + (size_t)x0],
+                                        grid->halo_start[row + (size_t)x1 + 1], i, xi, mask,
+                                        select, wanted, cutoff2, out, found);
             }
         return found;
     }
@@ -397,30 +426,19 @@ static sluice_index reach_scan(const sluice_pair_pass *pass, const sluice_grid *
                 const size_t at = ((size_t)cz * (size_t)grid->cells[1] + (size_t)cy) *
                                       (size_t)grid->cells[0] +
                                   (size_t)cx;
-                const sluice_index j0 = grid->cell_start[at], j1 = grid->cell_start[at + 1];
-                for (sluice_index j = j0; j < j1; j++) {
-                    if (j == i || !((mask >> kinds[j]) & 1u) || (select && select[j] != wanted))
-                        continue;
-                    double s2 = 0;
-                    for (uint32_t d = 0; d < dims; d++) {
-                        double e = xi[d] - (double)position[d][j];
-                        if (grid->periodic[d])
-                            e = minimum_image(e, grid->length[d]);
-                        s2 += e * e;
-                    }
-                    if (!(s2 < cutoff2))
-                        continue;
-                    if (out)
-                        out[found] = j;
-                    found++;
-                }
+                found = reach_range(grid, view, position, 0, grid->cell_start[at],
+                                    grid->cell_start[at + 1], i, xi, mask, select, wanted, cutoff2,
+                                    out, found);
+                if (halo)
+                    found = reach_range(grid, view, halo_position, grid->count,
+                                        grid->halo_start[at], grid->halo_start[at + 1], i, xi,
+                                        mask, select, wanted, cutoff2, out, found);
             }
         }
     }
     return found;
 }
 
-/* 1 when target i takes part in the pass (a kind it acts on, selected). */
 static inline int reach_target(const sluice_pair_pass *pass, const sluice_view *view,
                                sluice_index i)
 {
@@ -697,7 +715,7 @@ static void flush_points(sluice_pair_engine *engine, const sluice_view *view,
 
 int sluice_point_pass_run(sluice_pair_engine *engine, const sluice_grid *grid,
                           const sluice_view *view, const sluice_real *points, sluice_index count,
-                          uint32_t kinds,
+                          uint32_t kinds, int with_halo,
                           void (*fn)(void *context, const sluice_view *view,
                                      const sluice_pair_batch *batch),
                           void *context)
@@ -734,7 +752,8 @@ int sluice_point_pass_run(sluice_pair_engine *engine, const sluice_grid *grid,
             for (sluice_index q = a; q < b && !failed; q++) {
                 const double p[3] = {(double)points[3 * (size_t)q], (double)points[3 * (size_t)q + 1],
                                      dims == 3 ? (double)points[3 * (size_t)q + 2] : 0.0};
-                sluice_index n = sluice_grid_near_point(grid, pos, p, support2, found, found_capacity);
+                sluice_index n = sluice_grid_near_point(grid, pos, p, support2, with_halo, found,
+                                                         found_capacity);
                 if (n > found_capacity) {
                     sluice_index *grown = realloc(found, (size_t)n * sizeof *grown);
                     if (!grown) {
@@ -743,7 +762,8 @@ int sluice_point_pass_run(sluice_pair_engine *engine, const sluice_grid *grid,
                     }
                     found = grown;
                     found_capacity = n;
-                    n = sluice_grid_near_point(grid, pos, p, support2, found, found_capacity);
+                    n = sluice_grid_near_point(grid, pos, p, support2, with_halo, found,
+                                                         found_capacity);
                 }
                 if (np + n > w->pair_capacity && t > 0) {
                     w->pair_begin[t] = np;

@@ -89,10 +89,11 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
  * within the support of a kind in `kinds`) with offsets point - x_j, the
  * distance (may be 0), W and F, handed to fn; batch->target holds point
  * indices and batch->gathered is NULL. Parallel over chunks of points.
+ * with_halo: the particles of the halo (other ranks') are pairs too.
  * Returns 0, or -1 on OOM. */
 int sluice_point_pass_run(sluice_pair_engine *engine, const sluice_grid *grid,
                           const sluice_view *view, const sluice_real *points, sluice_index count,
-                          uint32_t kinds,
+                          uint32_t kinds, int with_halo,
                           void (*fn)(void *context, const sluice_view *view,
                                      const sluice_pair_batch *batch),
                           void *context);

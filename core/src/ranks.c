@@ -226,7 +226,15 @@ int sluice_ranks_split(sluice_sim *sim)
     const sluice_comm *c = &sim->comm;
     sluice_halo_lists *h = &sim->halo;
     sluice_particles *p = &sim->particles;
-    h->width = (double)sim->grid.support + (double)sim->grid.skin;
+    /* the halo holds every particle a pass of this rank's particles may
+     * reach: the support, or the longest reach of a term beyond it
+     * (api->request_reach), from points up to the largest point margin
+     * outside the slab (api->point_pass_local), plus the neighbour skin */
+    double reach = (double)sim->grid.support;
+    for (uint32_t k = 0; k < sim->instance_count; k++)
+        if ((double)sim->instances[k].reach > reach)
+            reach = (double)sim->instances[k].reach;
+    h->width = reach + (double)sim->point_margin + (double)sim->grid.skin;
     if (sim->grid.periodic[0]) {
         sluice_sim_fail(sim, "a periodic x axis cannot be split across ranks yet (%d ranks; "
                              "docs/scaling.md)", c->size);
@@ -259,8 +267,8 @@ int sluice_ranks_split(sluice_sim *sim)
     if (narrow >= 0) {
         sluice_sim_fail(sim,
                         "%d ranks split the %u particles into slabs along x narrower than the "
-                        "kernel support plus the neighbour skin (%.6g m): slab %d is [%.6g, "
-                        "%.6g) m; use fewer ranks",
+                        "halo (the kernel support or a longer reach, plus the point margin and "
+                        "the neighbour skin: %.6g m): slab %d is [%.6g, %.6g) m; use fewer ranks",
                         c->size, n, h->width, narrow, bound[narrow], bound[narrow + 1]);
         free(sorted);
         free(bound);

@@ -16,7 +16,7 @@ typedef struct sluice_sim sluice_sim;
 
 typedef struct sluice_halo_lists {
     double slab_lo, slab_hi; /* the slab, -inf / +inf at the ends */
-    double width;            /* halo width: support + skin */
+    double width;            /* halo width: reach + point margin + skin (ranks.c) */
     sluice_index *send[2];   /* owned particles sent to the left (0) and right (1) rank */
     sluice_index send_count[2], send_capacity[2];
     sluice_index receive_count[2]; /* from the left and from the right */

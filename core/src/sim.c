@@ -449,17 +449,6 @@ static int add_particles(sluice_sim *sim, uint8_t kind, const sluice_real *posit
     return 0;
 }
 
-/* What a distributed run does not do yet (docs/scaling.md): refused with a
- * message naming the plugin, never run on one rank's particles only. */
-static int one_rank_only(sluice_host *host, const char *what)
-{
-    if (host->sim->comm.size == 1)
-        return SLUICE_OK;
-    api_error(host, "%s is not supported in a run across %d ranks yet (docs/scaling.md)", what,
-              host->sim->comm.size);
-    return SLUICE_ERROR;
-}
-
 /* Output and point passes across ranks: only for a component written for
  * them (SLUICE_COMPONENT_ACROSS_RANKS, 1.8), which combines its ranks'
  * figures with api->reduce; any other is refused, never left to write one
@@ -1063,17 +1052,28 @@ static sluice_real api_wall_distance(sluice_host *host, const sluice_real *point
     return (sluice_real)best;
 }
 
+/* Across ranks: the other ranks' particles in the halo as they are now
+ * (every field). Collective; nothing on one rank. */
+static int refresh_halo(sluice_sim *sim)
+{
+#ifdef SLUICE_MPI
+    if (sim->comm.size > 1 && sluice_ranks_refresh_halo(sim) != 0)
+        return SLUICE_ERROR;
+#else
+    (void)sim;
+#endif
+    return SLUICE_OK;
+}
+
 static int api_pair_pass(sluice_host *host)
 {
     sluice_sim *sim = host->sim;
-    if (one_rank_only(host, "an on-demand pair pass (api->pair_pass)") != SLUICE_OK)
-        return SLUICE_ERROR;
     sluice_instance *in = &sim->instances[host->instance];
     if (!in->on_demand) {
         api_error(host, "calls api->pair_pass but is not flagged SLUICE_COMPONENT_ON_DEMAND");
         return SLUICE_ERROR;
     }
-    if (update_neighbours(sim) != SLUICE_OK)
+    if (update_neighbours(sim) != SLUICE_OK || refresh_halo(sim) != SLUICE_OK)
         return SLUICE_ERROR;
     sim->evaluating++;
     int failed = sluice_pair_pass_run(&sim->engine, in->on_demand, &sim->grid, &sim->view) != 0;
@@ -1164,7 +1164,7 @@ static int api_point_pass(sluice_host *host, const sluice_real *points, sluice_i
         return SLUICE_ERROR;
     sim->evaluating++;
     int failed = sluice_point_pass_run(&sim->engine, &sim->grid, &sim->view, points, count,
-                                       sluice_neighbour_kinds(kinds), fn, context) != 0;
+                                       sluice_neighbour_kinds(kinds), 0, fn, context) != 0;
     sim->evaluating--;
     if (failed) {
         sluice_sim_fail(sim, "out of memory in the point pass of '%s'",
@@ -1174,11 +1174,74 @@ static int api_point_pass(sluice_host *host, const sluice_real *points, sluice_i
     return SLUICE_OK;
 }
 
+/* 1.9: points of the rank's own particles, with the halo's particles as
+ * pairs: one rank's result at every point within the component's margin of
+ * the slab. */
+static int api_point_pass_local(sluice_host *host, const sluice_real *points, sluice_index count,
+                                uint32_t kinds, sluice_point_fn fn, void *context)
+{
+    sluice_sim *sim = host->sim;
+    if (!fn || (count > 0 && !points)) {
+        api_error(host, "api->point_pass_local called without points or without a callback");
+        return SLUICE_ERROR;
+    }
+    /* collective across ranks, whatever this rank's count */
+    if (update_neighbours(sim) != SLUICE_OK || refresh_halo(sim) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (sim->comm.size > 1) {
+        /* the halo holds every particle within the support of a point up to
+         * point_margin outside the slab (ranks.c: its width) */
+        const double lo = sim->halo.slab_lo - (double)sim->point_margin;
+        const double hi = sim->halo.slab_hi + (double)sim->point_margin;
+        for (sluice_index q = 0; q < count; q++) {
+            const double x = (double)points[3 * (size_t)q];
+            if (!(x >= lo && x < hi)) {
+                sluice_sim_fail(sim,
+                                "step %lld: plugin '%s' interpolates at x = %.6g m on rank %d, "
+                                "beyond the %.6g m it requested (api->request_point_margin) "
+                                "from the rank's slab [%.6g, %.6g) m",
+                                (long long)sim->step, instance_name(sim, host->instance), x,
+                                sim->comm.rank, (double)sim->point_margin, sim->halo.slab_lo,
+                                sim->halo.slab_hi);
+                return SLUICE_ERROR;
+            }
+        }
+    }
+    if (count == 0)
+        return SLUICE_OK;
+    sim->evaluating++;
+    int failed = sluice_point_pass_run(&sim->engine, &sim->grid, &sim->view, points, count,
+                                       sluice_neighbour_kinds(kinds), 1, fn, context) != 0;
+    sim->evaluating--;
+    if (failed) {
+        sluice_sim_fail(sim, "out of memory in the point pass of '%s'",
+                        instance_name(sim, host->instance));
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
+static int api_request_point_margin(sluice_host *host, sluice_real margin)
+{
+    sluice_sim *sim = host->sim;
+    if (host->instance == SLUICE_CORE_INSTANCE || sim->phase > SLUICE_PHASE_INITIALISE) {
+        api_error(host, "api->request_point_margin is for a component's create(), bind() or "
+                        "initialise()");
+        return SLUICE_ERROR;
+    }
+    if (!(margin >= 0) || !isfinite(margin)) {
+        api_error(host, "api->request_point_margin: the margin %g m is not finite and >= 0",
+                  (double)margin);
+        return SLUICE_ERROR;
+    }
+    if (margin > sim->point_margin)
+        sim->point_margin = margin;
+    return SLUICE_OK;
+}
+
 static int api_request_reach(sluice_host *host, sluice_real radius)
 {
     sluice_sim *sim = host->sim;
-    if (one_rank_only(host, "a pass beyond the kernel support (api->request_reach)") != SLUICE_OK)
-        return SLUICE_ERROR;
     if (host->instance == SLUICE_CORE_INSTANCE || sim->creating != (int64_t)host->instance) {
         api_error(host, "api->request_reach is for a component's create()");
         return SLUICE_ERROR;
@@ -1320,6 +1383,8 @@ static const sluice_api api_table = {
     api_reduce,
     api_ranks,
     api_owns,
+    api_point_pass_local,
+    api_request_point_margin,
 };
 
 /* ------------------------------------------------------------ schedule -- */
@@ -2532,20 +2597,6 @@ static int load(sluice_sim *sim, const char *scene_path, const char *variant,
     kernel->component->kernel(kernel->state, 1, &zero, &r0, &w0, &f0);
     sim->engine.kernel_self = w0;
 #ifdef SLUICE_MPI
-    /* what reaches other particles outside the pair passes is not split yet */
-    for (uint32_t k = 0; k < sim->instance_count && sim->comm.size > 1; k++) {
-        const sluice_instance *in = &sim->instances[k];
-        const char *what = in->component->prepare ? "prepares each evaluation from other "
-                                                    "particles (point passes)"
-                           : in->on_demand ? "runs pair passes of its own between steps"
-                                           : NULL;
-        if (what) {
-            report(sim, k, "plugin '%s' %s, which is not supported in a run across %d ranks yet "
-                           "(docs/scaling.md)",
-                   in->name, what, sim->comm.size);
-            return 1;
-        }
-    }
     /* every rank built every particle: the scene's count, before the split */
     sim->particles_initial = sim->particles.count;
     if (sim->comm.size > 1 && !sim->check_only && sluice_ranks_split(sim) != 0) {

@@ -122,6 +122,7 @@ struct sluice_sim {
     sluice_pair_engine engine;
     sluice_comm comm;         /* the ranks of a distributed run (one by default) */
     sluice_halo_lists halo;   /* this rank's slab and halo (ranks.h) */
+    sluice_real point_margin; /* 1.9: the largest api->request_point_margin, m */
     sluice_pass *passes;
     uint32_t pass_count;
     uint32_t *prepare; /* instances with a prepare callback, scene order */

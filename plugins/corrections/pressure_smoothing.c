@@ -50,7 +50,7 @@ typedef struct ps_state {
     sluice_real rho0, gravity_magnitude, up[3], across[2][3], bin_width, half_spacing;
     sluice_field density, mass, pressure, hydrostatic, smoothed;
     /* work arrays of the hook, grown as needed */
-    sluice_real *levels;
+    double *levels; /* double: combined over MPI ranks with api->reduce */
     size_t level_capacity;
     sluice_index *fluid;
     sluice_real *buffer; /* 2 per fluid particle: pressure, density */
@@ -258,7 +258,7 @@ static sluice_real surface_level(const ps_state *s, const ps_bins *bins, const s
         frac[a] = u - f;
     }
     const int64_t na = bins->count[0];
-    const sluice_real own_level = s->levels[own[0] + na * own[1]];
+    const sluice_real own_level = (sluice_real)s->levels[own[0] + na * own[1]];
     sluice_real eta = 0;
     for (int corner = 0; corner < (1 << axes); corner++) {
         sluice_real weight = 1;
@@ -270,7 +270,7 @@ static sluice_real surface_level(const ps_state *s, const ps_bins *bins, const s
             weight *= upper ? frac[a] : 1 - frac[a];
             inside &= k[a] >= 0 && k[a] < bins->count[a];
         }
-        sluice_real level = inside ? s->levels[k[0] + na * k[1]] : own_level;
+        sluice_real level = inside ? (sluice_real)s->levels[k[0] + na * k[1]] : own_level;
         if (!(level > -INFINITY))
             level = own_level; /* empty column */
         eta += weight * level;
@@ -303,8 +303,18 @@ static int ps_hydrostatic(ps_state *s, sluice_host *host, const sluice_view *v)
             hi[a] = c > hi[a] ? c : hi[a];
         }
     }
-    if (fluid == 0)
+    /* across MPI ranks: the columns span every rank's fluid (the one-rank
+     * columns); the identity on one rank */
+    double extent[5] = {-(double)lo[0], -(double)lo[1], (double)hi[0], (double)hi[1],
+                        fluid > 0 ? 1.0 : 0.0};
+    if (api->reduce(host, extent, 5, SLUICE_REDUCE_MAX) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (extent[4] == 0)
         return SLUICE_OK;
+    for (int a = 0; a < axes; a++) {
+        lo[a] = (sluice_real)-extent[a];
+        hi[a] = (sluice_real)extent[2 + a];
+    }
     size_t total = 1;
     for (int a = 0; a < axes; a++) {
         const double span = floor((double)((hi[a] - lo[a]) / s->bin_width)) + 1;
@@ -319,7 +329,7 @@ static int ps_hydrostatic(ps_state *s, sluice_host *host, const sluice_view *v)
         total *= (size_t)span;
     }
     if (total > s->level_capacity) {
-        sluice_real *grown = realloc(s->levels, total * sizeof *grown);
+        double *grown = realloc(s->levels, total * sizeof *grown);
         if (!grown) {
             api->error(host, "out of memory (%zu free-surface columns)", total);
             return SLUICE_ERROR;
@@ -336,10 +346,14 @@ static int ps_hydrostatic(ps_state *s, sluice_host *host, const sluice_view *v)
         int64_t k[2] = {0, 0};
         for (int a = 0; a < axes; a++)
             k[a] = bin_index(across(s, v, i, a), bins.origin[a], s->bin_width, bins.count[a]);
-        const sluice_real top = elevation(s, v, i) + s->half_spacing;
-        sluice_real *level = &s->levels[k[0] + na * k[1]];
+        const double top = (double)(elevation(s, v, i) + s->half_spacing);
+        double *level = &s->levels[k[0] + na * k[1]];
         *level = top > *level ? top : *level;
     }
+    /* each column's highest particle over the ranks (collective) */
+    if (total > UINT32_MAX ||
+        api->reduce(host, s->levels, (uint32_t)total, SLUICE_REDUCE_MAX) != SLUICE_OK)
+        return SLUICE_ERROR;
     const sluice_real weight = s->rho0 * s->gravity_magnitude;
     for (sluice_index i = 0; i < n; i++) {
         if (kind[i] != SLUICE_KIND_FLUID)
@@ -424,6 +438,6 @@ static const sluice_component components[] = {{
     .after_step = ps_after_step,
 }};
 
-SLUICE_DEFINE_LIBRARY("pressure_smoothing", "1.0.0",
+SLUICE_DEFINE_LIBRARY("pressure_smoothing", "1.1.0",
                       "Shepard smoothing of the non-hydrostatic pressure", SLUICE_DIMS_ALL,
                       components)

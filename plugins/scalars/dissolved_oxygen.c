@@ -58,7 +58,12 @@
  * Initial value: every fluid particle initial_concentration, air particles 0
  * (set at the first evaluation, once the phase is known); particles created
  * during the run (inlets) start at initial_concentration too (set in this
- * plugin's after_step, and in any case before the next evaluation).
+ * plugin's after_step, and in any case before the next evaluation). A
+ * particle is new when its id is at least the first id not seen yet; across
+ * MPI ranks every scan looks at every particle of the rank (a particle that
+ * came from another rank changes no count) and the ranks agree on the first
+ * id not seen (api->reduce, maximum), so a particle initialised on one rank
+ * keeps its concentration when it moves to another.
  *
  * Time step: the explicit diffusion limit 0.125 h^2 / max(D) (as
  * laminar_viscosity, Morris et al. 1997; not multiplied by the Courant
@@ -92,6 +97,7 @@ typedef struct do_state {
     int started;          /* air particles zeroed (first evaluation) */
     sluice_id next_id;    /* particles with an id from here on are new */
     uint64_t seen;        /* count + removed at the last scan for new particles */
+    int32_t ranks;        /* ranks of the run (api->ranks) */
 } do_state;
 
 #define POSITIVE (SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE)
@@ -436,6 +442,10 @@ static int do_initialise(void *state, sluice_host *host)
     s->api->parallel_for(host, v->count, do_start, s);
     s->next_id = do_next_id(v);
     s->seen = (uint64_t)v->count + s->api->removed_count(host);
+    sluice_ranks ranks;
+    if (s->api->ranks(host, &ranks) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->ranks = ranks.count;
     return SLUICE_OK;
 }
 
@@ -452,7 +462,7 @@ static int do_scan(do_state *s, sluice_host *host)
     const uint64_t total = (uint64_t)v->count + s->api->removed_count(host);
     sluice_real *restrict c = sluice_real_column(v, s->concentration, 0);
     const uint8_t *phase = s->two_phase ? (const uint8_t *)v->columns[s->phase.column] : NULL;
-    if (total != s->seen) {
+    if (total != s->seen || s->ranks > 1) {
         const sluice_id first = s->next_id;
         for (sluice_index i = 0; i < v->count; i++)
             if (v->id[i] >= first) {
@@ -461,6 +471,12 @@ static int do_scan(do_state *s, sluice_host *host)
                     s->next_id = v->id[i] + 1;
             }
         s->seen = total;
+    }
+    if (s->ranks > 1) { /* collective: every rank scans at the same points */
+        double next = (double)s->next_id; /* ids below 2^53: exact */
+        if (s->api->reduce(host, &next, 1, SLUICE_REDUCE_MAX) != SLUICE_OK)
+            return SLUICE_ERROR;
+        s->next_id = (sluice_id)next;
     }
     if (!s->started) {
         if (phase)
@@ -562,6 +578,6 @@ static const sluice_component components[] = {{
     .load_state = do_load_state,
 }};
 
-SLUICE_DEFINE_LIBRARY("dissolved_oxygen", "1.0.0",
+SLUICE_DEFINE_LIBRARY("dissolved_oxygen", "1.1.0",
                       "dissolved oxygen: diffusion and air-water reaeration (seed 001)",
                       SLUICE_DIMS_ALL, components)

@@ -139,8 +139,13 @@ typedef struct mirror_state {
     sluice_real *wall_position; /* x_b, 3 reals each */
     sluice_real *mirror;        /* x_m, 3 reals each */
     double *normal;             /* n_b, 3 each */
-    sluice_index *index;        /* current particle index of each */
-    /* results of the point pass */
+    /* the own particles this rank holds (all of them on one rank), in view
+     * order, at each evaluation: local[m] is the k of the m-th, index[m]
+     * its particle index, points its x_m; slot[k] = m */
+    sluice_index local_count;
+    sluice_index *local, *index, *slot;
+    sluice_real *points;
+    /* results of the point pass, per local point m */
     uint8_t *status;
     double *value;    /* Q_MAX per point */
     double *gradient; /* density gradient, 3 per point */
@@ -211,6 +216,9 @@ static void mirror_destroy(void *state)
     free(s->mirror);
     free(s->normal);
     free(s->index);
+    free(s->local);
+    free(s->slot);
+    free(s->points);
     free(s->status);
     free(s->value);
     free(s->gradient);
@@ -345,6 +353,9 @@ static int mirror_initialise(void *state, sluice_host *host)
     s->mirror = malloc(n * 3 * sizeof *s->mirror);
     s->normal = malloc(n * 3 * sizeof *s->normal);
     s->index = malloc(n * sizeof *s->index);
+    s->local = malloc(n * sizeof *s->local);
+    s->slot = malloc(n * sizeof *s->slot);
+    s->points = malloc(n * 3 * sizeof *s->points);
     s->status = malloc(n);
     s->value = malloc(n * Q_MAX * sizeof *s->value);
     s->gradient = malloc(n * 3 * sizeof *s->gradient);
@@ -353,7 +364,8 @@ static int mirror_initialise(void *state, sluice_host *host)
     s->r0 = malloc(n * sizeof *s->r0);
     s->r1 = malloc(n * sizeof *s->r1);
     s->target = malloc(n * sizeof *s->target);
-    if (!s->mirror || !s->normal || !s->index || !s->status || !s->value || !s->gradient ||
+    if (!s->mirror || !s->normal || !s->index || !s->local || !s->slot || !s->points ||
+        !s->status || !s->value || !s->gradient ||
         !s->p0 || !s->p1 || !s->r0 || !s->r1 || !s->target) {
         api->error(host, "out of memory");
         return SLUICE_ERROR;
@@ -361,6 +373,7 @@ static int mirror_initialise(void *state, sluice_host *host)
     /* the mirror point of each wall particle across the nearest of the
      * scheme's walls */
     const uint32_t walls = api->wall_count(host);
+    double margin = 0;
     for (size_t k = 0; k < n; k++) {
         const sluice_real *xb = s->wall_position + 3 * k;
         sluice_wall_point best, candidate;
@@ -391,8 +404,12 @@ static int mirror_initialise(void *state, sluice_host *host)
         for (int d = 0; d < 3; d++)
             s->normal[3 * k + d] =
                 length > 1e-9 * (double)s->dx ? r[d] / length : (double)best.normal[d];
+        if (fabs(r[0]) > margin)
+            margin = fabs(r[0]);
     }
-    return SLUICE_OK;
+    /* across ranks the rank of a wall particle interpolates at its mirror
+     * point, up to `margin` along x outside its slab */
+    return api->request_point_margin(host, (sluice_real)margin);
 }
 
 /* ------------------------------------------------------- interpolation -- */
@@ -525,7 +542,7 @@ static void interpolate_points(void *context, const sluice_view *v, const sluice
 /* The density the EOS inverse gives for `count` pressures. */
 static int eos_inverse(mirror_state *s, sluice_host *host, const sluice_real *p, sluice_real *rho)
 {
-    return s->api->density_from_pressure(host, s->count, p, rho);
+    return s->api->density_from_pressure(host, s->local_count, p, rho);
 }
 
 /* p_m = EOS(rho_m) for every point with fluid, by a secant iteration on the
@@ -533,7 +550,7 @@ static int eos_inverse(mirror_state *s, sluice_host *host, const sluice_real *p,
  * first slope 1 / c0^2. Leaves p_m in s->p1. */
 static int pressure_of_density(mirror_state *s, sluice_host *host)
 {
-    const sluice_index n = s->count;
+    const sluice_index n = s->local_count;
     const double tolerance = 1e-13 * (double)s->rho0, c2 = (double)s->c0 * (double)s->c0;
     for (sluice_index k = 0; k < n; k++) {
         const int fluid = s->status[k] != STATUS_NONE;
@@ -575,23 +592,59 @@ static int pressure_of_density(mirror_state *s, sluice_host *host)
     return SLUICE_OK; /* within a few ulp: the last iterate stands */
 }
 
+/* The own particles this rank holds, in view order: local[], index[],
+ * slot[] and their mirror points. */
+static void list_local(mirror_state *s, const sluice_view *v)
+{
+    const sluice_index n = s->count;
+    sluice_index m = 0;
+    for (sluice_index i = 0; i < v->count; i++) {
+        const sluice_id k = v->id[i] - s->first_id;
+        if (k >= n)
+            continue;
+        s->local[m] = (sluice_index)k;
+        s->index[m] = i;
+        s->slot[k] = m;
+        memcpy(s->points + 3 * (size_t)m, s->mirror + 3 * (size_t)k, 3 * sizeof *s->points);
+        m++;
+    }
+    s->local_count = m;
+}
+
 static int mirror_prepare(void *state, sluice_host *host)
 {
     mirror_state *s = state;
     const sluice_api *api = s->api;
-    const sluice_index n = s->count;
-    if (n == 0)
+    if (s->count == 0)
         return SLUICE_OK;
+    list_local(s, api->view(host));
+    const sluice_index n = s->local_count;
     memset(s->status, STATUS_NONE, n);
-    if (api->point_pass(host, s->mirror, n, SLUICE_KIND_MASK(SLUICE_KIND_FLUID), interpolate_points,
-                        s) != SLUICE_OK)
+    /* collective across ranks: every rank calls it, with its own points */
+    if (api->point_pass_local(host, s->points, n, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+                              interpolate_points, s) != SLUICE_OK)
         return SLUICE_ERROR;
-    /* where the own particles are now (the core reorders them) */
+    /* where the own particles are now (a rebuild in the pass would have
+     * sorted them anew; wall particles never change rank) */
     const sluice_view *v = api->view(host);
+    sluice_index seen = 0;
     for (sluice_index i = 0; i < v->count; i++) {
         const sluice_id k = v->id[i] - s->first_id;
-        if (k < n)
-            s->index[k] = i;
+        if (k < s->count) {
+            const sluice_index m = s->slot[k];
+            if (m >= n || s->local[m] != (sluice_index)k) {
+                api->error(host, "wall particle id %llu came to this rank during an evaluation",
+                           (unsigned long long)v->id[i]);
+                return SLUICE_ERROR;
+            }
+            s->index[m] = i;
+            seen++;
+        }
+    }
+    if (seen != n) {
+        api->error(host, "%u wall particles left this rank during an evaluation",
+                   (unsigned)(n - seen));
+        return SLUICE_ERROR;
     }
     const uint32_t dims = s->dims;
     sluice_real *rho = sluice_real_column(v, s->density, 0);
@@ -600,43 +653,45 @@ static int mirror_prepare(void *state, sluice_host *host)
         if (pressure_of_density(s, host) != SLUICE_OK)
             return SLUICE_ERROR;
         /* p_b = p_m + rho_m g . (x_b - x_m); rest pressure without fluid */
-        for (sluice_index k = 0; k < n; k++) {
-            if (s->status[k] == STATUS_NONE) {
-                s->p0[k] = s->p_ref;
+        for (sluice_index m = 0; m < n; m++) {
+            if (s->status[m] == STATUS_NONE) {
+                s->p0[m] = s->p_ref;
                 continue;
             }
+            const size_t k = s->local[m];
             double correction = 0;
             for (uint32_t d = 0; d < dims; d++)
-                correction += s->g[d] * ((double)s->wall_position[3 * (size_t)k + d] -
-                                         (double)s->mirror[3 * (size_t)k + d]);
-            s->p0[k] = (sluice_real)((double)s->p1[k] +
-                                     s->value[(size_t)k * Q_MAX + Q_DENSITY] * correction);
-            if (s->clamp && s->p0[k] < s->p_ref)
-                s->p0[k] = s->p_ref;
+                correction += s->g[d] * ((double)s->wall_position[3 * k + d] -
+                                         (double)s->mirror[3 * k + d]);
+            s->p0[m] = (sluice_real)((double)s->p1[m] +
+                                     s->value[(size_t)m * Q_MAX + Q_DENSITY] * correction);
+            if (s->clamp && s->p0[m] < s->p_ref)
+                s->p0[m] = s->p_ref;
         }
         if (eos_inverse(s, host, s->p0, s->r0) != SLUICE_OK)
             return SLUICE_ERROR;
-        for (sluice_index k = 0; k < n; k++) {
-            sluice_real value = s->r0[k];
+        for (sluice_index m = 0; m < n; m++) {
+            sluice_real value = s->r0[m];
             if (!(value > 0) || !isfinite(value)) /* beyond the EOS's range */
-                value = s->status[k] == STATUS_NONE ? s->rho0 : s->target[k];
-            rho[s->index[k]] = value;
+                value = s->status[m] == STATUS_NONE ? s->rho0 : s->target[m];
+            rho[s->index[m]] = value;
         }
     } else {
-        for (sluice_index k = 0; k < n; k++) {
+        for (sluice_index m = 0; m < n; m++) {
+            const size_t k = s->local[m];
             double value = (double)s->rho0;
-            const double *q = s->value + (size_t)k * Q_MAX;
-            if (s->status[k] != STATUS_NONE) {
+            const double *q = s->value + (size_t)m * Q_MAX;
+            if (s->status[m] != STATUS_NONE) {
                 value = q[Q_DENSITY];
-                if (s->status[k] == STATUS_CORRECTED)
+                if (s->status[m] == STATUS_CORRECTED)
                     for (uint32_t d = 0; d < dims; d++)
-                        value += ((double)s->wall_position[3 * (size_t)k + d] -
-                                  (double)s->mirror[3 * (size_t)k + d]) *
-                                 s->gradient[3 * (size_t)k + d];
+                        value += ((double)s->wall_position[3 * k + d] -
+                                  (double)s->mirror[3 * k + d]) *
+                                 s->gradient[3 * (size_t)m + d];
             }
             if (s->clamp && value < (double)s->rho0)
                 value = (double)s->rho0;
-            rho[s->index[k]] = (sluice_real)value;
+            rho[s->index[m]] = (sluice_real)value;
         }
     }
 
@@ -644,10 +699,10 @@ static int mirror_prepare(void *state, sluice_host *host)
         sluice_real *u[3] = {NULL, NULL, NULL};
         for (uint32_t d = 0; d < dims; d++)
             u[d] = sluice_real_column(v, s->velocity, d);
-        for (sluice_index k = 0; k < n; k++) {
-            const sluice_index i = s->index[k];
-            const double *q = s->value + (size_t)k * Q_MAX + Q_VELOCITY;
-            if (s->status[k] == STATUS_NONE) {
+        for (sluice_index m = 0; m < n; m++) {
+            const sluice_index i = s->index[m];
+            const double *q = s->value + (size_t)m * Q_MAX + Q_VELOCITY;
+            if (s->status[m] == STATUS_NONE) {
                 for (uint32_t d = 0; d < dims; d++)
                     u[d][i] = 0;
                 continue;
@@ -656,7 +711,7 @@ static int mirror_prepare(void *state, sluice_host *host)
                 for (uint32_t d = 0; d < dims; d++)
                     u[d][i] = (sluice_real)(-q[d]);
             } else {
-                const double *nb = s->normal + 3 * (size_t)k;
+                const double *nb = s->normal + 3 * (size_t)s->local[m];
                 double normal = 0;
                 for (uint32_t d = 0; d < dims; d++)
                     normal += q[d] * nb[d];
@@ -708,7 +763,7 @@ static const sluice_component components[] = {
     },
 };
 
-SLUICE_DEFINE_LIBRARY("mirror_walls", "1.0.0",
+SLUICE_DEFINE_LIBRARY("mirror_walls", "1.1.0",
                       "wall particles with values from the fluid at their mirror points: ghost "
                       "particles and modified DBC",
                       SLUICE_DIMS_ALL, components)

@@ -33,7 +33,7 @@ extern "C" {
 #endif
 
 #define SLUICE_ABI_MAJOR 1
-#define SLUICE_ABI_MINOR 8
+#define SLUICE_ABI_MINOR 9
 #define SLUICE_PLUGIN_MAGIC 0x534c4349u /* "SLCI" */
 
 #if defined(__GNUC__)
@@ -383,7 +383,9 @@ typedef struct sluice_api {
     sluice_real (*wall_distance)(sluice_host *host, const sluice_real *point);
     /* For a component flagged SLUICE_COMPONENT_ON_DEMAND: run its pair
      * callback over every particle now, on the current state (from a hook,
-     * e.g. after_step every N steps). */
+     * e.g. after_step every N steps). Across ranks (1.9) the core first
+     * refreshes the halo, so the neighbours other ranks own are current:
+     * collective, every rank calls it at the same point of the run. */
     int (*pair_pass)(sluice_host *host);
 
     /* -- 1.2: equation of state. */
@@ -452,7 +454,8 @@ typedef struct sluice_api {
      * `kernel_gradient` are NULL: the term evaluates its own kernel from
      * `distance`. Fails after create(), for a non-pair component, or for a
      * radius that is not finite and positive; a radius within the support
-     * changes nothing. */
+     * changes nothing. Across ranks (1.9) the halo is as wide as the largest
+     * reach (plus the neighbour skin). */
     int (*request_reach)(sluice_host *host, sluice_real radius);
 
     /* -- 1.7: the pairs a reaching term needs. Called in create(), after
@@ -480,6 +483,27 @@ typedef struct sluice_api {
      * collective: the rank that owns a place adds the particles there (an
      * inlet's new column), the others leave it. */
     int (*owns)(sluice_host *host, const sluice_real *point);
+
+    /* -- 1.9: interpolation at points of this rank's own particles (a wall
+     * particle's mirror point, docs/scaling.md). As point_pass, but the
+     * pairs include, across ranks, the particles other ranks own near the
+     * slab (the halo, refreshed first), so that every point gets what it
+     * gets on one rank: the caller passes only points that belong to its
+     * rank's own particles (view->count), and it may run without
+     * SLUICE_COMPONENT_ACROSS_RANKS (nothing is summed over ranks). Each
+     * point must lie within the margin the component requested
+     * (request_point_margin; 0 by default) of the rank's slab; a point
+     * beyond it fails with a message. Collective across ranks: every rank
+     * calls it at the same point of the run, with its own points (count
+     * may be 0). On one rank it is point_pass. Call from prepare() or a
+     * hook, never from a particle or pair callback. */
+    int (*point_pass_local)(sluice_host *host, const sluice_real *points, sluice_index count,
+                            uint32_t kinds, sluice_point_fn fn, void *context);
+    /* In create(), bind() or initialise(): the points of this component's
+     * point_pass_local lie up to `margin` m (finite, >= 0) from the particle
+     * they belong to; across ranks the halo is widened by the largest
+     * margin requested. */
+    int (*request_point_margin)(sluice_host *host, sluice_real margin);
 } sluice_api;
 
 /* ----------------------------------------------------------- components -- */
