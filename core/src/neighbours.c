@@ -257,6 +257,9 @@ static inline sluice_index visit(const sluice_grid *grid, sluice_real *const pos
                 size_t cx = (size_t)((c[0] + k + grid->cells[0]) % grid->cells[0]);
                 found = scan_range(grid, pos, i, xi, yi, zi, grid->cell_start[row + cx],
                                    grid->cell_start[row + cx + 1], cutoff2, out, found);
+                if (grid->halo_count)
+                    found = scan_range(grid, pos, i, xi, yi, zi, grid->halo_start[row + cx],
+                                       grid->halo_start[row + cx + 1], cutoff2, out, found);
             }
         }
     }

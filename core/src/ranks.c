@@ -9,14 +9,21 @@
 
 #include "sim_internal.h"
 
-void sluice_ranks_free(sluice_halo_lists *lists)
+void sluice_ranks_free(sluice_halo_lists *h)
 {
-    for (int s = 0; s < 2; s++) {
-        free(lists->send[s]);
-        free(lists->buffer[s]);
-    }
-    free(lists->slot);
-    memset(lists, 0, sizeof *lists);
+    free(h->cuts);
+    free(h->boxes);
+    free(h->neighbour);
+    free(h->send);
+    free(h->send_begin);
+    free(h->receive_begin);
+    free(h->sent);
+    free(h->got);
+    free(h->requests);
+    free(h->slot);
+    for (int s = 0; s < 2; s++)
+        free(h->buffer[s]);
+    memset(h, 0, sizeof *h);
 }
 
 int sluice_ranks_gather(sluice_sim *sim, sluice_particles *all)
@@ -68,9 +75,10 @@ int sluice_ranks_gather(sluice_sim *sim, sluice_particles *all)
     return 0;
 }
 
-static int compare_real(const void *a, const void *b)
+
+static int compare_double(const void *a, const void *b)
 {
-    sluice_real x = *(const sluice_real *)a, y = *(const sluice_real *)b;
+    double x = *(const double *)a, y = *(const double *)b;
     return (x > y) - (x < y);
 }
 
@@ -95,131 +103,505 @@ static int grow(void **block, size_t *capacity, size_t bytes)
     return 0;
 }
 
-static int list_push(sluice_halo_lists *h, int side, sluice_index i)
+/* ------------------------------------------------------------- geometry -- */
+
+static uint32_t dims_of(const sluice_sim *sim)
 {
-    if (h->send_count[side] == h->send_capacity[side]) {
-        sluice_index cap = h->send_capacity[side] ? 2 * h->send_capacity[side] : 1024;
-        sluice_index *grown = realloc(h->send[side], (size_t)cap * sizeof *grown);
-        if (!grown)
-            return -1;
-        h->send[side] = grown;
-        h->send_capacity[side] = cap;
+    return sim->grid.dimensions;
+}
+
+/* x along axis d, wrapped into the domain on a periodic axis */
+static double wrap_axis(const sluice_grid *g, uint32_t d, double x)
+{
+    if (!g->periodic[d])
+        return x;
+    double v = x - g->length[d] * floor((x - g->lo[d]) / g->length[d]);
+    return v >= g->hi[d] ? g->lo[d] : v;
+}
+
+/* The gap along axis d between [a0, a1] and [b0, b1) (0 when they meet); on
+ * a periodic axis the shortest over the images of the second. */
+static double interval_gap(const sluice_grid *g, uint32_t d, double a0, double a1, double b0,
+                           double b1)
+{
+    double best = INFINITY;
+    const int images = g->periodic[d] ? 1 : 0;
+    for (int k = -images; k <= images; k++) {
+        const double shift = k * g->length[d];
+        const double lo = b0 + shift, hi = b1 + shift;
+        const double gap = a1 < lo ? lo - a1 : hi < a0 ? a0 - hi : 0;
+        best = gap < best ? gap : best;
     }
-    h->send[side][h->send_count[side]++] = i;
+    return best;
+}
+
+static int box_holds(const sluice_sim *sim, const double *box, const double *x)
+{
+    for (uint32_t d = 0; d < dims_of(sim); d++) {
+        const double v = wrap_axis(&sim->grid, d, x[d]);
+        if (!(v >= box[d] && v < box[3 + d]))
+            return 0;
+    }
+    return 1;
+}
+
+/* 1 when x lies within `width` of the box along every axis */
+static int near_box(const sluice_sim *sim, const double *box, const double *x, double width)
+{
+    for (uint32_t d = 0; d < dims_of(sim); d++)
+        if (!(interval_gap(&sim->grid, d, x[d], x[d], box[d], box[3 + d]) < width))
+            return 0;
+    return 1;
+}
+
+int sluice_ranks_owns(const sluice_sim *sim, const double point[3])
+{
+    const sluice_halo_lists *h = &sim->halo;
+    const double box[6] = {h->lo[0], h->lo[1], h->lo[2], h->hi[0], h->hi[1], h->hi[2]};
+    return box_holds(sim, box, point);
+}
+
+double sluice_ranks_outside(const sluice_sim *sim, const double point[3])
+{
+    const sluice_halo_lists *h = &sim->halo;
+    double worst = 0;
+    for (uint32_t d = 0; d < dims_of(sim); d++) {
+        const double v = wrap_axis(&sim->grid, d, point[d]);
+        const double gap = interval_gap(&sim->grid, d, v, v, h->lo[d], h->hi[d]);
+        worst = gap > worst || gap != gap ? gap : worst;
+    }
+    return worst;
+}
+
+static void position_of(const sluice_sim *sim, const sluice_particles *p, sluice_index i,
+                        double x[3])
+{
+    x[0] = x[1] = x[2] = 0;
+    for (uint32_t d = 0; d < dims_of(sim); d++)
+        x[d] = (double)((const sluice_real *)p->columns[sim->position.column + d])[i];
+}
+
+/* ----------------------------------------------------------------- cuts -- */
+
+/* The cuts by level: x slab i spans [cut_x(i), cut_x(i + 1)); in it, y
+ * slab j spans [cut_y(i, j), cut_y(i, j + 1)); in that, z slab k spans
+ * [cut_z(i, j, k), cut_z(i, j, k + 1)). Rank (i, j, k) is
+ * (i split[1] + j) split[2] + k. */
+static size_t cut_index(const int *s, int level, int i, int j, int k)
+{
+    const size_t nx = (size_t)s[0] + 1, ny = (size_t)s[0] * ((size_t)s[1] + 1);
+    if (level == 0)
+        return (size_t)i;
+    if (level == 1)
+        return nx + (size_t)i * ((size_t)s[1] + 1) + (size_t)j;
+    return nx + ny + ((size_t)i * (size_t)s[1] + (size_t)j) * ((size_t)s[2] + 1) + (size_t)k;
+}
+
+static size_t cut_total(const int *s)
+{
+    return cut_index(s, 2, s[0] - 1, s[1] - 1, s[2]) + 1;
+}
+
+/* The outer ends of every level: the domain on a periodic axis, +-inf on a
+ * closed one (particles outside the domain are reported by the grid). */
+static void outer_cuts(const sluice_sim *sim, const int *s, double *cuts)
+{
+    const sluice_grid *g = &sim->grid;
+    double lo[3], hi[3];
+    for (int d = 0; d < 3; d++) {
+        const int periodic = (uint32_t)d < dims_of(sim) && g->periodic[d];
+        lo[d] = periodic ? g->lo[d] : -INFINITY;
+        hi[d] = periodic ? g->hi[d] : INFINITY;
+    }
+    cuts[cut_index(s, 0, 0, 0, 0)] = lo[0];
+    cuts[cut_index(s, 0, s[0], 0, 0)] = hi[0];
+    for (int i = 0; i < s[0]; i++) {
+        cuts[cut_index(s, 1, i, 0, 0)] = lo[1];
+        cuts[cut_index(s, 1, i, s[1], 0)] = hi[1];
+        for (int j = 0; j < s[1]; j++) {
+            cuts[cut_index(s, 2, i, j, 0)] = lo[2];
+            cuts[cut_index(s, 2, i, j, s[2])] = hi[2];
+        }
+    }
+}
+
+/* The group of level `level` of the point x: its x slab (level 1) or its
+ * (x, y) column (level 2); 0 at level 0. */
+static int group_of(const sluice_sim *sim, const double *cuts, int level, const double *x)
+{
+    const int *s = sim->halo.split;
+    if (level == 0)
+        return 0;
+    const double vx = wrap_axis(&sim->grid, 0, x[0]);
+    int i = 0;
+    while (i + 1 < s[0] && !(vx < cuts[cut_index(s, 0, i + 1, 0, 0)]))
+        i++;
+    if (level == 1)
+        return i;
+    const double vy = wrap_axis(&sim->grid, 1, x[1]);
+    int j = 0;
+    while (j + 1 < s[1] && !(vy < cuts[cut_index(s, 1, i, j + 1, 0)]))
+        j++;
+    return i * s[1] + j;
+}
+
+static double *cut_at(const sluice_sim *sim, double *cuts, int level, int group, int k)
+{
+    const int *s = sim->halo.split;
+    if (level == 0)
+        return &cuts[cut_index(s, 0, k, 0, 0)];
+    if (level == 1)
+        return &cuts[cut_index(s, 1, group, k, 0)];
+    return &cuts[cut_index(s, 2, group / s[1], group % s[1], k)];
+}
+
+static int groups_of_level(const int *s, int level)
+{
+    return level == 0 ? 1 : level == 1 ? s[0] : s[0] * s[1];
+}
+
+/* Sets the boxes from the cuts, this rank's box, and its neighbours (the
+ * ranks whose box meets this box widened by the halo width). */
+static int boxes_from_cuts(sluice_sim *sim)
+{
+    sluice_halo_lists *h = &sim->halo;
+    const int *s = h->split, size = sim->comm.size;
+    for (int i = 0; i < s[0]; i++)
+        for (int j = 0; j < s[1]; j++)
+            for (int k = 0; k < s[2]; k++) {
+                double *b = h->boxes + 6 * (size_t)((i * s[1] + j) * s[2] + k);
+                b[0] = h->cuts[cut_index(s, 0, i, 0, 0)];
+                b[3] = h->cuts[cut_index(s, 0, i + 1, 0, 0)];
+                b[1] = h->cuts[cut_index(s, 1, i, j, 0)];
+                b[4] = h->cuts[cut_index(s, 1, i, j + 1, 0)];
+                b[2] = h->cuts[cut_index(s, 2, i, j, k)];
+                b[5] = h->cuts[cut_index(s, 2, i, j, k + 1)];
+            }
+    const double *own = h->boxes + 6 * (size_t)sim->comm.rank;
+    for (int d = 0; d < 3; d++) {
+        h->lo[d] = own[d];
+        h->hi[d] = own[3 + d];
+    }
+    int count = 0;
+    for (int r = 0; r < size; r++) {
+        if (r == sim->comm.rank)
+            continue;
+        const double *b = h->boxes + 6 * (size_t)r;
+        int meets = 1;
+        for (uint32_t d = 0; d < dims_of(sim) && meets; d++)
+            meets = interval_gap(&sim->grid, d, own[d], own[3 + d], b[d], b[3 + d]) < h->width;
+        if (meets)
+            h->neighbour[count++] = r;
+    }
+    h->neighbour_count = count;
     return 0;
 }
 
-/* Packs the rows send[0] (then send[1]) column by column into buffer[0]. */
+/* The split of the rank count over the axes of `mask` (bit d: axis d) that
+ * gives the boxes the least surface for the particles' extent (ties: more
+ * cuts along x, then y). */
+static int choose_split(const sluice_sim *sim, int mask, const double *extent, int *split)
+{
+    const int size = sim->comm.size;
+    const uint32_t dims = dims_of(sim);
+    double best = INFINITY;
+    split[0] = split[1] = split[2] = 0;
+    for (int px = 1; px <= size; px++) {
+        if (size % px || (px > 1 && !(mask & 1)))
+            continue;
+        for (int py = 1; py <= size / px; py++) {
+            if ((size / px) % py || (py > 1 && !(mask & 2)))
+                continue;
+            const int pz = size / px / py;
+            if (pz > 1 && (!(mask & 4) || dims < 3))
+                continue;
+            const double a = extent[0] / px, b = extent[1] / py, c = extent[2] / pz;
+            const double surface = dims == 3 ? a * b + b * c + a * c : a + b;
+            if (surface < best * (1 - 1e-12)) {
+                best = surface;
+                split[0] = px, split[1] = py, split[2] = pz;
+            }
+        }
+    }
+    return split[0] > 0 ? 0 : -1;
+}
+
+/* Cuts of equal counts from every particle of the store (every rank holds
+ * all of them: the same cuts on every rank without a message), level by
+ * level: the cut between the m-th and (m+1)-th coordinate of the group,
+ * m = k n / parts. */
+static int cuts_of_equal_counts(sluice_sim *sim)
+{
+    sluice_halo_lists *h = &sim->halo;
+    const sluice_particles *p = &sim->particles;
+    const sluice_index n = p->count;
+    const int *s = h->split;
+    double *values = malloc(((size_t)n + 1) * sizeof *values);
+    int *group = malloc(((size_t)n + 1) * sizeof *group);
+    if (!values || !group) {
+        free(values);
+        free(group);
+        return -1;
+    }
+    outer_cuts(sim, s, h->cuts);
+    for (int level = 0; level < 3; level++) {
+        const int parts = s[level], groups = groups_of_level(s, level);
+        if (parts == 1)
+            continue;
+        for (sluice_index i = 0; i < n; i++) {
+            double x[3];
+            position_of(sim, p, i, x);
+            group[i] = group_of(sim, h->cuts, level, x);
+        }
+        for (int gr = 0; gr < groups; gr++) {
+            size_t m = 0;
+            for (sluice_index i = 0; i < n; i++)
+                if (group[i] == gr) {
+                    double x[3];
+                    position_of(sim, p, i, x);
+                    values[m++] = wrap_axis(&sim->grid, (uint32_t)level, x[level]);
+                }
+            qsort(values, m, sizeof *values, compare_double);
+            for (int k = 1; k < parts; k++) {
+                const size_t at = (size_t)((uint64_t)k * m / (uint64_t)parts);
+                double cut;
+                if (m == 0) /* an empty group: even cuts of the domain */
+                    cut = sim->grid.lo[level] +
+                          (sim->grid.hi[level] - sim->grid.lo[level]) * k / parts;
+                else if (at == 0)
+                    cut = values[0];
+                else if (at >= m)
+                    cut = values[m - 1];
+                else
+                    cut = 0.5 * (values[at - 1] + values[at]);
+                *cut_at(sim, h->cuts, level, gr, k) = cut;
+            }
+        }
+    }
+    free(values);
+    free(group);
+    return 0;
+}
+
+/* Weighted quantiles along axis `level` of the ranks' own particles, every
+ * particle of this rank weighing `weight`, for every group of the level
+ * (under the cuts of the levels above, already in `cuts`): target[g, k] is
+ * where the weight left of it is k / parts of the group's. Two histograms
+ * summed over the ranks: 512 bins over the group's extent, then 256 within
+ * the bin of each target, and linear within the sub-bin. A group without
+ * weight keeps its cuts. Collective. */
+enum { COARSE_BINS = 512, FINE_BINS = 256 };
+
+static int weighted_cuts(sluice_sim *sim, int level, double weight, double *cuts)
+{
+    const sluice_halo_lists *h = &sim->halo;
+    const sluice_particles *p = &sim->particles;
+    const sluice_index n = p->count;
+    const int parts = h->split[level], groups = groups_of_level(h->split, level);
+    const size_t targets = (size_t)groups * (size_t)(parts - 1);
+    double *range = malloc(2 * (size_t)groups * sizeof *range);
+    double *coarse = calloc((size_t)groups * COARSE_BINS, sizeof *coarse);
+    double *fine = calloc(targets * FINE_BINS + 1, sizeof *fine);
+    int *bin = malloc((targets + 1) * sizeof *bin);
+    double *below = malloc((targets + 1) * sizeof *below);
+    int *group = malloc(((size_t)n + 1) * sizeof *group);
+    double *value = malloc(((size_t)n + 1) * sizeof *value);
+    int failed = !range || !coarse || !fine || !bin || !below || !group || !value;
+    if (sluice_comm_any(&sim->comm, failed)) {
+        free(range), free(coarse), free(fine), free(bin), free(below), free(group), free(value);
+        return -1;
+    }
+    for (int gr = 0; gr < groups; gr++)
+        range[gr] = range[groups + gr] = INFINITY; /* min, -max */
+    for (sluice_index i = 0; i < n; i++) {
+        double x[3];
+        position_of(sim, p, i, x);
+        group[i] = group_of(sim, cuts, level, x);
+        value[i] = wrap_axis(&sim->grid, (uint32_t)level, x[level]);
+        if (value[i] == value[i]) {
+            range[group[i]] = fmin(range[group[i]], value[i]);
+            range[groups + group[i]] = fmin(range[groups + group[i]], -value[i]);
+        }
+    }
+    sluice_comm_reduce(&sim->comm, range, 2 * (uint32_t)groups, SLUICE_REDUCE_MIN);
+    for (sluice_index i = 0; i < n; i++) {
+        const int gr = group[i];
+        const double lo = range[gr], width = -range[groups + gr] - lo;
+        if (!(value[i] == value[i]) || !(width > 0))
+            continue;
+        int b = (int)((value[i] - lo) / width * COARSE_BINS);
+        b = b < 0 ? 0 : b >= COARSE_BINS ? COARSE_BINS - 1 : b;
+        coarse[(size_t)gr * COARSE_BINS + (size_t)b] += weight;
+    }
+    sluice_comm_reduce(&sim->comm, coarse, (uint32_t)groups * COARSE_BINS, SLUICE_REDUCE_SUM);
+    /* the coarse bin of every target, and the weight below it */
+    for (int gr = 0; gr < groups; gr++) {
+        const double *c = coarse + (size_t)gr * COARSE_BINS;
+        double total = 0;
+        for (int b = 0; b < COARSE_BINS; b++)
+            total += c[b];
+        for (int k = 1; k < parts; k++) {
+            const size_t t = (size_t)gr * (size_t)(parts - 1) + (size_t)(k - 1);
+            bin[t] = -1;
+            if (!(total > 0) || !(-range[groups + gr] - range[gr] > 0))
+                continue;
+            const double goal = total * k / parts;
+            double sum = 0;
+            int b = 0;
+            while (b + 1 < COARSE_BINS && sum + c[b] < goal)
+                sum += c[b++];
+            bin[t] = b;
+            below[t] = sum;
+        }
+    }
+    for (sluice_index i = 0; i < n; i++) {
+        const int gr = group[i];
+        const double lo = range[gr], width = -range[groups + gr] - lo;
+        if (!(value[i] == value[i]) || !(width > 0))
+            continue;
+        const double u = (value[i] - lo) / width * COARSE_BINS;
+        int b = (int)u;
+        b = b < 0 ? 0 : b >= COARSE_BINS ? COARSE_BINS - 1 : b;
+        for (int k = 1; k < parts; k++) {
+            const size_t t = (size_t)gr * (size_t)(parts - 1) + (size_t)(k - 1);
+            if (bin[t] != b)
+                continue;
+            int f = (int)((u - b) * FINE_BINS);
+            f = f < 0 ? 0 : f >= FINE_BINS ? FINE_BINS - 1 : f;
+            fine[t * FINE_BINS + (size_t)f] += weight;
+        }
+    }
+    sluice_comm_reduce(&sim->comm, fine, (uint32_t)(targets * FINE_BINS), SLUICE_REDUCE_SUM);
+    for (int gr = 0; gr < groups; gr++) {
+        const double *c = coarse + (size_t)gr * COARSE_BINS;
+        double total = 0;
+        for (int b = 0; b < COARSE_BINS; b++)
+            total += c[b];
+        const double lo = range[gr], width = -range[groups + gr] - lo;
+        for (int k = 1; k < parts; k++) {
+            const size_t t = (size_t)gr * (size_t)(parts - 1) + (size_t)(k - 1);
+            if (bin[t] < 0)
+                continue;
+            const double goal = total * k / parts, step = width / COARSE_BINS / FINE_BINS;
+            double sum = below[t], at = lo + width * bin[t] / COARSE_BINS;
+            const double *fb = fine + t * FINE_BINS;
+            int f = 0;
+            while (f + 1 < FINE_BINS && sum + fb[f] < goal)
+                sum += fb[f++];
+            const double fraction = fb[f] > 0 ? (goal - sum) / fb[f] : 0.5;
+            *cut_at(sim, cuts, level, gr, k) =
+                at + step * (f + (fraction < 0 ? 0 : fraction > 1 ? 1 : fraction));
+        }
+    }
+    free(range), free(coarse), free(fine), free(bin), free(below), free(group), free(value);
+    return 0;
+}
+
+/* ------------------------------------------------------------ exchange -- */
+
+/* Packs, neighbour by neighbour, the rows send[send_begin[k] ..) column by
+ * column into buffer[0]. */
 static int pack(sluice_sim *sim, sluice_halo_lists *h)
 {
     const sluice_particles *p = &sim->particles;
     const size_t row = row_bytes(p);
-    const size_t total = (size_t)(h->send_count[0] + h->send_count[1]) * row;
-    if (grow((void **)&h->buffer[0], &h->buffer_capacity[0], total) != 0)
+    const size_t total = (size_t)h->send_begin[h->neighbour_count] * row;
+    if (grow((void **)&h->buffer[0], &h->buffer_capacity[0], total + 1) != 0)
         return -1;
     char *out = h->buffer[0];
-    for (int side = 0; side < 2; side++)
+    for (int k = 0; k < h->neighbour_count; k++)
         for (uint32_t c = 0; c < p->column_count; c++) {
             const size_t e = p->element_size[c];
             const char *base = p->columns[c];
-            const sluice_index *list = h->send[side];
-            for (sluice_index k = 0; k < h->send_count[side]; k++, out += e)
-                memcpy(out, base + (size_t)list[k] * e, e);
+            for (sluice_index m = h->send_begin[k]; m < h->send_begin[k + 1]; m++, out += e)
+                memcpy(out, base + (size_t)h->send[m] * e, e);
         }
     return 0;
 }
 
-/* Sends buffer[0] (the left block, then the right) to the neighbours and
- * receives theirs into buffer[1] (from the left, then from the right);
- * receive_count[] gets their counts. Collective over the neighbours. */
-static int swap(sluice_sim *sim, sluice_halo_lists *h)
+/* Sends each neighbour its block of buffer[0] and receives its block into
+ * buffer[1] (in neighbour order); receive_begin gets the offsets. Collective
+ * over the neighbours. */
+static int exchange(sluice_sim *sim, sluice_halo_lists *h)
 {
     const sluice_comm *c = &sim->comm;
-    const int left = c->rank > 0 ? c->rank - 1 : MPI_PROC_NULL;
-    const int right = c->rank + 1 < c->size ? c->rank + 1 : MPI_PROC_NULL;
+    const int count = h->neighbour_count;
     const size_t row = row_bytes(&sim->particles);
-    unsigned long long sent[2] = {h->send_count[0], h->send_count[1]}, got[2] = {0, 0};
-    MPI_Sendrecv(&sent[0], 1, MPI_UNSIGNED_LONG_LONG, left, 11, &got[1], 1,
-                 MPI_UNSIGNED_LONG_LONG, right, 11, c->comm, MPI_STATUS_IGNORE);
-    MPI_Sendrecv(&sent[1], 1, MPI_UNSIGNED_LONG_LONG, right, 12, &got[0], 1,
-                 MPI_UNSIGNED_LONG_LONG, left, 12, c->comm, MPI_STATUS_IGNORE);
-    if ((sent[0] + sent[1]) * row > INT_MAX || (got[0] + got[1]) * row > INT_MAX) {
-        sluice_sim_fail(sim, "rank %d: a halo or migration message exceeds 2 GB", c->rank);
+    MPI_Request *request = h->requests;
+    for (int k = 0; k < count; k++) {
+        h->sent[k] = h->send_begin[k + 1] - h->send_begin[k];
+        MPI_Irecv(&h->got[k], 1, MPI_UNSIGNED_LONG_LONG, h->neighbour[k], 21, c->comm,
+                  &request[k]);
+        MPI_Isend(&h->sent[k], 1, MPI_UNSIGNED_LONG_LONG, h->neighbour[k], 21, c->comm,
+                  &request[count + k]);
+    }
+    MPI_Waitall(2 * count, request, MPI_STATUSES_IGNORE);
+    unsigned long long total = 0;
+    int too_large = 0;
+    h->receive_begin[0] = 0;
+    for (int k = 0; k < count; k++) {
+        too_large |= h->got[k] * row > INT_MAX || h->sent[k] * row > INT_MAX;
+        total += h->got[k];
+        h->receive_begin[k + 1] = (sluice_index)total;
+    }
+    if (too_large || total > UINT32_MAX / 2) {
+        sluice_sim_fail(sim, "rank %d: a halo message exceeds 2 GB", c->rank);
         return -1;
     }
-    h->receive_count[0] = (sluice_index)got[0];
-    h->receive_count[1] = (sluice_index)got[1];
-    if (grow((void **)&h->buffer[1], &h->buffer_capacity[1], (size_t)(got[0] + got[1]) * row) !=
-        0) {
+    if (grow((void **)&h->buffer[1], &h->buffer_capacity[1], (size_t)total * row + 1) != 0) {
         sluice_sim_fail(sim, "out of memory for the halo of rank %d", c->rank);
         return -1;
     }
-    /* blocks are column-major per side: [side 0: every column][side 1: ...] */
-    char *send_left = h->buffer[0], *send_right = h->buffer[0] + (size_t)sent[0] * row;
-    char *from_left = h->buffer[1], *from_right = h->buffer[1] + (size_t)got[0] * row;
-    MPI_Sendrecv(send_left, (int)(sent[0] * row), MPI_BYTE, left, 13, from_right,
-                 (int)(got[1] * row), MPI_BYTE, right, 13, c->comm, MPI_STATUS_IGNORE);
-    MPI_Sendrecv(send_right, (int)(sent[1] * row), MPI_BYTE, right, 14, from_left,
-                 (int)(got[0] * row), MPI_BYTE, left, 14, c->comm, MPI_STATUS_IGNORE);
+    for (int k = 0; k < count; k++) {
+        MPI_Irecv(h->buffer[1] + (size_t)h->receive_begin[k] * row, (int)(h->got[k] * row),
+                  MPI_BYTE, h->neighbour[k], 22, c->comm, &request[k]);
+        MPI_Isend(h->buffer[0] + (size_t)h->send_begin[k] * row, (int)(h->sent[k] * row),
+                  MPI_BYTE, h->neighbour[k], 22, c->comm, &request[count + k]);
+    }
+    MPI_Waitall(2 * count, request, MPI_STATUSES_IGNORE);
     return 0;
 }
 
-/* Writes the received rows (from the left, then from the right) to the store
- * rows first + k, or first + slot[k] when slot is given. */
-static void unpack(sluice_particles *p, const sluice_halo_lists *h, sluice_index first,
-                   const sluice_index *slot)
+/* Writes blocks of rows (each column by column) from `in` to the store rows
+ * first + k, or first + slot[k] when slot is given; blocks[b] .. blocks[b +
+ * 1] are the rows of block b. */
+static void unpack(sluice_particles *p, const char *in, const sluice_index *blocks, int count,
+                   sluice_index first, const sluice_index *slot)
 {
-    const char *in = h->buffer[1];
-    sluice_index k0 = 0;
-    for (int side = 0; side < 2; side++) {
-        const sluice_index n = h->receive_count[side];
+    for (int b = 0; b < count; b++) {
+        const sluice_index k0 = blocks[b], rows = blocks[b + 1] - blocks[b];
         for (uint32_t c = 0; c < p->column_count; c++) {
             const size_t e = p->element_size[c];
             char *base = p->columns[c];
-            for (sluice_index k = 0; k < n; k++, in += e) {
+            for (sluice_index k = 0; k < rows; k++, in += e) {
                 const sluice_index to = first + (slot ? slot[k0 + k] : k0 + k);
                 memcpy(base + (size_t)to * e, in, e);
             }
         }
-        k0 += n;
     }
 }
 
-enum { SEND_MIGRANTS, SEND_HALO };
-
-/* Lists the rank's particles to send left and right (the particles that left
- * the slab, or those within the halo width of its sides), packs them and
- * swaps them with the neighbours' into buffer[1]. Collective. */
-static int send_to_neighbours(sluice_sim *sim, int what)
+/* Room for the neighbour lists of up to `size` ranks. */
+static int neighbour_arrays(sluice_sim *sim)
 {
     sluice_halo_lists *h = &sim->halo;
-    const sluice_index n = sim->particles.count;
-    const sluice_real *x = sim->particles.columns[sim->position.column];
-    const int has_left = sim->comm.rank > 0, has_right = sim->comm.rank + 1 < sim->comm.size;
-    h->send_count[0] = h->send_count[1] = 0;
-    int failed = 0;
-    for (sluice_index i = 0; i < n && !failed; i++) {
-        const double xi = (double)x[i]; /* NaN stays: the grid build reports it */
-        if (what == SEND_MIGRANTS) {
-            if (xi < h->slab_lo)
-                failed = list_push(h, 0, i);
-            else if (xi >= h->slab_hi)
-                failed = list_push(h, 1, i);
-        } else {
-            if (has_left && xi < h->slab_lo + h->width)
-                failed = list_push(h, 0, i);
-            if (!failed && has_right && xi >= h->slab_hi - h->width)
-                failed = list_push(h, 1, i);
-        }
-    }
-    if (failed || pack(sim, h) != 0) {
-        sluice_sim_fail(sim, "out of memory %s on rank %d",
-                        what == SEND_MIGRANTS ? "migrating particles" : "for the halo",
-                        sim->comm.rank);
-        return -1;
-    }
-    return swap(sim, h);
+    const size_t size = (size_t)sim->comm.size;
+    h->cut_count = cut_total(h->split);
+    h->cuts = malloc(h->cut_count * sizeof *h->cuts);
+    h->boxes = malloc(6 * size * sizeof *h->boxes);
+    h->neighbour = malloc(size * sizeof *h->neighbour);
+    h->send_begin = calloc(size + 1, sizeof *h->send_begin);
+    h->receive_begin = calloc(size + 1, sizeof *h->receive_begin);
+    h->sent = malloc(size * sizeof *h->sent);
+    h->got = malloc(size * sizeof *h->got);
+    h->requests = malloc(2 * size * sizeof(MPI_Request));
+    return h->cuts && h->boxes && h->neighbour && h->send_begin && h->receive_begin && h->sent &&
+                   h->got && h->requests
+               ? 0
+               : -1;
 }
+
+/* ---------------------------------------------------------------- split -- */
 
 int sluice_ranks_split(sluice_sim *sim)
 {
@@ -229,63 +611,50 @@ int sluice_ranks_split(sluice_sim *sim)
     /* the halo holds every particle a pass of this rank's particles may
      * reach: the support, or the longest reach of a term beyond it
      * (api->request_reach), from points up to the largest point margin
-     * outside the slab (api->point_pass_local), plus the neighbour skin */
+     * outside the box (api->point_pass_local), plus the neighbour skin */
     double reach = (double)sim->grid.support;
     for (uint32_t k = 0; k < sim->instance_count; k++)
         if ((double)sim->instances[k].reach > reach)
             reach = (double)sim->instances[k].reach;
     h->width = reach + (double)sim->point_margin + (double)sim->grid.skin;
-    if (sim->grid.periodic[0]) {
-        sluice_sim_fail(sim, "a periodic x axis cannot be split across ranks yet (%d ranks; "
-                             "docs/scaling.md)", c->size);
+    /* the split: the scene's axes, the counts from the particles' extent */
+    const sluice_index n = p->count;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (sluice_index i = 0; i < n; i++) {
+        double x[3];
+        position_of(sim, p, i, x);
+        for (uint32_t d = 0; d < dims_of(sim); d++) {
+            lo[d] = fmin(lo[d], x[d]);
+            hi[d] = fmax(hi[d], x[d]);
+        }
+    }
+    double extent[3] = {1, 1, 1};
+    for (uint32_t d = 0; d < dims_of(sim); d++)
+        extent[d] = hi[d] > lo[d] ? hi[d] - lo[d] : (double)sim->spacing;
+    if (choose_split(sim, sim->scene.ranks.split, extent, h->split) != 0) {
+        sluice_sim_fail(sim, "%d ranks cannot be split along the axes of ranks.split", c->size);
         return -1;
     }
-    const sluice_index n = p->count;
-    const sluice_real *x = p->columns[sim->position.column];
-    sluice_real *sorted = malloc(((size_t)n + 1) * sizeof *sorted);
-    double *bound = malloc(((size_t)c->size + 1) * sizeof *bound);
     uint8_t *away = calloc((size_t)n + 1, 1);
-    if (!sorted || !bound || !away) {
-        free(sorted);
-        free(bound);
+    if (!away || neighbour_arrays(sim) != 0 || cuts_of_equal_counts(sim) != 0) {
         free(away);
         sluice_sim_fail(sim, "out of memory splitting %u particles across %d ranks", n, c->size);
         return -1;
     }
-    memcpy(sorted, x, (size_t)n * sizeof *sorted);
-    qsort(sorted, n, sizeof *sorted, compare_real);
-    bound[0] = -INFINITY;
-    bound[c->size] = INFINITY;
-    for (int r = 1; r < c->size; r++) {
-        size_t k = (size_t)((uint64_t)r * n / (uint64_t)c->size);
-        bound[r] = k == 0 ? (double)sorted[0] : 0.5 * ((double)sorted[k - 1] + (double)sorted[k]);
+    boxes_from_cuts(sim);
+    for (sluice_index i = 0; i < n; i++) {
+        double x[3];
+        position_of(sim, p, i, x);
+        const double box[6] = {h->lo[0], h->lo[1], h->lo[2], h->hi[0], h->hi[1], h->hi[2]};
+        away[i] = !box_holds(sim, box, x);
     }
-    int narrow = -1;
-    for (int r = 1; r + 1 < c->size; r++)
-        if (!(bound[r + 1] - bound[r] >= h->width))
-            narrow = r;
-    if (narrow >= 0) {
-        sluice_sim_fail(sim,
-                        "%d ranks split the %u particles into slabs along x narrower than the "
-                        "halo (the kernel support or a longer reach, plus the point margin and "
-                        "the neighbour skin: %.6g m): slab %d is [%.6g, %.6g) m; use fewer ranks",
-                        c->size, n, h->width, narrow, bound[narrow], bound[narrow + 1]);
-        free(sorted);
-        free(bound);
-        free(away);
-        return -1;
-    }
-    h->slab_lo = bound[c->rank];
-    h->slab_hi = bound[c->rank + 1];
-    for (sluice_index i = 0; i < n; i++)
-        away[i] = !((double)x[i] >= h->slab_lo && (double)x[i] < h->slab_hi);
     sluice_particles_compact(p, away);
-    free(sorted);
-    free(bound);
     free(away);
     sluice_sim_refresh_view(sim);
     return 0;
 }
+
+/* -------------------------------------------------------------- balance -- */
 
 int sluice_ranks_balance(sluice_sim *sim)
 {
@@ -296,156 +665,246 @@ int sluice_ranks_balance(sluice_sim *sim)
         sim->step < h->balance_step + sim->scene.ranks.every)
         return 0;
     h->balance_step = sim->step;
-    const int size = c->size;
-    /* every rank's work (time, or particles) and particles */
-    double mine[2] = {balance == SLUICE_BALANCE_TIME ? h->busy_seconds
-                                                     : (double)sim->particles.count,
-                      (double)sim->particles.count};
-    double *all = malloc(2 * (size_t)size * sizeof *all);
-    double *bound = malloc(((size_t)size + 1) * sizeof *bound);
-    double *proposed = malloc(((size_t)size + 1) * sizeof *proposed);
-    int failed = !all || !bound || !proposed;
-    if (sluice_comm_any(c, failed)) {
-        free(all), free(bound), free(proposed);
+    const double count = (double)sim->particles.count;
+    const double work = balance == SLUICE_BALANCE_TIME ? h->busy_seconds : count;
+    h->busy_seconds = 0;
+    const double total = sluice_comm_sum(c, work), largest = sluice_comm_max(c, work);
+    const double mean = total / c->size;
+    if (!(mean > 0 && largest > (1 + (double)sim->scene.ranks.tolerance) * mean))
+        return 0;
+    /* every particle weighs its rank's work per particle; the new cuts, level
+     * by level (each level's groups under the moved cuts of the levels
+     * above), half the way from the old ones */
+    const double weight = count > 0 ? work / count : 0;
+    double *target = malloc(h->cut_count * sizeof *target);
+    if (sluice_comm_any(c, target == NULL)) {
+        free(target);
         sluice_sim_fail(sim, "out of memory balancing the ranks");
         return -1;
     }
-    MPI_Allgather(mine, 2, MPI_DOUBLE, all, 2, MPI_DOUBLE, c->comm);
-    /* the current boundaries: rank r's slab starts at bound[r] */
-    double slab_lo = h->slab_lo;
-    MPI_Allgather(&slab_lo, 1, MPI_DOUBLE, bound, 1, MPI_DOUBLE, c->comm);
-    bound[size] = INFINITY;
-    h->busy_seconds = 0;
-    double total = 0, largest = 0;
-    for (int r = 0; r < size; r++) {
-        total += all[2 * r];
-        largest = all[2 * r] > largest ? all[2 * r] : largest;
-    }
-    const double mean = total / size;
-    for (int k = 0; k <= size; k++)
-        proposed[k] = -INFINITY;
-    if (mean > 0 && largest > (1 + (double)sim->scene.ranks.tolerance) * mean) {
-        /* boundary k (between ranks k - 1 and k): the work left of it
-         * against its share; the rank with the excess gives half of it, in
-         * particles at its cost per particle, from its side of the boundary */
-        double left = 0;
-        for (int k = 1; k < size; k++) {
-            left += all[2 * (k - 1)];
-            const double excess = 0.5 * (left - k * mean);
-            const int giver = excess > 0 ? k - 1 : k;
-            if (giver != c->rank)
-                continue;
-            const double count = all[2 * giver + 1], cost = count > 0 ? all[2 * giver] / count : 0;
-            if (!(cost > 0) || count < 2)
-                continue;
-            sluice_index move = (sluice_index)fmin(fabs(excess) / cost, count / 2);
-            if (move == 0)
-                continue;
-            /* the cut among this rank's x, sorted */
-            const sluice_index n = sim->particles.count;
-            const sluice_real *x = sim->particles.columns[sim->position.column];
-            sluice_real *sorted = malloc(((size_t)n + 1) * sizeof *sorted);
-            if (!sorted)
-                continue; /* no move: the balance waits for the next time */
-            memcpy(sorted, x, (size_t)n * sizeof *sorted);
-            qsort(sorted, n, sizeof *sorted, compare_real);
-            const sluice_index at = excess > 0 ? n - move : move;
-            double cut = 0.5 * ((double)sorted[at - 1] + (double)sorted[at]);
-            /* within the old neighbouring slabs, each at least the halo
-             * width wide, so that a particle crosses one boundary only */
-            const double floor_at = bound[k - 1] + h->width, ceiling = bound[k + 1] - h->width;
-            if (cut < floor_at)
-                cut = floor_at;
-            if (cut > ceiling)
-                cut = ceiling;
-            if (cut > floor_at && cut < ceiling)
-                proposed[k] = cut;
-            free(sorted);
-        }
-    }
-    MPI_Allreduce(MPI_IN_PLACE, proposed, size + 1, MPI_DOUBLE, MPI_MAX, c->comm);
-    /* boundaries moved both ways may come too close: keep the slabs wide */
+    memcpy(target, h->cuts, h->cut_count * sizeof *target);
     int moved = 0;
-    for (int k = 1; k < size; k++) {
-        if (!(proposed[k] > -INFINITY))
+    for (int level = 0; level < 3; level++) {
+        if (h->split[level] == 1)
             continue;
-        /* bound[k - 1] is final here, bound[k + 1] not yet moved */
-        if (proposed[k] - bound[k - 1] < h->width || bound[k + 1] - proposed[k] < h->width)
-            continue;
-        bound[k] = proposed[k];
-        moved = 1;
+        double *before = malloc(h->cut_count * sizeof *before);
+        if (sluice_comm_any(c, before == NULL) ||
+            (memcpy(before, target, h->cut_count * sizeof *before),
+             weighted_cuts(sim, level, weight, target) != 0)) {
+            free(before);
+            free(target);
+            sluice_sim_fail(sim, "out of memory balancing the ranks");
+            return -1;
+        }
+        const int groups = groups_of_level(h->split, level);
+        for (int gr = 0; gr < groups; gr++)
+            for (int k = 1; k < h->split[level]; k++) {
+                double *t = cut_at(sim, target, level, gr, k);
+                const double old = *cut_at(sim, before, level, gr, k);
+                const double next = old + 0.5 * (*t - old);
+                moved |= next != old;
+                *t = next;
+            }
+        free(before);
     }
     if (moved) {
-        h->slab_lo = c->rank == 0 ? -INFINITY : bound[c->rank];
-        h->slab_hi = c->rank + 1 == size ? INFINITY : bound[c->rank + 1];
+        memcpy(h->cuts, target, h->cut_count * sizeof *target);
+        boxes_from_cuts(sim);
         h->balances++;
     }
-    free(all), free(bound), free(proposed);
+    free(target);
     return moved;
+}
+
+/* ------------------------------------------------------------ migration -- */
+
+/* The rank whose box holds x: a neighbour, else any (a balance moves the
+ * cuts by more than a neighbour's width); -1 for a position that is not a
+ * number (the grid build reports it). */
+static int owner_of(const sluice_sim *sim, const double *x)
+{
+    const sluice_halo_lists *h = &sim->halo;
+    for (int k = 0; k < h->neighbour_count; k++)
+        if (box_holds(sim, h->boxes + 6 * (size_t)h->neighbour[k], x))
+            return h->neighbour[k];
+    for (int r = 0; r < sim->comm.size; r++)
+        if (box_holds(sim, h->boxes + 6 * (size_t)r, x))
+            return r;
+    return -1;
 }
 
 int sluice_ranks_migrate(sluice_sim *sim)
 {
+    const sluice_comm *c = &sim->comm;
     sluice_halo_lists *h = &sim->halo;
     sluice_particles *p = &sim->particles;
     const sluice_index n = p->count;
-    if (send_to_neighbours(sim, SEND_MIGRANTS) != 0)
-        return -1;
-    const sluice_index leaving = h->send_count[0] + h->send_count[1];
-    if (leaving) {
-        uint8_t *away = calloc((size_t)n + 1, 1);
-        if (!away) {
-            sluice_sim_fail(sim, "out of memory migrating particles on rank %d", sim->comm.rank);
-            return -1;
-        }
-        for (int side = 0; side < 2; side++)
-            for (sluice_index k = 0; k < h->send_count[side]; k++)
-                away[h->send[side][k]] = 1;
-        sluice_particles_compact(p, away);
-        free(away);
+    const int size = c->size;
+    const double box[6] = {h->lo[0], h->lo[1], h->lo[2], h->hi[0], h->hi[1], h->hi[2]};
+    int *destination = malloc(((size_t)n + 1) * sizeof *destination);
+    int *counts = calloc(4 * (size_t)size, sizeof *counts);
+    uint8_t *away = calloc((size_t)n + 1, 1);
+    int failed = !destination || !counts || !away;
+    sluice_index leaving = 0;
+    for (sluice_index i = 0; i < n && !failed; i++) {
+        double x[3];
+        position_of(sim, p, i, x);
+        destination[i] = -1;
+        if (box_holds(sim, box, x))
+            continue;
+        const int r = owner_of(sim, x);
+        if (r < 0 || r == c->rank)
+            continue;
+        destination[i] = r;
+        counts[r]++;
+        away[i] = 1;
+        leaving++;
     }
-    const sluice_index arriving = h->receive_count[0] + h->receive_count[1];
+    if (sluice_comm_any(c, failed)) {
+        free(destination), free(counts), free(away);
+        sluice_sim_fail(sim, "out of memory migrating particles on rank %d", c->rank);
+        return -1;
+    }
+    /* counts[0 .. size): sent to each rank; [size, 2 size): received from
+     * each; then the byte counts and displacements */
+    int *sent = counts, *got = counts + size, *sdisp = counts + 2 * size,
+        *rdisp = counts + 3 * size;
+    MPI_Alltoall(sent, 1, MPI_INT, got, 1, MPI_INT, c->comm);
+    const size_t row = row_bytes(p);
+    unsigned long long out_total = 0, in_total = 0;
+    for (int r = 0; r < size; r++) {
+        out_total += (unsigned long long)sent[r];
+        in_total += (unsigned long long)got[r];
+    }
+    failed = out_total * row > INT_MAX || in_total * row > INT_MAX;
+    if (sluice_comm_any(c, failed)) {
+        free(destination), free(counts), free(away);
+        sluice_sim_fail(sim, "rank %d: a migration message exceeds 2 GB", c->rank);
+        return -1;
+    }
+    /* pack by destination, each block column by column */
+    char *send_block = malloc((size_t)out_total * row + 1);
+    char *receive_block = malloc((size_t)in_total * row + 1);
+    sluice_index *blocks = malloc(((size_t)size + 1) * sizeof *blocks);
+    failed = !send_block || !receive_block || !blocks;
+    if (sluice_comm_any(c, failed)) {
+        free(destination), free(counts), free(away), free(send_block), free(receive_block),
+            free(blocks);
+        sluice_sim_fail(sim, "out of memory migrating particles on rank %d", c->rank);
+        return -1;
+    }
+    char *out = send_block;
+    for (int r = 0; r < size; r++) {
+        if (!sent[r])
+            continue;
+        for (uint32_t col = 0; col < p->column_count; col++) {
+            const size_t e = p->element_size[col];
+            const char *base = p->columns[col];
+            for (sluice_index i = 0; i < n; i++)
+                if (destination[i] == r) {
+                    memcpy(out, base + (size_t)i * e, e);
+                    out += e;
+                }
+        }
+    }
+    int at = 0, in_at = 0;
+    blocks[0] = 0;
+    for (int r = 0; r < size; r++) {
+        sdisp[r] = at;
+        rdisp[r] = in_at;
+        at += sent[r] * (int)row;
+        in_at += got[r] * (int)row;
+        blocks[r + 1] = blocks[r] + (sluice_index)got[r];
+    }
+    /* byte counts in place of the particle counts */
+    int *sbytes = malloc(2 * (size_t)size * sizeof *sbytes);
+    if (sluice_comm_any(c, sbytes == NULL)) {
+        free(destination), free(counts), free(away), free(send_block), free(receive_block),
+            free(blocks), free(sbytes);
+        sluice_sim_fail(sim, "out of memory migrating particles on rank %d", c->rank);
+        return -1;
+    }
+    int *rbytes = sbytes + size;
+    for (int r = 0; r < size; r++) {
+        sbytes[r] = sent[r] * (int)row;
+        rbytes[r] = got[r] * (int)row;
+    }
+    MPI_Alltoallv(send_block, sbytes, sdisp, MPI_BYTE, receive_block, rbytes, rdisp, MPI_BYTE,
+                  c->comm);
+    free(sbytes);
+    if (leaving)
+        sluice_particles_compact(p, away);
+    const sluice_index arriving = (sluice_index)in_total;
     if (arriving) {
         sluice_index first = 0;
         if (sluice_particles_append(p, arriving, &first) != 0) {
-            sluice_sim_fail(sim, "out of memory migrating particles on rank %d", sim->comm.rank);
+            free(destination), free(counts), free(away), free(send_block), free(receive_block),
+                free(blocks);
+            sluice_sim_fail(sim, "out of memory migrating particles on rank %d", c->rank);
             return -1;
         }
-        unpack(p, h, first, NULL);
+        unpack(p, receive_block, blocks, size, first, NULL);
         h->arrived += arriving;
-        /* a particle may cross one slab boundary per rebuild (it moves less
-         * than the skin between rebuilds, and slabs are wider) */
-        const sluice_real *xn = p->columns[sim->position.column];
-        for (sluice_index k = first; k < p->count; k++)
-            if (!((double)xn[k] >= h->slab_lo && (double)xn[k] < h->slab_hi) &&
-                xn[k] == xn[k]) {
-                sluice_sim_fail(sim,
-                                "step %lld: particle id %llu at x = %.6g m crossed more than one "
-                                "slab (rank %d holds [%.6g, %.6g) m)",
-                                (long long)sim->step,
-                                (unsigned long long)((const sluice_id *)
-                                                         p->columns[sim->id.column])[k],
-                                (double)xn[k], sim->comm.rank, h->slab_lo, h->slab_hi);
-                return -1;
-            }
     }
+    free(destination), free(counts), free(away), free(send_block), free(receive_block),
+        free(blocks);
     sluice_sim_refresh_view(sim);
     return 0;
 }
+
+/* ----------------------------------------------------------------- halo -- */
 
 int sluice_ranks_collect_halo(void *context, sluice_particles *p, sluice_index *halo_count)
 {
     sluice_sim *sim = context;
     sluice_halo_lists *h = &sim->halo;
     const sluice_index n = p->count;
-    if (send_to_neighbours(sim, SEND_HALO) != 0)
+    const double width = h->width;
+    const uint32_t dims = dims_of(sim);
+    /* the lists, neighbour by neighbour: the own particles within the halo
+     * width of its box; a particle deeper than that inside this box goes
+     * to none */
+    sluice_index listed = 0;
+    int failed = 0;
+    for (int k = 0; k < h->neighbour_count && !failed; k++) {
+        h->send_begin[k] = listed;
+        const double *box = h->boxes + 6 * (size_t)h->neighbour[k];
+        for (sluice_index i = 0; i < n; i++) {
+            double x[3];
+            position_of(sim, p, i, x);
+            int interior = 1;
+            for (uint32_t d = 0; d < dims && interior; d++) {
+                const double v = wrap_axis(&sim->grid, d, x[d]);
+                interior = v - h->lo[d] >= width && h->hi[d] - v >= width;
+            }
+            if (interior || !near_box(sim, box, x, width))
+                continue;
+            if (listed == h->send_capacity) {
+                sluice_index cap = h->send_capacity ? 2 * h->send_capacity : 1024;
+                sluice_index *grown = realloc(h->send, (size_t)cap * sizeof *grown);
+                if (!grown) {
+                    failed = 1;
+                    break;
+                }
+                h->send = grown;
+                h->send_capacity = cap;
+            }
+            h->send[listed++] = i;
+        }
+    }
+    h->send_begin[h->neighbour_count] = listed;
+    if (failed || pack(sim, h) != 0) {
+        sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
         return -1;
-    const sluice_index got = h->receive_count[0] + h->receive_count[1];
+    }
+    if (exchange(sim, h) != 0)
+        return -1;
+    const sluice_index got = h->receive_begin[h->neighbour_count];
     if (sluice_particles_reserve(p, n + got) != 0) {
         sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
         return -1;
     }
-    unpack(p, h, n, NULL);
+    unpack(p, h->buffer[1], h->receive_begin, h->neighbour_count, n, NULL);
     *halo_count = got;
     return 0;
 }
@@ -482,14 +941,15 @@ int sluice_ranks_refresh_halo(sluice_sim *sim)
         sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
         return -1;
     }
-    const sluice_index expected0 = h->receive_count[0], expected1 = h->receive_count[1];
-    if (swap(sim, h) != 0)
+    const sluice_index expected = h->receive_begin[h->neighbour_count];
+    if (exchange(sim, h) != 0)
         return -1;
-    if (h->receive_count[0] != expected0 || h->receive_count[1] != expected1) {
+    if (h->receive_begin[h->neighbour_count] != expected) {
         sluice_sim_fail(sim, "rank %d: the halo changed size between rebuilds", sim->comm.rank);
         return -1;
     }
-    unpack(&sim->particles, h, sim->particles.count, h->slot);
+    unpack(&sim->particles, h->buffer[1], h->receive_begin, h->neighbour_count,
+           sim->particles.count, h->slot);
     return 0;
 }
 

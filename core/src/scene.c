@@ -128,15 +128,24 @@ static const sluice_param_spec checkpoint_specs[] = {
 };
 
 typedef struct {
+    int split;
     int balance;
     int64_t every;
     sluice_real tolerance;
 } ranks_config;
 
+/* ranks.split's choices, as masks of axes (bit d: axis d) */
+static const int split_axes[] = {1, 2, 4, 3, 5, 6, 7};
+
 static const sluice_param_spec ranks_specs[] = {
+    {"split", SLUICE_PARAM_ENUM, OFF(ranks_config, split), "x", 0, 0, 0, NULL,
+     "in a run across MPI ranks (docs/scaling.md), the axes along which the domain is cut into "
+     "one box per rank: x (slabs along the flow), or several (xy, xyz, ...), the number of cuts "
+     "along each chosen so that the boxes have the least surface for the particles' extent",
+     "x|y|z|xy|xz|yz|xyz", 0},
     {"balance", SLUICE_PARAM_ENUM, OFF(ranks_config, balance), "time", 0, 0, 0, "1",
-     "in a run across MPI ranks (docs/scaling.md), what the slab boundaries are moved to "
-     "equalise during the run: the ranks' measured time in the passes, their particle counts "
+     "in a run across MPI ranks (docs/scaling.md), what the cuts between the ranks' boxes are "
+     "moved to equalise during the run: the ranks' measured time in the passes, their particle counts "
      "(reproducible from run to run), or nothing (the slabs of the start)",
      "time|count|none", 0},
     {"every", SLUICE_PARAM_INT, OFF(ranks_config, every), "50", 1, 1000000000,
@@ -145,7 +154,7 @@ static const sluice_param_spec ranks_specs[] = {
      0},
     {"tolerance", SLUICE_PARAM_REAL, OFF(ranks_config, tolerance), "0.05", 0, 10,
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_HAS_MAX, "1",
-     "the boundaries move when the largest rank's share exceeds the mean by this fraction",
+     "the cuts move when the largest rank's share exceeds the mean by this fraction",
      NULL, 0},
 };
 
@@ -1519,6 +1528,17 @@ int sluice_scene_load_variant(sluice_scene *scene, const char *path, const char 
     ranks_config rc;
     memset(&rc, 0, sizeof rc);
     errors += bind_section(scene, "ranks", ranks_specs, SLUICE_COUNT(ranks_specs), &rc, diag);
+    scene->ranks.split = split_axes[rc.split];
+    if (scene->dimensions == 2 && (scene->ranks.split & 4)) {
+        sluice_node **ranks_slot = section_slot(scene->root, "ranks", 0);
+        sluice_node **split_slot =
+            ranks_slot && (*ranks_slot)->kind == SLUICE_NODE_MAPPING
+                ? section_slot(*ranks_slot, "split", 0)
+                : NULL;
+        error_at(diag, scene, split_slot ? *split_slot : scene->root,
+                 "ranks.split names the axis z in a 2D scene (use x, y or xy)");
+        errors++;
+    }
     scene->ranks.balance = rc.balance;
     scene->ranks.every = rc.every;
     scene->ranks.tolerance = rc.tolerance;

@@ -81,6 +81,7 @@ typedef struct sluice_scene {
         int64_t keep;         /* newest checkpoints kept; 0: all */
     } checkpoint;
     struct {
+        int split;            /* axes cut into the ranks' boxes: bit d for axis d */
         int balance;          /* SLUICE_BALANCE_TIME, _COUNT or _NONE */
         int64_t every;        /* steps between balances */
         sluice_real tolerance; /* largest share over the mean, minus 1 */

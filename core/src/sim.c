@@ -1188,25 +1188,26 @@ static int api_point_pass_local(sluice_host *host, const sluice_real *points, sl
     /* collective across ranks, whatever this rank's count */
     if (update_neighbours(sim) != SLUICE_OK || refresh_halo(sim) != SLUICE_OK)
         return SLUICE_ERROR;
+#ifdef SLUICE_MPI
     if (sim->comm.size > 1) {
         /* the halo holds every particle within the support of a point up to
-         * point_margin outside the slab (ranks.c: its width) */
-        const double lo = sim->halo.slab_lo - (double)sim->point_margin;
-        const double hi = sim->halo.slab_hi + (double)sim->point_margin;
+         * point_margin outside the box (ranks.c: its width) */
         for (sluice_index q = 0; q < count; q++) {
-            const double x = (double)points[3 * (size_t)q];
-            if (!(x >= lo && x < hi)) {
+            const double p[3] = {(double)points[3 * (size_t)q], (double)points[3 * (size_t)q + 1],
+                                 (double)points[3 * (size_t)q + 2]};
+            const double outside = sluice_ranks_outside(sim, p);
+            if (!(outside <= (double)sim->point_margin)) {
                 sluice_sim_fail(sim,
-                                "step %lld: plugin '%s' interpolates at x = %.6g m on rank %d, "
-                                "beyond the %.6g m it requested (api->request_point_margin) "
-                                "from the rank's slab [%.6g, %.6g) m",
-                                (long long)sim->step, instance_name(sim, host->instance), x,
-                                sim->comm.rank, (double)sim->point_margin, sim->halo.slab_lo,
-                                sim->halo.slab_hi);
+                                "step %lld: plugin '%s' interpolates at (%.6g, %.6g, %.6g) m on "
+                                "rank %d, %.6g m outside the rank's box, beyond the %.6g m it "
+                                "requested (api->request_point_margin)",
+                                (long long)sim->step, instance_name(sim, host->instance), p[0],
+                                p[1], p[2], sim->comm.rank, outside, (double)sim->point_margin);
                 return SLUICE_ERROR;
             }
         }
     }
+#endif
     if (count == 0)
         return SLUICE_OK;
     sim->evaluating++;
@@ -1312,8 +1313,12 @@ static int api_owns(sluice_host *host, const sluice_real *point)
     const sluice_sim *sim = host->sim;
     if (sim->comm.size == 1 || !point)
         return 1;
-    const double x = (double)point[0];
-    return x >= sim->halo.slab_lo && x < sim->halo.slab_hi;
+#ifdef SLUICE_MPI
+    const double p[3] = {(double)point[0], (double)point[1], (double)point[2]};
+    return sluice_ranks_owns(sim, p);
+#else
+    return 1;
+#endif
 }
 
 static int api_ranks(sluice_host *host, sluice_ranks *out)

@@ -404,11 +404,12 @@ static int mirror_initialise(void *state, sluice_host *host)
         for (int d = 0; d < 3; d++)
             s->normal[3 * k + d] =
                 length > 1e-9 * (double)s->dx ? r[d] / length : (double)best.normal[d];
-        if (fabs(r[0]) > margin)
-            margin = fabs(r[0]);
+        for (int d = 0; d < 3; d++)
+            if (fabs(r[d]) > margin)
+                margin = fabs(r[d]);
     }
     /* across ranks the rank of a wall particle interpolates at its mirror
-     * point, up to `margin` along x outside its slab */
+     * point, up to `margin` along an axis outside its box */
     return api->request_point_margin(host, (sluice_real)margin);
 }
 

@@ -478,8 +478,9 @@ typedef struct sluice_api {
      * (ranks in order, each rank's particles in view order): where a writer
      * puts them in a shared file. */
     int (*ranks)(sluice_host *host, sluice_ranks *out);
-    /* 1 when this rank owns the particles at `point` (3 reals; its slab
-     * holds the point's x), 0 otherwise; always 1 on one rank. Not
+    /* 1 when this rank owns the particles at `point` (3 reals; its box
+     * holds the point, 1.9: the box of docs/scaling.md's decomposition;
+     * 1.8: its slab along x), 0 otherwise; always 1 on one rank. Not
      * collective: the rank that owns a place adds the particles there (an
      * inlet's new column), the others leave it. */
     int (*owns)(sluice_host *host, const sluice_real *point);
@@ -492,7 +493,7 @@ typedef struct sluice_api {
      * rank's own particles (view->count), and it may run without
      * SLUICE_COMPONENT_ACROSS_RANKS (nothing is summed over ranks). Each
      * point must lie within the margin the component requested
-     * (request_point_margin; 0 by default) of the rank's slab; a point
+     * (request_point_margin; 0 by default) of the rank's box; a point
      * beyond it fails with a message. Collective across ranks: every rank
      * calls it at the same point of the run, with its own points (count
      * may be 0). On one rank it is point_pass. Call from prepare() or a
@@ -500,9 +501,9 @@ typedef struct sluice_api {
     int (*point_pass_local)(sluice_host *host, const sluice_real *points, sluice_index count,
                             uint32_t kinds, sluice_point_fn fn, void *context);
     /* In create(), bind() or initialise(): the points of this component's
-     * point_pass_local lie up to `margin` m (finite, >= 0) from the particle
-     * they belong to; across ranks the halo is widened by the largest
-     * margin requested. */
+     * point_pass_local lie up to `margin` m (finite, >= 0; along any axis)
+     * from the particle they belong to; across ranks the halo is widened by
+     * the largest margin requested. */
     int (*request_point_margin)(sluice_host *host, sluice_real margin);
 } sluice_api;
 
