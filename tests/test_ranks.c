@@ -273,9 +273,11 @@ START_TEST(same_particles_as_one_rank)
      * (the communication model of docs/scaling.md) */
     unsigned long long halo = sim->grid.halo_count, halo_total = 0;
     MPI_Reduce(&halo, &halo_total, 1, MPI_UNSIGNED_LONG_LONG, MPI_SUM, 0, MPI_COMM_WORLD);
-    size_t row = 0;
+    size_t row = 0, refreshed = 0;
     for (uint32_t c = 0; c < sim->particles.column_count; c++)
         row += sim->particles.element_size[c];
+    for (uint32_t k = 0; k < sim->halo.column_count; k++)
+        refreshed += sim->particles.element_size[sim->halo.columns[k]];
     long long steps = sluice_sim_steps(sim), steps_min = 0, steps_max = 0;
     MPI_Reduce(&steps, &steps_min, 1, MPI_LONG_LONG, MPI_MIN, 0, MPI_COMM_WORLD);
     MPI_Reduce(&steps, &steps_max, 1, MPI_LONG_LONG, MPI_MAX, 0, MPI_COMM_WORLD);
@@ -322,8 +324,9 @@ START_TEST(same_particles_as_one_rank)
                     sim->halo.split[1], sim->halo.split[2]);
         fprintf(stderr,
                 "ranks: %s: %d ranks, %d particles, %d steps to t = %.6g s, %llu particles moved "
-                "between ranks, %llu halo particles over all ranks (%zu bytes each);",
-                c->what, size, total, STEPS, t_max, arrived_total, halo_total, row);
+                "between ranks, %llu halo particles over all ranks (%zu bytes each, %zu "
+                "refreshed);",
+                c->what, size, total, STEPS, t_max, arrived_total, halo_total, row, refreshed);
         for (int k = 0; k < VALUES; k++)
             fprintf(stderr, " %s %.2e (of %.3g)", k == VALUES - 1 && c->extra_field
                                                        ? c->extra_field : names[k],

@@ -21,6 +21,8 @@ void sluice_ranks_free(sluice_halo_lists *h)
     free(h->got);
     free(h->requests);
     free(h->slot);
+    free(h->columns);
+    free(h->real_column);
     for (int s = 0; s < 2; s++)
         free(h->buffer[s]);
     memset(h, 0, sizeof *h);
@@ -82,13 +84,32 @@ static int compare_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-static size_t row_bytes(const sluice_particles *p)
+/* The columns of an exchange: `columns` (count of them), or every column
+ * when columns is NULL. */
+typedef struct column_set {
+    const uint32_t *columns;
+    uint32_t count;
+} column_set;
+
+static uint32_t set_count(const sluice_particles *p, column_set set)
+{
+    return set.columns ? set.count : p->column_count;
+}
+
+static uint32_t set_column(column_set set, uint32_t k)
+{
+    return set.columns ? set.columns[k] : k;
+}
+
+static size_t row_bytes(const sluice_particles *p, column_set set)
 {
     size_t b = 0;
-    for (uint32_t c = 0; c < p->column_count; c++)
-        b += p->element_size[c];
+    for (uint32_t k = 0; k < set_count(p, set); k++)
+        b += p->element_size[set_column(set, k)];
     return b;
 }
+
+static const column_set every_column = {NULL, 0};
 
 static int grow(void **block, size_t *capacity, size_t bytes)
 {
@@ -500,17 +521,18 @@ static int weighted_cuts(sluice_sim *sim, int level, double weight, double *cuts
 /* ------------------------------------------------------------ exchange -- */
 
 /* Packs, neighbour by neighbour, the rows send[send_begin[k] ..) column by
- * column into buffer[0]. */
-static int pack(sluice_sim *sim, sluice_halo_lists *h)
+ * column (the columns of `set`) into buffer[0]. */
+static int pack(sluice_sim *sim, sluice_halo_lists *h, column_set set)
 {
     const sluice_particles *p = &sim->particles;
-    const size_t row = row_bytes(p);
+    const size_t row = row_bytes(p, set);
     const size_t total = (size_t)h->send_begin[h->neighbour_count] * row;
     if (grow((void **)&h->buffer[0], &h->buffer_capacity[0], total + 1) != 0)
         return -1;
     char *out = h->buffer[0];
     for (int k = 0; k < h->neighbour_count; k++)
-        for (uint32_t c = 0; c < p->column_count; c++) {
+        for (uint32_t q = 0; q < set_count(p, set); q++) {
+            const uint32_t c = set_column(set, q);
             const size_t e = p->element_size[c];
             const char *base = p->columns[c];
             for (sluice_index m = h->send_begin[k]; m < h->send_begin[k + 1]; m++, out += e)
@@ -522,11 +544,11 @@ static int pack(sluice_sim *sim, sluice_halo_lists *h)
 /* Sends each neighbour its block of buffer[0] and receives its block into
  * buffer[1] (in neighbour order); receive_begin gets the offsets. Collective
  * over the neighbours. */
-static int exchange(sluice_sim *sim, sluice_halo_lists *h)
+static int exchange(sluice_sim *sim, sluice_halo_lists *h, column_set set)
 {
     const sluice_comm *c = &sim->comm;
     const int count = h->neighbour_count;
-    const size_t row = row_bytes(&sim->particles);
+    const size_t row = row_bytes(&sim->particles, set);
     MPI_Request *request = h->requests;
     for (int k = 0; k < count; k++) {
         h->sent[k] = h->send_begin[k + 1] - h->send_begin[k];
@@ -566,11 +588,12 @@ static int exchange(sluice_sim *sim, sluice_halo_lists *h)
  * first + k, or first + slot[k] when slot is given; blocks[b] .. blocks[b +
  * 1] are the rows of block b. */
 static void unpack(sluice_particles *p, const char *in, const sluice_index *blocks, int count,
-                   sluice_index first, const sluice_index *slot)
+                   sluice_index first, const sluice_index *slot, column_set set)
 {
     for (int b = 0; b < count; b++) {
         const sluice_index k0 = blocks[b], rows = blocks[b + 1] - blocks[b];
-        for (uint32_t c = 0; c < p->column_count; c++) {
+        for (uint32_t q = 0; q < set_count(p, set); q++) {
+            const uint32_t c = set_column(set, q);
             const size_t e = p->element_size[c];
             char *base = p->columns[c];
             for (sluice_index k = 0; k < rows; k++, in += e) {
@@ -602,6 +625,56 @@ static int neighbour_arrays(sluice_sim *sim)
 }
 
 /* ---------------------------------------------------------------- split -- */
+
+/* The columns a halo refresh sends (sluice_halo_lists.columns). */
+static int halo_columns(sluice_sim *sim)
+{
+    sluice_halo_lists *h = &sim->halo;
+    const uint32_t columns = sim->column_count;
+    uint8_t *wanted = calloc((size_t)columns + 1, 1);
+    h->real_column = calloc((size_t)columns + 1, 1);
+    h->columns = malloc(((size_t)columns + 1) * sizeof *h->columns);
+    if (!wanted || !h->real_column || !h->columns) {
+        free(wanted);
+        return -1;
+    }
+    for (uint32_t c = 0; c < columns; c++)
+        wanted[c] = 1; /* columns of no field: sent */
+    for (uint32_t f = 0; f < sim->field_count; f++)
+        for (uint32_t c = 0; c < sim->fields[f].components && sim->fields[f].column >= 0; c++)
+            wanted[(uint32_t)sim->fields[f].column + c] = 0;
+    for (uint32_t d = 0; d < dims_of(sim); d++)
+        wanted[sim->position.column + (int32_t)d] = 1;
+    wanted[sim->kind.column] = 1;
+    for (uint32_t f = 0; f < sim->field_count; f++) {
+        const sluice_field_entry *field = &sim->fields[f];
+        if (field->column < 0)
+            continue;
+        int read = 0;
+        for (uint32_t k = 0; k < field->declarer_count; k++) {
+            const sluice_declarer *dec = &field->declarers[k];
+            const sluice_instance *in =
+                dec->instance < sim->instance_count ? &sim->instances[dec->instance] : NULL;
+            read |= (dec->access & SLUICE_READ_NEIGHBOUR) != 0;
+            read |= in && in->local_points && (dec->access & (SLUICE_READ | SLUICE_WRITE)) != 0;
+            read |= in && in->reach_field[0] && strcmp(in->reach_field, field->name) == 0;
+        }
+        /* columns of other types (kind, id, phase: a byte or eight each)
+         * are always sent: they cannot hold NaN to catch an undeclared read */
+        const int real = field->type == SLUICE_TYPE_REAL;
+        for (uint32_t c = 0; c < field->components; c++) {
+            const uint32_t column = (uint32_t)field->column + c;
+            h->real_column[column] = (uint8_t)real;
+            wanted[column] |= (uint8_t)(read || !real);
+        }
+    }
+    h->column_count = 0;
+    for (uint32_t c = 0; c < columns; c++)
+        if (wanted[c])
+            h->columns[h->column_count++] = c;
+    free(wanted);
+    return 0;
+}
 
 int sluice_ranks_split(sluice_sim *sim)
 {
@@ -636,7 +709,8 @@ int sluice_ranks_split(sluice_sim *sim)
         return -1;
     }
     uint8_t *away = calloc((size_t)n + 1, 1);
-    if (!away || neighbour_arrays(sim) != 0 || cuts_of_equal_counts(sim) != 0) {
+    if (!away || neighbour_arrays(sim) != 0 || halo_columns(sim) != 0 ||
+        cuts_of_equal_counts(sim) != 0) {
         free(away);
         sluice_sim_fail(sim, "out of memory splitting %u particles across %d ranks", n, c->size);
         return -1;
@@ -770,7 +844,7 @@ int sluice_ranks_migrate(sluice_sim *sim)
     int *sent = counts, *got = counts + size, *sdisp = counts + 2 * size,
         *rdisp = counts + 3 * size;
     MPI_Alltoall(sent, 1, MPI_INT, got, 1, MPI_INT, c->comm);
-    const size_t row = row_bytes(p);
+    const size_t row = row_bytes(p, every_column);
     unsigned long long out_total = 0, in_total = 0;
     for (int r = 0; r < size; r++) {
         out_total += (unsigned long long)sent[r];
@@ -843,7 +917,7 @@ int sluice_ranks_migrate(sluice_sim *sim)
             sluice_sim_fail(sim, "out of memory migrating particles on rank %d", c->rank);
             return -1;
         }
-        unpack(p, receive_block, blocks, size, first, NULL);
+        unpack(p, receive_block, blocks, size, first, NULL, every_column);
         h->arrived += arriving;
     }
     free(destination), free(counts), free(away), free(send_block), free(receive_block),
@@ -893,18 +967,33 @@ int sluice_ranks_collect_halo(void *context, sluice_particles *p, sluice_index *
         }
     }
     h->send_begin[h->neighbour_count] = listed;
-    if (failed || pack(sim, h) != 0) {
+    if (failed || pack(sim, h, every_column) != 0) {
         sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
         return -1;
     }
-    if (exchange(sim, h) != 0)
+    if (exchange(sim, h, every_column) != 0)
         return -1;
     const sluice_index got = h->receive_begin[h->neighbour_count];
     if (sluice_particles_reserve(p, n + got) != 0) {
         sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
         return -1;
     }
-    unpack(p, h->buffer[1], h->receive_begin, h->neighbour_count, n, NULL);
+    unpack(p, h->buffer[1], h->receive_begin, h->neighbour_count, n, NULL, every_column);
+    /* the real columns no refresh sends hold NaN in the halo: a term that
+     * reads one at a neighbour without declaring it fails loudly (the
+     * watchdog's NaN) instead of using values one rebuild old */
+    uint32_t next = 0;
+    for (uint32_t c = 0; c < p->column_count; c++) {
+        if (next < h->column_count && h->columns[next] == c) {
+            next++;
+            continue;
+        }
+        if (p->element_size[c] != sizeof(sluice_real) || !h->real_column[c])
+            continue;
+        sluice_real *column = p->columns[c];
+        for (sluice_index k = 0; k < got; k++)
+            column[n + k] = (sluice_real)NAN;
+    }
     *halo_count = got;
     return 0;
 }
@@ -937,19 +1026,20 @@ int sluice_ranks_refresh_halo(sluice_sim *sim)
         }
         h->slot_valid_at = sim->grid.rebuilds;
     }
-    if (pack(sim, h) != 0) {
+    const column_set refreshed = {h->columns, h->column_count};
+    if (pack(sim, h, refreshed) != 0) {
         sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
         return -1;
     }
     const sluice_index expected = h->receive_begin[h->neighbour_count];
-    if (exchange(sim, h) != 0)
+    if (exchange(sim, h, refreshed) != 0)
         return -1;
     if (h->receive_begin[h->neighbour_count] != expected) {
         sluice_sim_fail(sim, "rank %d: the halo changed size between rebuilds", sim->comm.rank);
         return -1;
     }
     unpack(&sim->particles, h->buffer[1], h->receive_begin, h->neighbour_count,
-           sim->particles.count, h->slot);
+           sim->particles.count, h->slot, refreshed);
     return 0;
 }
 

@@ -42,6 +42,13 @@ typedef struct sluice_halo_lists {
     double busy_seconds;     /* this rank's time in the passes since the last balance */
     int64_t balance_step;    /* the step of the last balance */
     uint64_t balances;       /* times the cuts moved */
+    /* the columns a refresh sends: what other ranks' particles are read
+     * for (position, kind, the fields declared SLUICE_READ_NEIGHBOUR, those
+     * a component reads in its local point passes, a reach's selection);
+     * the other real columns of the halo hold NaN between rebuilds */
+    uint32_t *columns;
+    uint32_t column_count;
+    uint8_t *real_column;    /* per column: 1 for a column of a real field */
     char *buffer[2];         /* send and receive */
     size_t buffer_capacity[2];
 } sluice_halo_lists;

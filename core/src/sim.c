@@ -1189,6 +1189,16 @@ static int api_point_pass_local(sluice_host *host, const sluice_real *points, sl
     if (update_neighbours(sim) != SLUICE_OK || refresh_halo(sim) != SLUICE_OK)
         return SLUICE_ERROR;
 #ifdef SLUICE_MPI
+    if (sim->comm.size > 1 && host->instance != SLUICE_CORE_INSTANCE &&
+        !sim->instances[host->instance].local_points) {
+        /* the halo refreshes the fields of such a component (ranks.c) */
+        sluice_sim_fail(sim,
+                        "plugin '%s' calls api->point_pass_local without having called "
+                        "api->request_point_margin (in create, bind or initialise; 0 when its "
+                        "points lie at its particles)",
+                        instance_name(sim, host->instance));
+        return SLUICE_ERROR;
+    }
     if (sim->comm.size > 1) {
         /* the halo holds every particle within the support of a point up to
          * point_margin outside the box (ranks.c: its width) */
@@ -1237,6 +1247,7 @@ static int api_request_point_margin(sluice_host *host, sluice_real margin)
     }
     if (margin > sim->point_margin)
         sim->point_margin = margin;
+    sim->instances[host->instance].local_points = 1;
     return SLUICE_OK;
 }
 

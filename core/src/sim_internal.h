@@ -60,6 +60,8 @@ typedef struct sluice_instance {
     sluice_real reach;           /* 1.6: pair radius beyond the support (m), 0: the support */
     char reach_field[64];        /* 1.7: the reach pass's particles: this uint8 field... */
     uint32_t reach_value;        /* ...holds this value ("" : every particle) */
+    int local_points;            /* 1.9: requested a point margin (reads its fields at
+                                    other particles in api->point_pass_local) */
 } sluice_instance;
 
 typedef struct sluice_pass {
