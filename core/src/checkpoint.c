@@ -49,9 +49,35 @@
 #define CHECKPOINT_FORMAT "sluice checkpoint"
 #define CHECKPOINT_VERSION 1
 
+/* Across MPI ranks with a parallel HDF5, every rank writes its particles
+ * into one file (parallel HDF5) instead of gathering them on rank 0. */
+#if defined(SLUICE_MPI) && defined(H5_HAVE_PARALLEL)
+#define CK_PARALLEL 1
+#else
+#define CK_PARALLEL 0
+#endif
+
 typedef struct ck_error {
     char text[1024];
+    /* a checkpoint every rank writes (CK_PARALLEL): the calls are
+     * collective; rank 0 (`writer`) alone writes the data that are not
+     * particles, the particles go to [offset, offset + count) of `total`
+     * rows, with the collective transfer list `transfer` */
+    int shared, writer;
+    hid_t transfer;
+    hsize_t offset, total;
+#if CK_PARALLEL
+    MPI_Comm comm;
+#endif
 } ck_error;
+
+static ck_error ck_clear(void)
+{
+    ck_error e;
+    memset(&e, 0, sizeof e);
+    e.transfer = H5P_DEFAULT;
+    return e;
+}
 
 static herr_t innermost_error(unsigned n, const H5E_error2_t *e, void *data)
 {
@@ -191,6 +217,16 @@ static void put_rows(hid_t loc, const char *name, int type, int rank, hsize_t ro
 {
     if (e->text[0])
         return;
+#if CK_PARALLEL
+    if (e->shared) { /* rank 0's shape on every rank (the calls are collective) */
+        unsigned long long shape[2] = {rows, length};
+        MPI_Bcast(shape, 2, MPI_UNSIGNED_LONG_LONG, 0, e->comm);
+        rows = shape[0];
+        length = shape[1];
+    }
+#endif
+    const int skip = e->shared && !e->writer; /* takes part, writes nothing */
+    const char dummy = 0;
     hsize_t dims[2] = {rank == 2 ? rows : length, length};
     hid_t t = native_type(type);
     hid_t space = H5Screate_simple(rank, dims, NULL), set = -1, memory = -1;
@@ -201,19 +237,57 @@ static void put_rows(hid_t loc, const char *name, int type, int rank, hsize_t ro
         hsize_t one[1] = {length};
         memory = H5Screate_simple(1, one, NULL);
         for (hsize_t r = 0; r < (rank == 2 ? rows : 1) && !e->text[0]; r++) {
-            if (rank == 2) {
-                hsize_t start[2] = {r, 0}, count[2] = {1, length};
-                if (H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, count, NULL) < 0) {
-                    fail(e, "selecting row %llu of dataset '%s' failed", (unsigned long long)r,
-                         name);
-                    break;
-                }
+            hsize_t start[2] = {r, 0}, count[2] = {1, length};
+            if (rank == 2 &&
+                H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, count, NULL) < 0) {
+                fail(e, "selecting row %llu of dataset '%s' failed", (unsigned long long)r,
+                     name);
+                break;
             }
-            if (memory < 0 ||
-                H5Dwrite(set, t, rank == 2 ? memory : H5S_ALL, rank == 2 ? space : H5S_ALL,
-                         H5P_DEFAULT, data[r]) < 0)
+            if (skip && (H5Sselect_none(space) < 0 || (memory >= 0 && H5Sselect_none(memory) < 0)))
+                fail(e, "selecting nothing of dataset '%s' failed", name);
+            if (memory < 0 || e->text[0] ||
+                H5Dwrite(set, t, rank == 2 || skip ? memory : H5S_ALL,
+                         rank == 2 || skip ? space : H5S_ALL, e->shared ? e->transfer : H5P_DEFAULT,
+                         skip ? (const void *)&dummy : data[r]) < 0)
                 fail(e, "writing dataset '%s' failed", name);
         }
+    }
+    close_id(&memory, H5Sclose);
+    close_id(&set, H5Dclose);
+    close_id(&space, H5Sclose);
+}
+
+/* The particles' rows of a field, [rows][count] of this process, at the
+ * columns [e->offset, e->offset + count) of a dataset [rows][e->total] (a
+ * shared checkpoint), or the whole dataset. */
+static void put_particles(hid_t loc, const char *name, int type, hsize_t rows, hsize_t count,
+                          const void *const *data, ck_error *e)
+{
+    if (!e->shared) {
+        put_rows(loc, name, type, 2, rows, count, data, e);
+        return;
+    }
+    if (e->text[0])
+        return;
+    const char dummy = 0;
+    hsize_t dims[2] = {rows, e->total}, own[1] = {count > 0 ? count : 1};
+    hid_t t = native_type(type);
+    hid_t space = H5Screate_simple(2, dims, NULL), set = -1;
+    hid_t memory = H5Screate_simple(1, own, NULL);
+    if (space < 0 || memory < 0 ||
+        (set = H5Dcreate2(loc, name, t, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT)) < 0)
+        fail(e, "creating dataset '%s' failed", name);
+    for (hsize_t r = 0; r < rows && e->total > 0 && !e->text[0]; r++) {
+        hsize_t start[2] = {r, e->offset}, size[2] = {1, count};
+        if (count > 0 ? H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, size, NULL) < 0
+                      : H5Sselect_none(space) < 0 || H5Sselect_none(memory) < 0) {
+            fail(e, "selecting this rank's part of dataset '%s' failed", name);
+            break;
+        }
+        if (H5Dwrite(set, t, memory, space, e->transfer,
+                     count > 0 ? data[r] : (const void *)&dummy) < 0)
+            fail(e, "writing dataset '%s' failed", name);
     }
     close_id(&memory, H5Sclose);
     close_id(&set, H5Dclose);
@@ -262,7 +336,7 @@ static void write_state(sluice_sim *sim, hid_t file, ck_error *e)
     /* across ranks the particles are the gathered ones and the grids are
      * the ranks' own: the restart rebuilds the neighbour lists */
     int grid_valid = sim->comm.size == 1 && sim->grid.valid && sim->grid.count == n;
-    uint64_t count = n, next_id = sim->next_id, removed = sim->removed,
+    uint64_t count = e->shared ? (uint64_t)e->total : n, next_id = sim->next_id, removed = sim->removed,
              initial = sim->particles_initial, steps = sim->particle_steps,
              rebuilds = sim->grid.rebuilds;
     int64_t step = sim->step;
@@ -300,7 +374,7 @@ static void write_state(sluice_sim *sim, hid_t file, ck_error *e)
         const void *rows[16];
         for (uint32_t c = 0; c < field->components; c++)
             rows[c] = sim->particles.columns[field->column + (int32_t)c];
-        put_rows(group, field->name, field->type, 2, field->components, n, rows, e);
+        put_particles(group, field->name, field->type, field->components, n, rows, e);
     }
     close_id(&group, H5Gclose);
 
@@ -358,9 +432,11 @@ static void write_state(sluice_sim *sim, hid_t file, ck_error *e)
         sim->state_group = own;
         sim->state_instance = k;
         sim->state_writing = 1;
+        sim->state_context = e;
         int rc = in->component->save_state(in->state, &in->host);
         sim->state_group = -1;
         sim->state_writing = 0;
+        sim->state_context = NULL;
         H5Gclose(own);
         if (rc != SLUICE_OK || sim->failure[0])
             fail(e, "plugin '%s' failed to save its state%s%s", in->name,
@@ -377,7 +453,7 @@ static int checkpoint_image(sluice_sim *sim, void **image, size_t *size, char *e
     *size = 0;
     quiet_hdf5 q;
     quiet_begin(&q);
-    ck_error e = {{0}};
+    ck_error e = ck_clear();
     size_t estimate = 65536 + strlen(sim->resolved_scene ? sim->resolved_scene : "") +
                       (size_t)sim->particles.count * (sim->column_count + 3) * 8;
     hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), file = -1;
@@ -415,6 +491,131 @@ static int checkpoint_image(sluice_sim *sim, void **image, size_t *size, char *e
     return 0;
 }
 
+/* After a checkpoint is on disk: the message, and the newest kept. */
+static int checkpoint_written(sluice_sim *sim, const char *path, const char *full,
+                              double started, size_t size)
+{
+    sim->checkpoint_step = sim->step;
+    if (!sim->quiet && sim->comm.rank == 0)
+        fprintf(stderr, "%ssluice: checkpoint %s: step %lld, t = %.9g s, %zu bytes, %.3f s\n",
+                sim->progress ? "\n" : "", path, (long long)sim->step, sim->time, size,
+                sluice_wall_clock() - started);
+    if (path != full || sim->comm.rank != 0)
+        return SLUICE_OK;
+    /* this run's checkpoints in the output directory: keep the newest */
+    char **grown = realloc(sim->checkpoint_files,
+                           (sim->checkpoint_file_count + 1) * sizeof *grown);
+    char *copy = strdup(full);
+    if (grown)
+        sim->checkpoint_files = grown;
+    if (!grown || !copy) {
+        free(copy);
+        sluice_sim_fail(sim, "out of memory");
+        return SLUICE_ERROR;
+    }
+    size_t same = sim->checkpoint_file_count;
+    for (size_t c = 0; c < sim->checkpoint_file_count; c++)
+        if (strcmp(sim->checkpoint_files[c], copy) == 0)
+            same = c;
+    if (same < sim->checkpoint_file_count) { /* rewritten: it is the newest now */
+        free(sim->checkpoint_files[same]);
+        memmove(sim->checkpoint_files + same, sim->checkpoint_files + same + 1,
+                (sim->checkpoint_file_count - same - 1) * sizeof *sim->checkpoint_files);
+        sim->checkpoint_file_count--;
+    }
+    sim->checkpoint_files[sim->checkpoint_file_count++] = copy;
+    const size_t keep = (size_t)sim->scene.checkpoint.keep;
+    while (keep > 0 && sim->checkpoint_file_count > keep) {
+        if (unlink(sim->checkpoint_files[0]) != 0 && errno != ENOENT)
+            fprintf(stderr, "sluice: warning: cannot delete old checkpoint '%s': %s\n",
+                    sim->checkpoint_files[0], strerror(errno));
+        free(sim->checkpoint_files[0]);
+        memmove(sim->checkpoint_files, sim->checkpoint_files + 1,
+                (sim->checkpoint_file_count - 1) * sizeof *sim->checkpoint_files);
+        sim->checkpoint_file_count--;
+    }
+    return SLUICE_OK;
+}
+
+#if CK_PARALLEL
+/* Across ranks: every rank writes its particles into one file of the
+ * one-process layout with parallel HDF5 (as the hdf5 writer's snapshots),
+ * opened collectively as <path>.partial and renamed by rank 0 once every
+ * rank has closed it; rank 0 writes what is not particles (its plugins'
+ * state, which a plugin keeps alike on every rank). The run's counters are
+ * summed over the ranks for the file. Collective. Returns the file's size,
+ * or 0 with `why` set. */
+static size_t checkpoint_shared(sluice_sim *sim, const char *path, char *why, size_t why_size)
+{
+    const sluice_comm *c = &sim->comm;
+    ck_error e = ck_clear();
+    e.shared = 1;
+    e.writer = c->rank == 0;
+    e.comm = c->comm;
+    uint64_t offset = 0, total = 0;
+    double sums[2] = {(double)sim->removed, (double)sim->particle_steps};
+    double largest[3] = {(double)sim->next_id, sim->max_density_deviation,
+                         (double)sim->grid.rebuilds};
+    if (sluice_comm_offset(c, sim->particles.count, &offset, &total) != 0 ||
+        sluice_comm_reduce(c, sums, 2, SLUICE_REDUCE_SUM) != 0 ||
+        sluice_comm_reduce(c, largest, 3, SLUICE_REDUCE_MAX) != 0) {
+        snprintf(why, why_size, "MPI failed");
+        return 0;
+    }
+    e.offset = offset;
+    e.total = total;
+    const uint64_t own_removed = sim->removed, own_steps = sim->particle_steps,
+                   own_next_id = sim->next_id, own_rebuilds = sim->grid.rebuilds;
+    const double own_deviation = sim->max_density_deviation;
+    sim->removed = (uint64_t)sums[0];
+    sim->particle_steps = (uint64_t)sums[1];
+    sim->next_id = (uint64_t)largest[0];
+    sim->max_density_deviation = largest[1];
+    sim->grid.rebuilds = (uint64_t)largest[2];
+    char partial[4200];
+    snprintf(partial, sizeof partial, "%s.partial", path);
+    quiet_hdf5 q;
+    quiet_begin(&q);
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), file = -1;
+    e.transfer = H5Pcreate(H5P_DATASET_XFER);
+    if (fapl < 0 || e.transfer < 0 || H5Pset_fapl_mpio(fapl, c->comm, MPI_INFO_NULL) < 0 ||
+        H5Pset_dxpl_mpio(e.transfer, H5FD_MPIO_COLLECTIVE) < 0)
+        fail(&e, "setting up parallel HDF5 failed");
+    else if ((file = H5Fcreate(partial, H5F_ACC_TRUNC, H5P_DEFAULT, fapl)) < 0)
+        fail(&e, "cannot create '%s'", partial);
+    if (!e.text[0])
+        write_state(sim, file, &e);
+    if (file >= 0 && H5Fclose(file) < 0)
+        fail(&e, "H5Fclose failed");
+    close_id(&fapl, H5Pclose);
+    close_id(&e.transfer, H5Pclose);
+    quiet_end(&q);
+    sim->removed = own_removed;
+    sim->particle_steps = own_steps;
+    sim->next_id = own_next_id;
+    sim->max_density_deviation = own_deviation;
+    sim->grid.rebuilds = own_rebuilds;
+    /* whole once every rank has closed it */
+    if (sluice_comm_any(c, e.text[0] != 0) && !e.text[0])
+        fail(&e, "another rank failed to write its part");
+    size_t size = 0;
+    if (c->rank == 0) {
+        struct stat st;
+        if (e.text[0])
+            unlink(partial);
+        else if (stat(partial, &st) != 0 || rename(partial, path) != 0)
+            fail(&e, "cannot rename '%s' to '%s': %s", partial, path, strerror(errno));
+        else
+            size = (size_t)st.st_size;
+    }
+    if (sluice_comm_any(c, e.text[0] != 0)) {
+        snprintf(why, why_size, "%s", e.text[0] ? e.text : "rank 0 failed to rename it");
+        return 0;
+    }
+    return size > 0 ? size : 1;
+}
+#endif
+
 int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
 {
     char name[64], full[4096], error[1200];
@@ -436,6 +637,18 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
     size_t size = 0;
     char why[1400] = "";
     int rc = 0;
+#if CK_PARALLEL
+    if (sim->comm.size > 1) {
+        size = checkpoint_shared(sim, path, why, sizeof why);
+        sim->state_file = NULL;
+        if (size == 0) {
+            sluice_sim_fail(sim, "cannot write checkpoint '%s' (step %lld, t = %.9g s): %s",
+                            path, (long long)sim->step, sim->time, why);
+            return SLUICE_ERROR;
+        }
+        return checkpoint_written(sim, path, full, started, size);
+    }
+#endif
 #ifdef SLUICE_MPI
     /* Across ranks rank 0 writes the one-process checkpoint of every rank's
      * particles (gathered in rank order) and of its plugins' state, which a
@@ -489,46 +702,7 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
                         (long long)sim->step, sim->time, why[0] ? why : "rank 0 failed");
         return SLUICE_ERROR;
     }
-    sim->checkpoint_step = sim->step;
-    if (!sim->quiet && sim->comm.rank == 0)
-        fprintf(stderr, "%ssluice: checkpoint %s: step %lld, t = %.9g s, %zu bytes, %.3f s\n",
-                sim->progress ? "\n" : "", path, (long long)sim->step, sim->time, size,
-                sluice_wall_clock() - started);
-    if (path != full || sim->comm.rank != 0)
-        return SLUICE_OK;
-    /* this run's checkpoints in the output directory: keep the newest */
-    char **grown = realloc(sim->checkpoint_files,
-                           (sim->checkpoint_file_count + 1) * sizeof *grown);
-    char *copy = strdup(full);
-    if (grown)
-        sim->checkpoint_files = grown;
-    if (!grown || !copy) {
-        free(copy);
-        sluice_sim_fail(sim, "out of memory");
-        return SLUICE_ERROR;
-    }
-    size_t same = sim->checkpoint_file_count;
-    for (size_t c = 0; c < sim->checkpoint_file_count; c++)
-        if (strcmp(sim->checkpoint_files[c], copy) == 0)
-            same = c;
-    if (same < sim->checkpoint_file_count) { /* rewritten: it is the newest now */
-        free(sim->checkpoint_files[same]);
-        memmove(sim->checkpoint_files + same, sim->checkpoint_files + same + 1,
-                (sim->checkpoint_file_count - same - 1) * sizeof *sim->checkpoint_files);
-        sim->checkpoint_file_count--;
-    }
-    sim->checkpoint_files[sim->checkpoint_file_count++] = copy;
-    const size_t keep = (size_t)sim->scene.checkpoint.keep;
-    while (keep > 0 && sim->checkpoint_file_count > keep) {
-        if (unlink(sim->checkpoint_files[0]) != 0 && errno != ENOENT)
-            fprintf(stderr, "sluice: warning: cannot delete old checkpoint '%s': %s\n",
-                    sim->checkpoint_files[0], strerror(errno));
-        free(sim->checkpoint_files[0]);
-        memmove(sim->checkpoint_files, sim->checkpoint_files + 1,
-                (sim->checkpoint_file_count - 1) * sizeof *sim->checkpoint_files);
-        sim->checkpoint_file_count--;
-    }
-    return SLUICE_OK;
+    return checkpoint_written(sim, path, full, started, size);
 }
 
 /* ------------------------------------------------------------- reading -- */
@@ -990,7 +1164,7 @@ int sluice_sim_restart(sluice_sim *sim, const char *path, char *error, size_t er
     }
     quiet_hdf5 q;
     quiet_begin(&q);
-    ck_error e = {{0}};
+    ck_error e = ck_clear();
     hid_t file = -1;
     htri_t is_hdf5 = H5Fis_hdf5(path);
     if (is_hdf5 <= 0)
@@ -1051,7 +1225,11 @@ int sluice_api_state_write(sluice_host *host, const char *name, sluice_state_typ
                         sim->instances[host->instance].name, name);
         return SLUICE_ERROR;
     }
-    ck_error e = {{0}};
+    ck_error e = ck_clear();
+    if (sim->state_context) { /* a shared checkpoint: collective, rank 0 writes */
+        e = *(const ck_error *)sim->state_context;
+        e.text[0] = '\0';
+    }
     const void *row[1] = {data};
     if (H5Lexists((hid_t)sim->state_group, name, H5P_DEFAULT) > 0)
         fail(&e, "it is written twice");
@@ -1072,7 +1250,7 @@ int sluice_api_state_read(sluice_host *host, const char *name, sluice_state_type
     const int type = state_kind(state_type);
     if (state_access(host, name, type, 0) != SLUICE_OK)
         return SLUICE_ERROR;
-    ck_error e = {{0}};
+    ck_error e = ck_clear();
     void *row[1] = {data};
     if (sim->state_absent)
         fail(&e, "the checkpoint holds no state of this plugin (was it written by an older "

@@ -168,6 +168,7 @@ struct sluice_sim {
     int state_writing;
     int state_absent;             /* load_state of a plugin the checkpoint holds no state of */
     const char *state_file;       /* the checkpoint read or written (messages) */
+    const void *state_context;    /* the checkpoint being written (checkpoint.c), or NULL */
 };
 
 /* The kinds a term that asked for `kinds` as neighbours receives: fluid
