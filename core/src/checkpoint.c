@@ -27,7 +27,9 @@
  *
  * The file is built in memory (HDF5's core driver) and reaches the disk
  * through sluice_write_file_atomic: a killed run never leaves a half-written
- * checkpoint. */
+ * checkpoint. Across MPI ranks (with a parallel HDF5) every rank writes its
+ * particles into <path>.partial, which rank 0 renames once whole
+ * (checkpoint_shared). */
 #define _GNU_SOURCE
 #include <errno.h>
 #include <math.h>
