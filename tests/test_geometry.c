@@ -2004,6 +2004,114 @@ static const char *scene_head = "dimensions: 2\n"
                                 "plugins: {wendland_c2: {}}\n"
                                 "geometry:\n";
 
+/* 3D walls extruded from a 2D outline (x, z) across y: a trapezoidal
+ * obstacle (polygon: a solid) on a sloped bed (polyline), in a 3D scene
+ * and, as 2D walls, in a 2D one. Exact: for points between the extrusion's
+ * ends the 3D signed distance is the 2D one of (x, z) (to round-off), and
+ * the 3D wall layers are the 2D layers repeated on every lattice row of y
+ * within the ends, no point beyond them. */
+static const char *extruded_walls =
+    "    - {shape: polygon, points: [[6.18, 0], [6.58, 0.075], [6.78, 0.075], [7.18, 0]]%s}\n"
+    "    - {shape: polyline, points: [[5.0, 0.1], [6.0, 0], [8.0, 0]]%s}\n";
+
+START_TEST(extruded_walls_3d)
+{
+    char *walls2 = NULL, *walls3 = NULL, *text2 = NULL, *text3 = NULL;
+    ck_assert_int_ge(asprintf(&walls2, extruded_walls, "", ""), 0);
+    ck_assert_int_ge(asprintf(&walls3, extruded_walls, ", across: [0, 0.3]",
+                              ", across: [0, 0.3]"),
+                     0);
+    ck_assert_int_ge(asprintf(&text2,
+                              "dimensions: 2\nparticles: {spacing: 0.015}\ntime: {end: 0.1}\n"
+                              "domain: {min: [4.5, -0.2], max: [8.5, 0.5]}\n"
+                              "plugins: {wendland_c2: {}}\ngeometry:\n  walls:\n%s",
+                              walls2),
+                     0);
+    ck_assert_int_ge(asprintf(&text3,
+                              "dimensions: 3\nparticles: {spacing: 0.015}\ntime: {end: 0.1}\n"
+                              "domain: {min: [4.5, -0.2, -0.2], max: [8.5, 0.5, 0.5]}\n"
+                              "plugins: {wendland_c2: {}}\ngeometry:\n  walls:\n%s",
+                              walls3),
+                     0);
+    sluice_scene s2, s3;
+    sluice_diag *d2, *d3;
+    char *p2, *p3;
+    ck_assert_uint_eq(load_scene_text(text2, &s2, &d2, &p2), 0);
+    size_t errors = load_scene_text(text3, &s3, &d3, &p3);
+    for (size_t i = 0; i < sluice_diag_count(d3); i++)
+        fprintf(stderr, "%s\n", sluice_diag_message(d3, i));
+    ck_assert_uint_eq(errors, 0);
+    ck_assert_uint_eq(s3.wall_count, 2);
+    const double dx = 0.015, T = 3 * dx, width = 0.3;
+    uint64_t state = 12345;
+    double worst = 0;
+    for (int w = 0; w < 2; w++) {
+        const sluice_wall_geometry *g2 = &s2.walls[w].geometry, *g3 = &s3.walls[w].geometry;
+        ck_assert_uint_eq(g3->element_count, 2 * g2->element_count);
+        for (int k = 0; k < 20000; k++) {
+            sluice_real p2[3] = {(sluice_real)uniform(&state, 4.8, 8.4),
+                                 (sluice_real)uniform(&state, -0.1, 0.3), 0};
+            sluice_real p3[3] = {p2[0], (sluice_real)uniform(&state, 0.01, width - 0.01), p2[1]};
+            int beyond2 = 0, beyond3 = 0;
+            const double a = (double)sluice_wall_signed_distance(g2, p2, &beyond2, NULL);
+            const double b = (double)sluice_wall_signed_distance(g3, p3, &beyond3, NULL);
+            ck_assert_int_eq(beyond2, beyond3);
+            if (!beyond2)
+                worst = fmax(worst, fabs(a - b));
+        }
+        /* layers: every 3D point is a 2D point on one of the 20 rows of y */
+        sluice_points q2, q3;
+        layer(g2, dx, T, &q2);
+        layer(g3, dx, T, &q3);
+        check_layer_points(g3, &q3, dx, T);
+        const size_t rows = (size_t)llround(width / dx);
+        ck_assert_uint_eq(q3.count, rows * q2.count);
+        for (size_t i = 0; i < q3.count; i++) {
+            const double y = q3.xyz[3 * i + 1];
+            ck_assert(y > 0 && y < width);
+            int found = 0;
+            for (size_t j = 0; j < q2.count && !found; j++)
+                found = fabs(q2.xyz[3 * j] - q3.xyz[3 * i]) < 1e-9 &&
+                        fabs(q2.xyz[3 * j + 1] - q3.xyz[3 * i + 2]) < 1e-9;
+            ck_assert_msg(found, "3D layer point (%g, %g, %g) is no 2D layer point",
+                          q3.xyz[3 * i], q3.xyz[3 * i + 1], q3.xyz[3 * i + 2]);
+        }
+        fprintf(stderr, "extruded wall %d: %zu 2D layer points, %zu in 3D (%zu rows)\n", w,
+                q2.count, q3.count, rows);
+        sluice_points_free(&q2);
+        sluice_points_free(&q3);
+    }
+    fprintf(stderr, "extruded walls: largest |3D - 2D| signed distance %.2e m\n", worst);
+    ck_assert(worst < 1e-12);
+    sluice_scene_free(&s2);
+    sluice_scene_free(&s3);
+    sluice_diag_destroy(d2);
+    sluice_diag_destroy(d3);
+    remove_scene_file(p2);
+    remove_scene_file(p3);
+
+    /* refused: the extrusion's ends reversed, with their line */
+    char *bad = NULL;
+    ck_assert_int_ge(asprintf(&bad,
+                              "dimensions: 3\nparticles: {spacing: 0.015}\ntime: {end: 0.1}\n"
+                              "domain: {min: [4.5, -0.2, -0.2], max: [8.5, 0.5, 0.5]}\n"
+                              "plugins: {wendland_c2: {}}\ngeometry:\n  walls:\n"
+                              "    - {shape: polyline, points: [[5, 0], [6, 0]], across: [0.3, 0]}\n"),
+                     0);
+    sluice_scene sb;
+    sluice_diag *db;
+    char *pb;
+    ck_assert_uint_eq(load_scene_text(bad, &sb, &db, &pb), 1);
+    ck_assert_ptr_nonnull(strstr(sluice_diag_message(db, 0), "across must run from a smaller"));
+    ck_assert_ptr_nonnull(strstr(sluice_diag_message(db, 0), ":8:"));
+    sluice_scene_free(&sb);
+    sluice_diag_destroy(db);
+    remove_scene_file(pb);
+    free(bad);
+    free(walls2), free(walls3), free(text2), free(text3);
+}
+END_TEST
+
 /* The Chanson chute as docs/scene-format.md writes it (anchors, nested
  * lists of pieces): the wall and the regions are the profiles the builder
  * makes of the same pieces; max_segment defaults to spacing / 2. */
@@ -2217,8 +2325,8 @@ START_TEST(profile_errors)
     expect_profile_error("  walls:\n"
                          "    - {shape: profile, start: [0, 1], pieces: [{piece: line, to: [0, "
                          "0]}]}\n",
-                         3, "shape", "profile", "shape 'profile' in geometry.walls.0 is only "
-                                                "available in 2D");
+                         3, "shape", "{shape", "missing required parameter 'across' in "
+                                               "geometry.walls.0");
     /* a fluid region whose closing segment crosses its outline */
     expect_profile_error("  fluid:\n"
                          "    - shape: profile\n"
@@ -2260,6 +2368,7 @@ int main(void)
     tcase_add_test(walls, signed_distance_meshes_3d);
     tcase_add_test(walls, layer_tank_2d);
     tcase_add_test(walls, layer_tank_3d);
+    tcase_add_test(walls, extruded_walls_3d);
     tcase_add_test(walls, layer_slanted_2d);
     tcase_add_test(walls, layer_box_obstacles);
     tcase_add_test(walls, wall_watch_matches_full_query);

@@ -248,6 +248,7 @@ typedef struct {
     int closed;
     const char *scheme, *name;
     sluice_real lattice_origin[3];
+    sluice_real across[3]; /* 3D outlines: extruded over y in [across[0], across[1]] */
 } wall_config;
 
 #define WALL_SHAPES "tank|box|polyline|polygon|profile"
@@ -283,6 +284,37 @@ static const sluice_param_spec wall_line_specs[] = {
      WALL_SHAPES, 0},
     {"points", SLUICE_PARAM_POINT_LIST, OFF(wall_config, points), NULL, 0, 0, 0, "m",
      "vertices (2D)", NULL, 0},
+    WALL_COMMON,
+};
+
+/* In 3D a polyline, polygon or profile is an outline in the (x, z) plane
+ * extruded across y. */
+#define WALL_ACROSS                                                                             \
+    {"across", SLUICE_PARAM_VECTOR, OFF(wall_config, across), NULL, 0, 0, 0, "m",              \
+     "3D: the outline (x, z) is extruded across y from across[0] to across[1] (open at both "   \
+     "ends: place it between side walls)",                                                      \
+     NULL, 2}
+
+static const sluice_param_spec wall_line_specs_3d[] = {
+    {"shape", SLUICE_PARAM_ENUM, OFF(wall_config, shape), NULL, 0, 0, 0, NULL,
+     "polyline: open line with the fluid on its left (in x-z, seen from -y); polygon: closed "
+     "solid with the fluid outside",
+     WALL_SHAPES, 0},
+    {"points", SLUICE_PARAM_POINT_LIST, OFF(wall_config, points), NULL, 0, 0, 0, "m",
+     "vertices (x, z) of the outline", NULL, 2},
+    WALL_ACROSS,
+    WALL_COMMON,
+};
+
+static const sluice_param_spec wall_profile_specs_3d[] = {
+    {"shape", SLUICE_PARAM_ENUM, OFF(wall_config, shape), NULL, 0, 0, 0, NULL,
+     "profile: a wall built from pieces (lines, arcs, crests, steps) in the (x, z) plane, the "
+     "fluid on its left, extruded across y",
+     WALL_SHAPES, 0},
+    PROFILE_KEYS(wall_config),
+    {"closed", SLUICE_PARAM_BOOL, OFF(wall_config, closed), "false", 0, 0, 0, NULL,
+     "join the end back to the start", NULL, 0},
+    WALL_ACROSS,
     WALL_COMMON,
 };
 
@@ -517,6 +549,46 @@ static sluice_real *polygon_xy(sluice_arena *arena, const sluice_real_list *poin
         xy[2 * k + 1] = points->values[3 * src + 1];
     }
     return xy;
+}
+
+/* A 2D outline (x, z) of n vertices extruded across y from across[0] to
+ * across[1]: two triangles per segment, the fluid on the left of each
+ * segment a -> b seen with x to the right and z up (the 2D polyline's rule),
+ * open at both ends across y. */
+static int build_extruded(sluice_wall_geometry *wall, const sluice_real *xz, uint32_t n,
+                          int closed, const sluice_real *across, const char **reason)
+{
+    const uint32_t segments = closed ? n : n - 1;
+    sluice_real *vertices = malloc(((size_t)n * 6 + 1) * sizeof *vertices);
+    uint32_t *faces = malloc(((size_t)segments * 6 + 1) * sizeof *faces);
+    if (!vertices || !faces) {
+        free(vertices);
+        free(faces);
+        *reason = "out of memory";
+        return -1;
+    }
+    for (uint32_t k = 0; k < n; k++)
+        for (int side = 0; side < 2; side++) {
+            sluice_real *v = vertices + 3 * (2 * (size_t)k + (size_t)side);
+            v[0] = xz[2 * k];
+            v[1] = across[side];
+            v[2] = xz[2 * k + 1];
+        }
+    uint32_t count = 0;
+    for (uint32_t k = 0; k < segments; k++) {
+        const uint32_t a = k, b = (k + 1) % n;
+        if (xz[2 * a] == xz[2 * b] && xz[2 * a + 1] == xz[2 * b + 1])
+            continue; /* a repeated vertex */
+        const uint32_t a0 = 2 * a, a1 = 2 * a + 1, b0 = 2 * b, b1 = 2 * b + 1;
+        /* (b0 - a0) x (b1 - a0) = width (-(bz - az), 0, bx - ax): the left */
+        uint32_t *f = faces + 6 * (size_t)count++;
+        f[0] = a0, f[1] = b0, f[2] = b1;
+        f[3] = a0, f[4] = b1, f[5] = a1;
+    }
+    int rc = sluice_wall_build_triangles(wall, vertices, 2 * n, faces, 2 * count, reason);
+    free(vertices);
+    free(faces);
+    return rc;
 }
 
 static double signed_area(const sluice_real_list *points)
@@ -985,12 +1057,19 @@ static int load_walls(sluice_scene *scene, sluice_node *geometry, sluice_diag *d
         snprintf(path, sizeof path, "geometry.walls.%zu", i);
         wall_config c;
         memset(&c, 0, sizeof c);
-        int boxlike = shape <= 1, profile = shape == 4;
+        int boxlike = shape <= 1, profile = shape == 4, three = scene->dimensions == 3;
         detached_key pieces = profile ? detach(item, "pieces") : (detached_key){0, NULL, NULL};
         int e = boxlike   ? sluice_schema_bind(wall_box_specs, SLUICE_COUNT(wall_box_specs),
                                                &list->items[i], item, path, scene->dimensions, &c,
                                                scene->arena, diag)
+                : profile && three
+                    ? sluice_schema_bind(wall_profile_specs_3d, SLUICE_COUNT(wall_profile_specs_3d),
+                                         &list->items[i], item, path, scene->dimensions, &c,
+                                         scene->arena, diag)
                 : profile ? sluice_schema_bind(wall_profile_specs, SLUICE_COUNT(wall_profile_specs),
+                                               &list->items[i], item, path, scene->dimensions, &c,
+                                               scene->arena, diag)
+                : three   ? sluice_schema_bind(wall_line_specs_3d, SLUICE_COUNT(wall_line_specs_3d),
                                                &list->items[i], item, path, scene->dimensions, &c,
                                                scene->arena, diag)
                           : sluice_schema_bind(wall_line_specs, SLUICE_COUNT(wall_line_specs),
@@ -1026,10 +1105,10 @@ static int load_walls(sluice_scene *scene, sluice_node *geometry, sluice_diag *d
                             : sluice_wall_build_box(&w->geometry, scene->dimensions, c.min, c.max,
                                                     &reason);
         } else {
-            if (scene->dimensions != 2) {
-                error_at(diag, scene, sluice_node_get(item, "shape"),
-                         "shape '%s' in %s is only available in 2D (3D walls: tank or box)",
-                         shape == 2 ? "polyline" : shape == 3 ? "polygon" : "profile", path);
+            if (three && !(c.across[1] > c.across[0])) {
+                error_at(diag, scene, sluice_node_get(item, "across"),
+                         "%s.across must run from a smaller to a larger y (got [%g, %g])", path,
+                         (double)c.across[0], (double)c.across[1]);
                 errors++;
                 continue;
             }
@@ -1043,8 +1122,10 @@ static int load_walls(sluice_scene *scene, sluice_node *geometry, sluice_diag *d
                     sluice_profile_path_free(&outline);
                     continue;
                 }
-                rc = sluice_wall_build_polyline(&w->geometry, outline.xy, outline.vertex_count,
-                                                c.closed, &reason);
+                rc = three ? build_extruded(&w->geometry, outline.xy, outline.vertex_count,
+                                            c.closed, c.across, &reason)
+                           : sluice_wall_build_polyline(&w->geometry, outline.xy,
+                                                        outline.vertex_count, c.closed, &reason);
                 sluice_profile_path_free(&outline);
                 if (rc != 0) {
                     error_at(diag, scene, item, "%s: %s", path, reason ? reason : "out of memory");
@@ -1068,7 +1149,9 @@ static int load_walls(sluice_scene *scene, sluice_node *geometry, sluice_diag *d
             sluice_real *xy = polygon_xy(scene->arena, &c.points, reverse);
             if (!xy)
                 return errors + 1;
-            rc = sluice_wall_build_polyline(&w->geometry, xy, c.points.count, closed, &reason);
+            rc = three ? build_extruded(&w->geometry, xy, c.points.count, closed, c.across, &reason)
+                       : sluice_wall_build_polyline(&w->geometry, xy, c.points.count, closed,
+                                                    &reason);
         }
         if (rc != 0) {
             error_at(diag, scene, item, "%s: %s", path, reason ? reason : "out of memory");

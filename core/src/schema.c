@@ -380,7 +380,9 @@ static int read_real_list(conversion *c, const sluice_node *node, const char *pa
 static int read_point_list(conversion *c, const sluice_node *node, const char *path,
                            sluice_real_list *out)
 {
-    uint32_t d = c->dimensions;
+    /* points of the scene's dimensions, or of the spec's length (a 2D
+     * outline in a 3D scene) */
+    uint32_t d = c->spec->length ? c->spec->length : c->dimensions;
     char expected[100];
     snprintf(expected, sizeof expected, "a list of points, each a list of %u numbers",
              (unsigned)d);
