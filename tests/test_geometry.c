@@ -2004,6 +2004,48 @@ static const char *scene_head = "dimensions: 2\n"
                                 "plugins: {wendland_c2: {}}\n"
                                 "geometry:\n";
 
+/* An open channel: the tank without its ends across x. 3D: the bed and the
+ * two sides (6 triangles); a point past an open end is beyond it (no
+ * "behind"), and the layers are the tank's without the end walls' and
+ * without points past the ends. 2D: the bed alone. */
+START_TEST(channel_walls)
+{
+    const sluice_real lo[3] = {0, 0, 0}, hi[3] = {2, 0.5, 0.6};
+    const double dx = 0.05, T = 3 * dx;
+    sluice_wall_geometry channel, tank;
+    ck_assert_int_eq(sluice_wall_build_channel(&channel, 3, lo, hi, NULL), 0);
+    ck_assert_int_eq(sluice_wall_build_tank(&tank, 3, lo, hi, NULL), 0);
+    ck_assert_uint_eq(channel.element_count, 6);
+    ck_assert_uint_eq(tank.element_count, 10);
+    int beyond = 0;
+    const sluice_real inside[3] = {1.0, 0.2, 0.1}, past[3] = {2.3, 0.25, 0.1};
+    ck_assert(fabs((double)sluice_wall_signed_distance(&channel, inside, &beyond, NULL) - 0.1) <
+              1e-12);
+    ck_assert_int_eq(beyond, 0);
+    (void)sluice_wall_signed_distance(&channel, past, &beyond, NULL);
+    ck_assert_int_eq(beyond, 1);
+    sluice_points a, b;
+    layer(&channel, dx, T, &a);
+    layer(&tank, dx, T, &b);
+    check_layer_points(&channel, &a, dx, T);
+    /* the channel's layers: the tank's whose x lies within the channel */
+    size_t within = 0;
+    for (size_t i = 0; i < b.count; i++)
+        within += b.xyz[3 * i] > 0 && b.xyz[3 * i] < 2;
+    ck_assert_uint_eq(a.count, within);
+    for (size_t i = 0; i < a.count; i++)
+        ck_assert(a.xyz[3 * i] > 0 && a.xyz[3 * i] < 2);
+    sluice_points_free(&a);
+    sluice_points_free(&b);
+    sluice_wall_geometry_free(&channel);
+    sluice_wall_geometry_free(&tank);
+    ck_assert_int_eq(sluice_wall_build_channel(&channel, 2, lo, hi, NULL), 0);
+    ck_assert_uint_eq(channel.element_count, 1);
+    ck_assert(channel.normals[1] > 0.999); /* the fluid above the bed */
+    sluice_wall_geometry_free(&channel);
+}
+END_TEST
+
 /* 3D walls extruded from a 2D outline (x, z) across y: a trapezoidal
  * obstacle (polygon: a solid) on a sloped bed (polyline), in a 3D scene
  * and, as 2D walls, in a 2D one. Exact: for points between the extrusion's
@@ -2369,6 +2411,7 @@ int main(void)
     tcase_add_test(walls, layer_tank_2d);
     tcase_add_test(walls, layer_tank_3d);
     tcase_add_test(walls, extruded_walls_3d);
+    tcase_add_test(walls, channel_walls);
     tcase_add_test(walls, layer_slanted_2d);
     tcase_add_test(walls, layer_box_obstacles);
     tcase_add_test(walls, wall_watch_matches_full_query);

@@ -708,7 +708,8 @@ static const uint32_t box_quads[6][4] = {
  * the box when `inward`, out of it otherwise. The top face is left out for an
  * open tank. */
 static int build_box_3d(sluice_wall_geometry *wall, const sluice_real min[3],
-                        const sluice_real max[3], int inward, int with_top, const char **reason)
+                        const sluice_real max[3], int inward, int with_top, int with_ends,
+                        const char **reason)
 {
     sluice_real corners[8 * 3];
     double centre[3];
@@ -722,6 +723,10 @@ static int build_box_3d(sluice_wall_geometry *wall, const sluice_real min[3],
     for (int q = with_top ? 0 : 1; q < 6; q++) {
         uint32_t c[4];
         memcpy(c, box_quads[q], sizeof c);
+        /* the ends across x: the four corners share their x (bit 0) */
+        const uint32_t x_bits = (c[0] & 1u) + (c[1] & 1u) + (c[2] & 1u) + (c[3] & 1u);
+        if (!with_ends && (x_bits == 0 || x_bits == 4))
+            continue;
         double v0[3], v1[3], v2[3], e1[3], e2[3], n[3], to_centre[3];
         load3(v0, corners + 3 * c[0]);
         load3(v1, corners + 3 * c[1]);
@@ -774,7 +779,23 @@ int sluice_wall_build_tank(sluice_wall_geometry *wall, uint32_t dimensions,
                                    max[0], min[1], max[0], max[1]};
         return sluice_wall_build_polyline(wall, xy, 4, 0, reason);
     }
-    return build_box_3d(wall, min, max, 1, 0, reason);
+    return build_box_3d(wall, min, max, 1, 0, 1, reason);
+}
+
+int sluice_wall_build_channel(sluice_wall_geometry *wall, uint32_t dimensions,
+                              const sluice_real min[3], const sluice_real max[3],
+                              const char **reason)
+{
+    const char *ignored;
+    if (!reason)
+        reason = &ignored;
+    if (begin_box_wall(wall, dimensions, min, max, reason) != 0)
+        return -1;
+    if (dimensions == 2) { /* the bed, the fluid above it */
+        const sluice_real xy[4] = {min[0], min[1], max[0], min[1]};
+        return sluice_wall_build_polyline(wall, xy, 2, 0, reason);
+    }
+    return build_box_3d(wall, min, max, 1, 0, 0, reason);
 }
 
 int sluice_wall_build_box(sluice_wall_geometry *wall, uint32_t dimensions,
@@ -792,7 +813,7 @@ int sluice_wall_build_box(sluice_wall_geometry *wall, uint32_t dimensions,
                                    max[0], max[1], max[0], min[1]};
         return sluice_wall_build_polyline(wall, xy, 4, 1, reason);
     }
-    return build_box_3d(wall, min, max, 0, 1, reason);
+    return build_box_3d(wall, min, max, 0, 1, 1, reason);
 }
 
 /* ------------------------------------------------------ closest points -- */

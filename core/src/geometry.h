@@ -81,6 +81,11 @@ int sluice_wall_build_triangles(sluice_wall_geometry *wall, const sluice_real *v
 int sluice_wall_build_tank(sluice_wall_geometry *wall, uint32_t dimensions,
                            const sluice_real min[3], const sluice_real max[3],
                            const char **reason);
+/* An open channel: a tank without its ends across x (the fluid enters and
+ * leaves there): 2D the bed, 3D the bed and the two sides. */
+int sluice_wall_build_channel(sluice_wall_geometry *wall, uint32_t dimensions,
+                              const sluice_real min[3], const sluice_real max[3],
+                              const char **reason);
 /* A solid box with the fluid outside (2D closed rectangle, 3D six faces). */
 int sluice_wall_build_box(sluice_wall_geometry *wall, uint32_t dimensions,
                           const sluice_real min[3], const sluice_real max[3],

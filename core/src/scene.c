@@ -251,7 +251,7 @@ typedef struct {
     sluice_real across[3]; /* 3D outlines: extruded over y in [across[0], across[1]] */
 } wall_config;
 
-#define WALL_SHAPES "tank|box|polyline|polygon|profile"
+#define WALL_SHAPES "tank|box|polyline|polygon|profile|channel"
 #define WALL_COMMON                                                                             \
     {"scheme", SLUICE_PARAM_STRING, OFF(wall_config, scheme), NULL, 0, 0, SLUICE_PARAM_OPTIONAL, \
      NULL, "wall scheme plugin for this wall (default: the only one loaded)", NULL, 0},        \
@@ -268,7 +268,8 @@ typedef struct {
 
 static const sluice_param_spec wall_box_specs[] = {
     {"shape", SLUICE_PARAM_ENUM, OFF(wall_config, shape), NULL, 0, 0, 0, NULL,
-     "tank: open-top container with the fluid inside; box: solid block with the fluid outside",
+     "tank: open-top container with the fluid inside; box: solid block with the fluid "
+     "outside; channel: a tank without its ends across x (the bed and, in 3D, the sides)",
      WALL_SHAPES, 0},
     {"min", SLUICE_PARAM_VECTOR, OFF(wall_config, min), NULL, 0, 0, 0, "m", "lower corner", NULL,
      SLUICE_LENGTH_DIM},
@@ -1057,7 +1058,8 @@ static int load_walls(sluice_scene *scene, sluice_node *geometry, sluice_diag *d
         snprintf(path, sizeof path, "geometry.walls.%zu", i);
         wall_config c;
         memset(&c, 0, sizeof c);
-        int boxlike = shape <= 1, profile = shape == 4, three = scene->dimensions == 3;
+        int boxlike = shape <= 1 || shape == 5, profile = shape == 4,
+            three = scene->dimensions == 3;
         detached_key pieces = profile ? detach(item, "pieces") : (detached_key){0, NULL, NULL};
         int e = boxlike   ? sluice_schema_bind(wall_box_specs, SLUICE_COUNT(wall_box_specs),
                                                &list->items[i], item, path, scene->dimensions, &c,
@@ -1100,10 +1102,12 @@ static int load_walls(sluice_scene *scene, sluice_node *geometry, sluice_diag *d
                 errors++;
                 continue;
             }
-            rc = shape == 0 ? sluice_wall_build_tank(&w->geometry, scene->dimensions, c.min, c.max,
-                                                     &reason)
-                            : sluice_wall_build_box(&w->geometry, scene->dimensions, c.min, c.max,
-                                                    &reason);
+            rc = shape == 0   ? sluice_wall_build_tank(&w->geometry, scene->dimensions, c.min,
+                                                       c.max, &reason)
+                 : shape == 5 ? sluice_wall_build_channel(&w->geometry, scene->dimensions, c.min,
+                                                          c.max, &reason)
+                              : sluice_wall_build_box(&w->geometry, scene->dimensions, c.min,
+                                                      c.max, &reason);
         } else {
             if (three && !(c.across[1] > c.across[0])) {
                 error_at(diag, scene, sluice_node_get(item, "across"),
