@@ -662,7 +662,11 @@ static const char *channel =
     "  time_step: {courant: 0.25}\n"
     "  symplectic: {}\n"
     "  inlet: {form: buffer, position: 0, depth: 0.1, velocity: 0.5, interval: 0.05}\n"
-    "  outlet: {form: free, position: 1.0, interval: 0.05}\n";
+    "  outlet: {form: free, position: 1.0, interval: 0.05}\n"
+    /* the cuts move with the particle counts, reproducibly (a balance by
+     * measured time moves them as the machine's load says, and the
+     * round-off with them) */
+    "ranks: {balance: count}\n";
 
 /* Every rank's (id, x, y, u, v, density, kind) on rank 0. */
 static int gather_particles(sluice_sim *sim, MPI_Comm comm, unsigned long long **ids,
@@ -775,6 +779,9 @@ START_TEST(inlet_and_outlet_on_other_ranks)
                 scale[c] = fmax(scale[c], fabs(mine[c]));
             }
         }
+        /* the velocity's scale is the flow's speed, for both components
+         * (the vertical one alone is noise about zero) */
+        scale[2] = scale[3] = fmax(scale[2], scale[3]);
         for (int c = 0; c < 6; c++)
             ck_assert_msg(worst[c] <= 1e-10 * scale[c], "value %d differs by %g (scale %g)", c,
                           worst[c], scale[c]);

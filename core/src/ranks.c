@@ -609,6 +609,9 @@ static int neighbour_arrays(sluice_sim *sim)
 {
     sluice_halo_lists *h = &sim->halo;
     const size_t size = (size_t)sim->comm.size;
+    /* a restart splits again */
+    free(h->cuts), free(h->boxes), free(h->neighbour), free(h->send_begin);
+    free(h->receive_begin), free(h->sent), free(h->got), free(h->requests);
     h->cut_count = cut_total(h->split);
     h->cuts = malloc(h->cut_count * sizeof *h->cuts);
     h->boxes = malloc(6 * size * sizeof *h->boxes);
@@ -631,6 +634,7 @@ static int halo_columns(sluice_sim *sim)
 {
     sluice_halo_lists *h = &sim->halo;
     const uint32_t columns = sim->column_count;
+    free(h->real_column), free(h->columns); /* a restart splits again */
     uint8_t *wanted = calloc((size_t)columns + 1, 1);
     h->real_column = calloc((size_t)columns + 1, 1);
     h->columns = malloc(((size_t)columns + 1) * sizeof *h->columns);
