@@ -172,6 +172,32 @@ static const char *periodic_scene =
     "  time_step: {courant: 0.2}\n"
     "  symplectic: {}\n";
 
+/* A 3D dam break (dx = 0.05 m, 10,228 particles) cut along x, y and z:
+ * 2 x 1 x 2 boxes on 4 ranks (the least surface for its extent), so halos
+ * cross faces, edges and corners of boxes in 3D. */
+static const char *scene_3d =
+    "dimensions: 3\n"
+    "particles: {spacing: 0.05, smoothing_length_ratio: 1.5, rest_density: 1000}\n"
+    "time: {end: 1.0}\n"
+    "domain: {min: [-0.2, -0.2, -0.2], max: [1.8, 0.8, 1.5]}\n"
+    "geometry:\n"
+    "  fluid:\n"
+    "    - {shape: box, min: [0, 0, 0], max: [0.5, 0.6, 0.5]}\n"
+    "  walls:\n"
+    "    - {shape: tank, min: [0, 0, 0], max: [1.6, 0.6, 1.2], name: tank}\n"
+    "initial: {density: hydrostatic}\n"
+    "plugins:\n"
+    "  wendland_c2: {}\n"
+    "  tait: {speed_of_sound: 25, gamma: 7}\n"
+    "  continuity: {}\n"
+    "  delta_sph: {delta: 0.1, form: fourtakas}\n"
+    "  pressure_gradient: {}\n"
+    "  artificial_viscosity: {alpha: 0.1}\n"
+    "  gravity: {acceleration: [0, 0, -9.81]}\n"
+    "  dbc: {}\n"
+    "  time_step: {courant: 0.2}\n"
+    "  symplectic: {}\n";
+
 typedef struct ranks_case {
     const char *what;
     const char *const *base; /* the scene */
@@ -200,6 +226,8 @@ static const ranks_case cases[] = {
      "ranks: {split: y, balance: count, every: 20, tolerance: 0.01}\n", 1, 2000, NULL},
     {"periodic channel cut along x and y (2 x 2 on 4 ranks)", &periodic_scene, NULL, NULL,
      "ranks: {split: xy, balance: count, every: 20, tolerance: 0.01}\n", 0, 2000, NULL},
+    {"3D dam break cut along x, y and z (2 x 1 x 2 on 4 ranks), balanced", &scene_3d, NULL, NULL,
+     "ranks: {split: xyz, balance: count, every: 20, tolerance: 0.01}\n", 1, 1000, NULL},
 };
 #define CASES ((int)(sizeof cases / sizeof cases[0]))
 
