@@ -336,7 +336,7 @@ typedef struct sluice_api {
                          sluice_index count, sluice_index *first);
     /* (Across ranks, 1.8: during the run only components flagged
      * SLUICE_COMPONENT_ACROSS_RANKS add or remove particles; new ids are
-     * unique over the ranks, and a particle added outside the rank's slab
+     * unique over the ranks, and a particle added outside the rank's box
      * moves to its owner at the next neighbour-list rebuild.) */
     uint32_t (*wall_count)(sluice_host *host);
     const sluice_wall *(*wall)(sluice_host *host, uint32_t index);
@@ -488,7 +488,7 @@ typedef struct sluice_api {
     /* -- 1.9: interpolation at points of this rank's own particles (a wall
      * particle's mirror point, docs/scaling.md). As point_pass, but the
      * pairs include, across ranks, the particles other ranks own near the
-     * slab (the halo, refreshed first), so that every point gets what it
+     * rank's box (the halo, refreshed first), so that every point gets what it
      * gets on one rank: the caller passes only points that belong to its
      * rank's own particles (view->count), and it may run without
      * SLUICE_COMPONENT_ACROSS_RANKS (nothing is summed over ranks). Each
