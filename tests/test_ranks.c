@@ -841,6 +841,47 @@ START_TEST(inlet_and_outlet_on_other_ranks)
 }
 END_TEST
 
+/* A term that reads a field at its neighbours without declaring it
+ * (tests/fixtures/neighbour_reader.c: density_rate, declared SLUICE_READ
+ * only) gets NaN from the halo across ranks, where the refresh does not send
+ * that field: one evaluation leaves NaN in the acceleration of the particles
+ * with neighbours on other ranks (which the watchdog then stops), never a
+ * value one rebuild old. On one rank every acceleration is finite. */
+START_TEST(undeclared_neighbour_read_is_nan)
+{
+    int rank = 0, size = 1;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+    MPI_Comm world = MPI_COMM_WORLD;
+    const char *fixtures = getenv("SLUICE_FIXTURE_DIR");
+    ck_assert_ptr_nonnull(fixtures);
+    char *text = NULL;
+    ck_assert_int_ge(asprintf(&text, "plugin_path: %s\n%s  neighbour_reader: {}\n",
+                              fixtures, scene),
+                     0);
+    sluice_sim *sim = load_text(text, &world, NULL);
+    free(text);
+    ck_assert_ptr_nonnull(sim);
+    ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
+    const sluice_view *v = sluice_sim_view(sim);
+    const sluice_real *ax = test_column(sim, "acceleration", 0);
+    double nan_count = 0;
+    for (sluice_index i = 0; i < v->count; i++)
+        nan_count += v->kind[i] == SLUICE_KIND_FLUID && !isfinite((double)ax[i]);
+    double total = 0;
+    MPI_Allreduce(&nan_count, &total, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    if (rank == 0)
+        fprintf(stderr, "ranks: an undeclared neighbour read on %d rank(s): %.0f fluid particles "
+                        "with a NaN acceleration\n",
+                size, total);
+    if (size == 1)
+        ck_assert_msg(total == 0, "NaN on one rank");
+    else
+        ck_assert_msg(total > 0, "the undeclared read across ranks went unnoticed");
+    sluice_sim_free(sim);
+}
+END_TEST
+
 /* A split the scene cannot have is refused at load, with the line of the
  * key: the axis z in a 2D scene. */
 START_TEST(refused_across_ranks)
@@ -863,6 +904,7 @@ int main(int argc, char **argv)
     tcase_add_test(t, output_as_one_rank);
     tcase_add_test(t, inlet_and_outlet_on_other_ranks);
     tcase_add_test(t, refused_across_ranks);
+    tcase_add_test(t, undeclared_neighbour_read_is_nan);
     suite_add_tcase(s, t);
     SRunner *runner = srunner_create(s);
     srunner_set_fork_status(runner, CK_NOFORK);
