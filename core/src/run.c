@@ -571,8 +571,17 @@ static int step(sluice_sim *sim)
         return strstr(sim->failure, "outside the domain") ? SLUICE_RUN_UNSTABLE : SLUICE_RUN_FAILED;
     }
     if (!(sim->dt > 0)) {
-        sluice_sim_fail(sim, "integrator '%s' did not take a step at t = %.9g s (time step %g s)",
-                        integrator->name, sim->time, sim->dt);
+        /* a time-step limit that is not a number (or not positive) comes from
+         * a particle's state: name the particle and the field when the
+         * watchdog's scan finds it */
+        const double limit = sim->dt_limit;
+        sim->dt_limit = INFINITY;
+        const int found = watchdog(sim) != 0;
+        sim->dt_limit = limit;
+        if (!found)
+            sluice_sim_fail(sim,
+                            "integrator '%s' did not take a step at t = %.9g s (time step %g s)",
+                            integrator->name, sim->time, sim->dt);
         return SLUICE_RUN_UNSTABLE;
     }
     sim->time += sim->dt;
