@@ -939,23 +939,30 @@ int sluice_ranks_collect_halo(void *context, sluice_particles *p, sluice_index *
     const sluice_index n = p->count;
     const double width = h->width;
     const uint32_t dims = dims_of(sim);
-    /* the lists, neighbour by neighbour: the own particles within the halo
-     * width of its box; a particle deeper than that inside this box goes
-     * to none */
+    /* the particles within the halo width of this box's sides (the others
+     * go to no neighbour), then the lists, neighbour by neighbour: those
+     * within the halo width of its box */
+    sluice_index *near = malloc(((size_t)n + 1) * sizeof *near), near_count = 0;
+    int failed = near == NULL;
+    for (sluice_index i = 0; i < n && !failed; i++) {
+        double x[3];
+        position_of(sim, p, i, x);
+        int interior = 1;
+        for (uint32_t d = 0; d < dims && interior; d++) {
+            const double v = wrap_axis(&sim->grid, d, x[d]);
+            interior = v - h->lo[d] >= width && h->hi[d] - v >= width;
+        }
+        if (!interior)
+            near[near_count++] = i;
+    }
     sluice_index listed = 0;
-    int failed = 0;
     for (int k = 0; k < h->neighbour_count && !failed; k++) {
         h->send_begin[k] = listed;
         const double *box = h->boxes + 6 * (size_t)h->neighbour[k];
-        for (sluice_index i = 0; i < n; i++) {
+        for (sluice_index m = 0; m < near_count; m++) {
             double x[3];
-            position_of(sim, p, i, x);
-            int interior = 1;
-            for (uint32_t d = 0; d < dims && interior; d++) {
-                const double v = wrap_axis(&sim->grid, d, x[d]);
-                interior = v - h->lo[d] >= width && h->hi[d] - v >= width;
-            }
-            if (interior || !near_box(sim, box, x, width))
+            position_of(sim, p, near[m], x);
+            if (!near_box(sim, box, x, width))
                 continue;
             if (listed == h->send_capacity) {
                 sluice_index cap = h->send_capacity ? 2 * h->send_capacity : 1024;
@@ -967,9 +974,10 @@ int sluice_ranks_collect_halo(void *context, sluice_particles *p, sluice_index *
                 h->send = grown;
                 h->send_capacity = cap;
             }
-            h->send[listed++] = i;
+            h->send[listed++] = near[m];
         }
     }
+    free(near);
     h->send_begin[h->neighbour_count] = listed;
     if (failed || pack(sim, h, every_column) != 0) {
         sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);

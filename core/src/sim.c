@@ -1148,6 +1148,26 @@ static int api_wall_nearest(sluice_host *host, const sluice_real *point, int32_t
     return found ? SLUICE_OK : SLUICE_ERROR;
 }
 
+/* The pass of api->point_pass and api->point_pass_local, once the
+ * neighbour search is up to date (with_halo: the halo's particles are pairs
+ * too). */
+static int run_point_pass(sluice_sim *sim, const sluice_host *host, const sluice_real *points,
+                          sluice_index count, uint32_t kinds, int with_halo, sluice_point_fn fn,
+                          void *context)
+{
+    sim->evaluating++;
+    int failed = sluice_point_pass_run(&sim->engine, &sim->grid, &sim->view, points, count,
+                                       sluice_neighbour_kinds(kinds), with_halo, fn,
+                                       context) != 0;
+    sim->evaluating--;
+    if (failed) {
+        sluice_sim_fail(sim, "out of memory in the point pass of '%s'",
+                        instance_name(sim, host->instance));
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
 static int api_point_pass(sluice_host *host, const sluice_real *points, sluice_index count,
                           uint32_t kinds, sluice_point_fn fn, void *context)
 {
@@ -1162,21 +1182,12 @@ static int api_point_pass(sluice_host *host, const sluice_real *points, sluice_i
         return SLUICE_OK;
     if (update_neighbours(sim) != SLUICE_OK)
         return SLUICE_ERROR;
-    sim->evaluating++;
-    int failed = sluice_point_pass_run(&sim->engine, &sim->grid, &sim->view, points, count,
-                                       sluice_neighbour_kinds(kinds), 0, fn, context) != 0;
-    sim->evaluating--;
-    if (failed) {
-        sluice_sim_fail(sim, "out of memory in the point pass of '%s'",
-                        instance_name(sim, host->instance));
-        return SLUICE_ERROR;
-    }
-    return SLUICE_OK;
+    return run_point_pass(sim, host, points, count, kinds, 0, fn, context);
 }
 
 /* 1.9: points of the rank's own particles, with the halo's particles as
  * pairs: one rank's result at every point within the component's margin of
- * the slab. */
+ * the rank's box. */
 static int api_point_pass_local(sluice_host *host, const sluice_real *points, sluice_index count,
                                 uint32_t kinds, sluice_point_fn fn, void *context)
 {
@@ -1220,16 +1231,7 @@ static int api_point_pass_local(sluice_host *host, const sluice_real *points, sl
 #endif
     if (count == 0)
         return SLUICE_OK;
-    sim->evaluating++;
-    int failed = sluice_point_pass_run(&sim->engine, &sim->grid, &sim->view, points, count,
-                                       sluice_neighbour_kinds(kinds), 1, fn, context) != 0;
-    sim->evaluating--;
-    if (failed) {
-        sluice_sim_fail(sim, "out of memory in the point pass of '%s'",
-                        instance_name(sim, host->instance));
-        return SLUICE_ERROR;
-    }
-    return SLUICE_OK;
+    return run_point_pass(sim, host, points, count, kinds, 1, fn, context);
 }
 
 static int api_request_point_margin(sluice_host *host, sluice_real margin)
