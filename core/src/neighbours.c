@@ -508,13 +508,13 @@ int sluice_grid_build_with_halo(sluice_grid *grid, sluice_particles *particles,
     const double cutoff = (double)grid->support + (double)grid->skin;
     const double cutoff2 = cutoff * cutoff;
     sluice_index *begin = grid->list_begin;
-#pragma omp parallel for schedule(dynamic, 256)
+#pragma omp parallel for schedule(guided, 256)
     for (sluice_index i = 0; i < n; i++)
         begin[i + 1] = visit(grid, pos, i, cutoff2, NULL);
     if (sluice_list_offsets(begin, n, &grid->list, &grid->list_capacity) != 0)
         return -1;
     sluice_index *list = grid->list;
-#pragma omp parallel for schedule(dynamic, 256)
+#pragma omp parallel for schedule(guided, 256)
     for (sluice_index i = 0; i < n; i++)
         (void)visit(grid, pos, i, cutoff2, list + begin[i]);
 

@@ -467,7 +467,7 @@ static int reach_list_build(const sluice_pair_pass *pass, const sluice_grid *gri
     }
     const double cutoff = (double)pass->reach + (double)grid->skin;
     sluice_index *begin = L->begin;
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 256)
+#pragma omp parallel for num_threads(threads) schedule(guided, 256)
     for (sluice_index i = 0; i < n; i++)
         begin[i + 1] = reach_target(pass, view, i) ? reach_scan(pass, grid, view, i,
                                                                 pass->neighbour_mask[view->kind[i]],
@@ -476,7 +476,7 @@ static int reach_list_build(const sluice_pair_pass *pass, const sluice_grid *gri
     if (sluice_list_offsets(begin, n, &L->list, &L->capacity) != 0)
         return -1;
     sluice_index *list = L->list;
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 256)
+#pragma omp parallel for num_threads(threads) schedule(guided, 256)
     for (sluice_index i = 0; i < n; i++)
         if (begin[i + 1] > begin[i])
             (void)reach_scan(pass, grid, view, i, pass->neighbour_mask[view->kind[i]], cutoff,
@@ -584,7 +584,7 @@ static int pair_pass_run_reach(sluice_pair_engine *engine, const sluice_pair_pas
             w->gathered[c] = NULL;
         const uint8_t *kind = view->kind;
 
-#pragma omp for schedule(dynamic, 4)
+#pragma omp for schedule(guided, 4)
         for (sluice_index chunk = 0; chunk < chunks; chunk++) {
             if (failed)
                 continue;
@@ -644,7 +644,13 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
         const uint8_t *kind = view->kind;
         const sluice_index *list = grid->list, *begin = grid->list_begin;
 
-#pragma omp for schedule(dynamic, 4)
+/* guided: each thread takes long runs of consecutive chunks (shrinking
+         * towards the end for balance), so the neighbours its targets read
+         * are still in its own cache from the chunk before; interleaved
+         * small chunks (dynamic, 4) made the two threads of a 2-core machine
+         * fetch each other's rows and cost 8 % at 86k-1M particles
+         * (docs/performance.md) */
+        #pragma omp for schedule(guided, 4)
         for (sluice_index chunk = 0; chunk < chunks; chunk++) {
             if (failed)
                 continue;
@@ -742,7 +748,7 @@ int sluice_point_pass_run(sluice_pair_engine *engine, const sluice_grid *grid,
         if (!found)
             failed = 1;
 
-#pragma omp for schedule(dynamic, 4)
+#pragma omp for schedule(guided, 4)
         for (sluice_index chunk = 0; chunk < chunks; chunk++) {
             if (failed)
                 continue;
