@@ -233,6 +233,12 @@ fi
                   for (v in rate) if (v ~ /^sluice-/)
                       printf "\n%s against PySPH on 2 threads: %.2fx the particle-steps/s, %.2fx faster to the same end time\n",
                              v, rate[v] / rate["pysph-openmp"], wall["pysph-openmp"] / wall[v] }' "$csv"
+    # parallel efficiency: each speed run against its one-thread twin
+    awk -F, 'NR > 1 && $1 == "speed" && $12 == "complete" { rate[$2 "|" $3] = $8; n[$2 "|" $3] = $5; t[$2 "|" $3] = $11 }
+        END { for (k in rate) { split(k, a, "|"); one = a[1] "-1thread|" a[2]
+                  if (a[1] !~ /-1thread$/ && (one in rate) && rate[one] > 0)
+                      printf "\nspeed %s, %s (%s particles): %s threads / 1 thread = %.2f (target 1.8 at 100k+)\n",
+                             a[1], a[2], n[k], t[k], rate[k] / rate[one] } }' "$csv"
     if [ -f "$out/core/summary.md" ]; then
         echo
         cat "$out/core/summary.md"
