@@ -290,6 +290,16 @@ START_TEST(open_boundaries_restart_bit_identical)
 END_TEST
 
 /* Rows of a table with time > t (the header first), as text. */
+/* The number after "key": in a run.json text (the test fails without it). */
+static double json_number(const char *json, const char *key)
+{
+    char needle[128];
+    snprintf(needle, sizeof needle, "\"%s\": ", key);
+    const char *at = strstr(json, needle);
+    ck_assert_msg(at != NULL, "run.json has no %s", key);
+    return strtod(at + strlen(needle), NULL);
+}
+
 static char *rows_after(const char *text, double t)
 {
     size_t n = strlen(text);
@@ -387,6 +397,27 @@ START_TEST(dam_break_restart_bit_identical)
             worst = fmax(worst, fabs((double)va->position[d][i] - (double)vb->position[d][i]));
     }
     ck_assert_msg(worst <= 1e-9, "positions on 2 threads differ by %g m", worst);
+    /* the restarted run's run.json: the whole run's counters, and this
+     * invocation's particle-steps, over whose wall time the rate is taken
+     * (the dam break neither adds nor removes particles) */
+    char *json2 = read_or_fail(out2, "run.json");
+    long long checkpoint_step = -1;
+    const char *base = strrchr(checkpoint, '/');
+    ck_assert_int_eq(sscanf(base ? base + 1 : checkpoint, "checkpoint_%lld.h5", &checkpoint_step),
+                     1);
+    const double particles = (double)va->count, steps = (double)sluice_sim_steps(full);
+    ck_assert_double_eq(json_number(json2, "restarted_at_step"), (double)checkpoint_step);
+    ck_assert_double_eq(json_number(json2, "steps"), steps);
+    ck_assert_double_eq(json_number(json2, "particle_steps"), particles * steps);
+    const double this_run = json_number(json2, "particle_steps_this_run");
+    ck_assert_double_eq(this_run, particles * (steps - (double)checkpoint_step));
+    const double rate = json_number(json2, "particle_steps_per_second"),
+                 wall = json_number(json2, "wall_seconds");
+    /* run.json prints the rate to 6 significant digits */
+    ck_assert_msg(wall > 0 && fabs(rate * wall - this_run) <= 1e-5 * this_run,
+                  "rate %g x wall %g s = %g, not this invocation's %g particle-steps", rate, wall,
+                  rate * wall, this_run);
+    free(json2);
     free(command);
     free(output);
     fprintf(stderr,

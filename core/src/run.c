@@ -487,6 +487,9 @@ int sluice_sim_begin(sluice_sim *sim, const char *output_directory)
             return SLUICE_RUN_FAILED;
     }
     sim->wall_start = sluice_wall_clock();
+    sim->step_at_start = sim->step;
+    sim->time_at_start = sim->time;
+    sim->particle_steps_at_start = sim->particle_steps;
     /* the watchdog's wall check: cells about a kernel support wide */
     if (sim->scene.wall_count > 0 && sim->wall_watch.wall_count == 0) {
         double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
@@ -624,11 +627,12 @@ static int write_run_json(sluice_sim *sim, int status)
                                sluice_pair_engine_bytes(&sim->engine);
     struct rusage usage;
     double peak = getrusage(RUSAGE_SELF, &usage) == 0 ? (double)usage.ru_maxrss * 1024 : -1;
-    double sums[5] = {(double)sim->particles.count, (double)sim->removed,
+    double sums[6] = {(double)sim->particles.count, (double)sim->removed,
                       (double)sim->particle_steps,
-                      (double)sluice_pair_engine_pairs(&sim->engine), (double)state_bytes};
+                      (double)sluice_pair_engine_pairs(&sim->engine), (double)state_bytes,
+                      (double)(sim->particle_steps - sim->particle_steps_at_start)};
     double maxima[2] = {peak, sim->max_density_deviation};
-    if (sluice_comm_reduce(&sim->comm, sums, 5, SLUICE_REDUCE_SUM) != 0 ||
+    if (sluice_comm_reduce(&sim->comm, sums, 6, SLUICE_REDUCE_SUM) != 0 ||
         sluice_comm_reduce(&sim->comm, maxima, 2, SLUICE_REDUCE_MAX) != 0)
         return -1;
     /* the balance of the ranks: their fewest and most particles */
@@ -638,7 +642,8 @@ static int write_run_json(sluice_sim *sim, int status)
     if (sim->comm.rank != 0)
         return 0;
     const double particles_final = sums[0], removed = sums[1], particle_steps = sums[2],
-                 pairs = sums[3], bytes = sums[4], max_deviation = maxima[1];
+                 pairs = sums[3], bytes = sums[4], steps_this_run = sums[5],
+                 max_deviation = maxima[1];
     peak = maxima[0];
     char *text = NULL;
     size_t size = 0;
@@ -646,7 +651,9 @@ static int write_run_json(sluice_sim *sim, int status)
     if (!f)
         return -1;
     const char *names[] = {"complete", "?", "input_error", "unstable", "failed", "interrupted"};
-    double rate = sim->wall_seconds > 0 ? particle_steps / sim->wall_seconds : 0;
+    /* this invocation's particle-steps over its wall time (after a restart
+     * particle_steps is the whole run's) */
+    double rate = sim->wall_seconds > 0 ? steps_this_run / sim->wall_seconds : 0;
     fprintf(f, "{\n  \"status\": \"%s\",\n", status >= 0 && status <= 5 ? names[status] : "failed");
     fprintf(f, "  \"scene\": ");
     json_string(f, sim->scene.path);
@@ -669,7 +676,9 @@ static int write_run_json(sluice_sim *sim, int status)
     fprintf(f, "  \"simulated_time\": %.12g,\n", sim->time);
     fprintf(f, "  \"end_time\": %.12g,\n", sim->end);
     fprintf(f, "  \"wall_seconds\": %.6f,\n", sim->wall_seconds);
+    fprintf(f, "  \"restarted_at_step\": %lld,\n", (long long)sim->step_at_start);
     fprintf(f, "  \"particle_steps\": %.0f,\n", particle_steps);
+    fprintf(f, "  \"particle_steps_this_run\": %.0f,\n", steps_this_run);
     fprintf(f, "  \"particle_steps_per_second\": %.6g,\n", rate);
     fprintf(f, "  \"pair_interactions\": %.0f,\n", pairs);
     fprintf(f, "  \"pair_interactions_per_second\": %.6g,\n",
@@ -749,8 +758,10 @@ static void progress_line(sluice_sim *sim, int final)
         return;
     sim->last_progress = now;
     double elapsed = now - sim->wall_start;
-    double rate = elapsed > 0 ? (double)sim->step / elapsed : 0;
-    double eta = sim->time > 0 ? elapsed * (sim->end - sim->time) / sim->time : 0;
+    /* this invocation's steps and simulated time (a restart begins past 0) */
+    double rate = elapsed > 0 ? (double)(sim->step - sim->step_at_start) / elapsed : 0;
+    double done = sim->time - sim->time_at_start;
+    double eta = done > 0 ? elapsed * (sim->end - sim->time) / done : 0;
     int h = (int)(eta / 3600), m = (int)(fmod(eta, 3600) / 60), s = (int)fmod(eta, 60);
     fprintf(stderr,
             "\r  t %.4f / %.4f s   step %lld   dt %.2e s   %u particles   %.0f steps/s   ETA "

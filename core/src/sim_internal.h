@@ -143,6 +143,12 @@ struct sluice_sim {
     int threads;
     double wall_start, wall_seconds;
     uint64_t particle_steps;
+    /* the step and particle-steps when this invocation's run began (a
+     * restart carries the run's counters on; wall_seconds is this
+     * invocation's, and so is the rate in run.json) */
+    int64_t step_at_start;
+    uint64_t particle_steps_at_start;
+    double time_at_start;
     /* largest |density / rest density - 1| over fluid particles seen by the
      * watchdog during the run (run.json max_density_deviation) */
     double max_density_deviation;
