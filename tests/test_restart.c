@@ -290,16 +290,6 @@ START_TEST(open_boundaries_restart_bit_identical)
 END_TEST
 
 /* Rows of a table with time > t (the header first), as text. */
-/* The number after "key": in a run.json text (the test fails without it). */
-static double json_number(const char *json, const char *key)
-{
-    char needle[128];
-    snprintf(needle, sizeof needle, "\"%s\": ", key);
-    const char *at = strstr(json, needle);
-    ck_assert_msg(at != NULL, "run.json has no %s", key);
-    return strtod(at + strlen(needle), NULL);
-}
-
 static char *rows_after(const char *text, double t)
 {
     size_t n = strlen(text);
@@ -406,13 +396,13 @@ START_TEST(dam_break_restart_bit_identical)
     ck_assert_int_eq(sscanf(base ? base + 1 : checkpoint, "checkpoint_%lld.h5", &checkpoint_step),
                      1);
     const double particles = (double)va->count, steps = (double)sluice_sim_steps(full);
-    ck_assert_double_eq(json_number(json2, "restarted_at_step"), (double)checkpoint_step);
-    ck_assert_double_eq(json_number(json2, "steps"), steps);
-    ck_assert_double_eq(json_number(json2, "particle_steps"), particles * steps);
-    const double this_run = json_number(json2, "particle_steps_this_run");
+    ck_assert_double_eq(test_json_number(json2, "restarted_at_step"), (double)checkpoint_step);
+    ck_assert_double_eq(test_json_number(json2, "steps"), steps);
+    ck_assert_double_eq(test_json_number(json2, "particle_steps"), particles * steps);
+    const double this_run = test_json_number(json2, "particle_steps_this_run");
     ck_assert_double_eq(this_run, particles * (steps - (double)checkpoint_step));
-    const double rate = json_number(json2, "particle_steps_per_second"),
-                 wall = json_number(json2, "wall_seconds");
+    const double rate = test_json_number(json2, "particle_steps_per_second"),
+                 wall = test_json_number(json2, "wall_seconds");
     /* run.json prints the rate to 6 significant digits */
     ck_assert_msg(wall > 0 && fabs(rate * wall - this_run) <= 1e-5 * this_run,
                   "rate %g x wall %g s = %g, not this invocation's %g particle-steps", rate, wall,

@@ -53,16 +53,6 @@ static double interpolate(const double *x, const double *y, int n, double at)
 
 /* ----------------------------------------------------------- helpers -- */
 
-static double json_number(const char *json, const char *key)
-{
-    char *pattern = NULL;
-    if (asprintf(&pattern, "\"%s\": ", key) < 0)
-        return NAN;
-    const char *p = strstr(json, pattern);
-    free(pattern);
-    return p ? strtod(p + strlen(key) + 4, NULL) : NAN;
-}
-
 /* ------------------------------------------------------------- tests -- */
 
 START_TEST(dam_break_2d_martin_moyce)
@@ -121,7 +111,8 @@ START_TEST(dam_break_2d_martin_moyce)
     char *json = test_read_file(json_path);
     ck_assert_ptr_nonnull(json);
     ck_assert(strstr(json, "\"status\": \"complete\""));
-    ck_assert_msg(json_number(json, "particles_final") == json_number(json, "particles_initial"),
+    ck_assert_msg(test_json_number(json, "particles_final") ==
+                      test_json_number(json, "particles_initial"),
                   "particles were lost");
     free(json);
     free(json_path);
@@ -234,9 +225,10 @@ START_TEST(dam_break_3d_runs)
     ck_assert_int_ge(asprintf(&json_path, "%s/run.json", dir), 0);
     char *json = test_read_file(json_path);
     ck_assert_ptr_nonnull(json);
-    ck_assert(json_number(json, "dimensions") == 3);
-    ck_assert(json_number(json, "particles_final") == json_number(json, "particles_initial"));
-    ck_assert(json_number(json, "particles_initial") > 1000);
+    ck_assert(test_json_number(json, "dimensions") == 3);
+    ck_assert(test_json_number(json, "particles_final") ==
+              test_json_number(json, "particles_initial"));
+    ck_assert(test_json_number(json, "particles_initial") > 1000);
     /* the front has moved out along x: Ritter's front speed bounds it above */
     double *t = NULL, *x = NULL;
     char *csv = NULL;

@@ -179,4 +179,16 @@ static inline int test_run_suite(Suite *suite)
     return failed == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
 }
 
+/* The number after "key": in a run.json text; NaN when the key is absent
+ * (so that any comparison with it fails). */
+static inline double test_json_number(const char *json, const char *key)
+{
+    char *pattern = NULL;
+    if (asprintf(&pattern, "\"%s\": ", key) < 0)
+        return 0.0 / 0.0;
+    const char *p = strstr(json, pattern);
+    free(pattern);
+    return p ? strtod(p + strlen(key) + 4, NULL) : 0.0 / 0.0;
+}
+
 #endif

@@ -644,13 +644,13 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
         const uint8_t *kind = view->kind;
         const sluice_index *list = grid->list, *begin = grid->list_begin;
 
-/* guided: each thread takes long runs of consecutive chunks (shrinking
-         * towards the end for balance), so the neighbours its targets read
-         * are still in its own cache from the chunk before; interleaved
-         * small chunks (dynamic, 4) made the two threads of a 2-core machine
-         * fetch each other's rows and cost 8 % at 86k-1M particles
-         * (docs/performance.md) */
-        #pragma omp for schedule(guided, 4)
+        /* guided: each thread takes long runs of consecutive chunks
+         * (shrinking towards the end for balance), so the neighbours its
+         * targets read are still in its own cache from the chunk before;
+         * interleaved small chunks (dynamic, 4) made the two threads of a
+         * 2-core machine fetch each other's rows and cost 8 % at 86k-1M
+         * particles (docs/performance.md) */
+#pragma omp for schedule(guided, 4)
         for (sluice_index chunk = 0; chunk < chunks; chunk++) {
             if (failed)
                 continue;
