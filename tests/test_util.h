@@ -9,6 +9,7 @@
 #endif
 #include <check.h>
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -185,10 +186,10 @@ static inline double test_json_number(const char *json, const char *key)
 {
     char *pattern = NULL;
     if (asprintf(&pattern, "\"%s\": ", key) < 0)
-        return 0.0 / 0.0;
+        return NAN;
     const char *p = strstr(json, pattern);
     free(pattern);
-    return p ? strtod(p + strlen(key) + 4, NULL) : 0.0 / 0.0;
+    return p ? strtod(p + strlen(key) + 4, NULL) : NAN;
 }
 
 #endif
