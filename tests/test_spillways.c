@@ -8,8 +8,9 @@
  *  - the particles balance exactly, phase by phase: the air's box is closed
  *    but for the air vent, so the air count never grows and the air now +
  *    the air the vent let out (mass_total of air_vent.csv, in whole
- *    particles of mass rho0_a dx^2, two_phase's rho0_a = 1.09 kg m^-3) is
- *    the air at the start; the water now = the water at the start
+ *    particles of mass rho0_a dx^2, two_phase's rho0_a = 1.09 kg m^-3) +
+ *    the unresolved bubbles taken out (particles_removed_total of
+ *    unresolved_bubbles.csv) is the air at the start; the water now = the water at the start
  *    + the inlet's net inflow - the outlet's outflow, in whole particles of
  *    mass rho0 dx^2 (mass_total of inlet.csv and outlet.csv; in the CI's
  *    few thousand steps no inflow column has crossed yet: the crossings'
@@ -141,10 +142,11 @@ static void run_reduced(const char *config, const char *tag, const char *const *
     const double in = last_value(dir, "inlet.csv", 4) / particle;
     const double out = last_value(dir, "outlet.csv", 4) / particle;
     const double vented = last_value(dir, "air_vent.csv", 3) / (1.09 * dx * dx);
+    const double bubbles = last_value(dir, "unresolved_bubbles.csv", 4);
     fprintf(stderr,
             "%s: %lld steps; water %ld -> %ld (inflow %.6g, outflow %.6g particles), air %ld -> "
-            "%ld (%.6g vented)",
-            tag, steps, start.water, final.water, in, out, start.air, final.air, vented);
+            "%ld (%.6g vented, %.6g unresolved bubbles removed)",
+            tag, steps, start.water, final.water, in, out, start.air, final.air, vented, bubbles);
     if (oxygen)
         fprintf(stderr, "; water C in [%.6g, %.6g] mg/L", c_min, c_max);
     fprintf(stderr, "\n");
@@ -152,7 +154,8 @@ static void run_reduced(const char *config, const char *tag, const char *const *
                   "fluxes are not whole particles: %g in, %g out", in, out);
     ck_assert_msg(fabs(vented - nearbyint(vented)) < 1e-6, "the vent let out %.9g air particles",
                   vented);
-    ck_assert_int_eq(final.air + llround(vented), start.air);
+    ck_assert_msg(bubbles >= 0 && bubbles == nearbyint(bubbles), "%g bubbles removed", bubbles);
+    ck_assert_int_eq(final.air + llround(vented) + llround(bubbles), start.air);
     ck_assert_int_eq(final.water, start.water + llround(in) - llround(out));
     if (oxygen)
         ck_assert_msg(c_max > cu, "no reaeration anywhere: max C = %g", c_max);

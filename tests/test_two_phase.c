@@ -1028,6 +1028,208 @@ START_TEST(bad_input)
 }
 END_TEST
 
+/* --------------------------------------------------- unresolved bubbles -- */
+
+/* The still column of run_column (water 0.15 m deep under air, dx = 0.01)
+ * with a lone air particle at (0.055, 0.055) and a pocket of two side by
+ * side at (0.135, 0.055) and (0.145, 0.055), all deep in the water. */
+static char *bubble_scene(double lifetime)
+{
+    char *text = NULL;
+    ck_assert_int_ge(
+        asprintf(&text,
+                 "dimensions: 2\n"
+                 "particles: {spacing: 0.01, smoothing_length_ratio: 1.225, rest_density: 1000}\n"
+                 "time: {end: 0.02}\n"
+                 "domain: {min: [-0.1, -0.1], max: [0.3, 0.4]}\n"
+                 "geometry:\n"
+                 "  fluid:\n"
+                 "    - {shape: box, min: [0, 0], max: [0.2, 0.15]}\n"
+                 "    - {shape: box, min: [0, 0.15], max: [0.2, 0.25]}\n"
+                 "  walls:\n"
+                 "    - {shape: tank, min: [0, 0], max: [0.2, 0.3], name: tank}\n"
+                 "    - {shape: polyline, points: [[0.2, 0.25], [0, 0.25]], name: lid}\n"
+                 "initial: {density: hydrostatic}\n"
+                 "plugins:\n"
+                 "  wendland_c2: {}\n"
+                 "  two_phase: {speed_of_sound: 20, background_pressure: 2000,"
+                 " air_above: [[0, 0.15]], air_box_min: [[0.05, 0.05], [0.13, 0.05]],"
+                 " air_box_max: [[0.06, 0.06], [0.15, 0.06]]}\n"
+                 "  continuity: {form: volume}\n"
+                 "  pressure_gradient: {form: density_product}\n"
+                 "  artificial_viscosity: {alpha: 0.1}\n"
+                 "  gravity: {}\n"
+                 "  dbc: {}\n"
+                 "  time_step: {}\n"
+                 "  symplectic: {}\n"
+                 "  unresolved_bubbles: {lifetime: %g, check_every: 10, interval: 0.005}\n",
+                 lifetime),
+        0);
+    return text;
+}
+
+static int find_id(const sluice_view *v, sluice_id id, sluice_index *at)
+{
+    for (sluice_index i = 0; i < v->count; i++)
+        if (v->id[i] == id) {
+            *at = i;
+            return 1;
+        }
+    return 0;
+}
+
+/* The lone particle leaves once its isolation time reaches the lifetime
+ * (between the lifetime and the lifetime plus one check's span, 10 steps);
+ * until then its isolation time is the time elapsed, to within a check's
+ * span; the pocket and the air above, which have air neighbours, stay at 0
+ * and stay in the domain; the table counts the lone particle's mass,
+ * rho0_a dx^2, exactly; a run restarted from a checkpoint before the
+ * removal removes it at the same step with the same table. */
+START_TEST(unresolved_bubble_leaves_after_its_lifetime)
+{
+    const double dx = 0.01, lifetime = 0.01, rho_a = 1.09;
+    char *yaml = bubble_scene(lifetime);
+    sluice_sim *sim = test_load("bubbles", yaml, NULL, 0);
+    char *dir = test_scratch("bubbles-run");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    const sluice_view *v = sluice_sim_view(sim);
+    const uint8_t *phase = phase_column(sim);
+    sluice_id lone = 0, pocket[2] = {0, 0};
+    long air_start = 0;
+    for (sluice_index i = 0; i < v->count; i++) {
+        if (v->kind[i] != SLUICE_KIND_FLUID || !phase[i])
+            continue;
+        air_start++;
+        const double x = v->position[0][i], y = v->position[1][i];
+        if (fabs(x - 0.055) < 1e-9 && fabs(y - 0.055) < 1e-9)
+            lone = v->id[i];
+        if (fabs(y - 0.055) < 1e-9 && fabs(x - 0.135) < 1e-9)
+            pocket[0] = v->id[i];
+        if (fabs(y - 0.055) < 1e-9 && fabs(x - 0.145) < 1e-9)
+            pocket[1] = v->id[i];
+    }
+    ck_assert(lone && pocket[0] && pocket[1]);
+    char *checkpoint = NULL;
+    ck_assert_int_ge(asprintf(&checkpoint, "%s/checkpoint.h5", dir), 0);
+    double removed_at = -1, largest_lag = 0, span = 0;
+    int64_t removed_step = -1, checkpoint_step = -1;
+    int status;
+    while ((status = sluice_sim_step(sim)) == SLUICE_RUN_COMPLETE &&
+           sluice_sim_time(sim) < sluice_sim_end_time(sim) - 1e-12) {
+        v = sluice_sim_view(sim);
+        phase = phase_column(sim);
+        const sluice_real *isolation = test_column(sim, "isolation_time", 0);
+        const double t = sluice_sim_time(sim);
+        span = fmax(span, 10 * v->dt);
+        sluice_index at;
+        const int present = find_id(v, lone, &at);
+        if (removed_at < 0 && !present) {
+            removed_at = t;
+            removed_step = sluice_sim_steps(sim);
+        }
+        if (present && sluice_sim_steps(sim) % 10 == 0)
+            largest_lag = fmax(largest_lag, fabs(t - isolation[at]));
+        if (present)
+            ck_assert_msg(isolation[at] <= t + 1e-12, "isolation %g s at t = %g s",
+                          (double)isolation[at], t);
+        for (int k = 0; k < 2; k++) {
+            ck_assert_msg(find_id(v, pocket[k], &at), "pocket particle %d removed at t = %g s",
+                          k, t);
+            ck_assert_msg(isolation[at] == 0, "pocket particle %d isolated for %g s", k,
+                          (double)isolation[at]);
+        }
+        for (sluice_index i = 0; i < v->count; i++)
+            if (v->position[1][i] > 0.15 && phase[i] && isolation[i] != 0)
+                ck_abort_msg("air above the water isolated for %g s at (%g, %g)",
+                             (double)isolation[i], (double)v->position[0][i],
+                             (double)v->position[1][i]);
+        if (checkpoint_step < 0 && t > 0.5 * lifetime) {
+            ck_assert_int_eq(sluice_sim_checkpoint(sim, checkpoint), SLUICE_OK);
+            checkpoint_step = sluice_sim_steps(sim);
+        }
+    }
+    ck_assert_msg(status == SLUICE_RUN_COMPLETE, "stopped: %s", sluice_sim_failure(sim));
+    v = sluice_sim_view(sim);
+    phase = phase_column(sim);
+    long air_end = 0;
+    for (sluice_index i = 0; i < v->count; i++)
+        air_end += v->kind[i] == SLUICE_KIND_FLUID && phase[i];
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    fprintf(stderr,
+            "unresolved bubble: removed at t = %.6g s (lifetime %g s, check span %.3g s); "
+            "isolation time within %.3g s of t before; air %ld -> %ld\n",
+            removed_at, lifetime, span, largest_lag, air_start, air_end);
+    ck_assert_msg(removed_at >= lifetime - 1e-12 && removed_at <= lifetime + span + 1e-12,
+                  "removed at %g s", removed_at);
+    ck_assert_msg(largest_lag <= span * (1 + 1e-9), "isolation time lags %g s", largest_lag);
+    ck_assert_int_eq(air_end, air_start - 1);
+    /* the table: one particle, its mass and volume */
+    char *csv = NULL;
+    ck_assert_int_ge(asprintf(&csv, "%s/unresolved_bubbles.csv", dir), 0);
+    char *text = test_read_file(csv);
+    ck_assert_ptr_nonnull(text);
+    const char *last = text, *line = text;
+    while ((line = strchr(line, '\n')) && line[1])
+        last = ++line;
+    double row[6];
+    ck_assert_int_eq(sscanf(last, "%lf,%lf,%lf,%lf,%lf,%lf", &row[0], &row[1], &row[2], &row[3],
+                            &row[4], &row[5]),
+                     6);
+    ck_assert_msg(fabs(row[2] - rho_a * dx * dx) < 1e-12 * rho_a * dx * dx, "mass %g", row[2]);
+    ck_assert_msg(fabs(row[3] - dx * dx) < 1e-12 * dx * dx, "volume %g", row[3]);
+    ck_assert(row[4] == 1);
+    /* restarted from the checkpoint: the same step, the same table */
+    sluice_sim *again = test_load("bubbles", yaml, NULL, 0);
+    char error[512] = "";
+    ck_assert_msg(sluice_sim_restart(again, checkpoint, error, sizeof error) == SLUICE_OK, "%s",
+                  error);
+    char *dir2 = test_scratch("bubbles-restart");
+    ck_assert_int_eq(sluice_sim_begin(again, dir2), SLUICE_RUN_COMPLETE);
+    int64_t removed_again = -1;
+    while ((status = sluice_sim_step(again)) == SLUICE_RUN_COMPLETE &&
+           sluice_sim_time(again) < sluice_sim_end_time(again) - 1e-12) {
+        sluice_index at;
+        if (removed_again < 0 && !find_id(sluice_sim_view(again), lone, &at))
+            removed_again = sluice_sim_steps(again);
+    }
+    ck_assert_int_eq(status, SLUICE_RUN_COMPLETE);
+    ck_assert_int_eq(sluice_sim_end(again, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    fprintf(stderr, "restarted at step %lld: removed at step %lld (continuous run %lld)\n",
+            (long long)checkpoint_step, (long long)removed_again, (long long)removed_step);
+    ck_assert_int_eq(removed_again, removed_step);
+    sluice_sim_free(again);
+    sluice_sim_free(sim);
+    free(text);
+    free(csv);
+    free(checkpoint);
+    free(dir);
+    free(dir2);
+    free(yaml);
+}
+END_TEST
+
+/* unresolved_bubbles without two_phase: refused, naming what to load. */
+START_TEST(unresolved_bubbles_need_two_phase)
+{
+    char *yaml = NULL;
+    ck_assert_int_ge(
+        asprintf(&yaml, "dimensions: 2\n"
+                        "particles: {spacing: 0.02, smoothing_length_ratio: 1.225}\n"
+                        "time: {end: 0.1, max_step: 1e-4}\n"
+                        "domain: {min: [-0.1, -0.1], max: [0.3, 0.3]}\n"
+                        "geometry: {fluid: [{shape: box, min: [0, 0], max: [0.2, 0.1]}]}\n"
+                        "plugins:\n"
+                        "  wendland_c2: {}\n"
+                        "  tait: {speed_of_sound: 20}\n"
+                        "  gravity: {}\n"
+                        "  symplectic: {}\n"
+                        "  unresolved_bubbles: {}\n"),
+        0);
+    test_load_refused("bubbles-alone", yaml, "two_phase");
+    free(yaml);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("two_phase");
@@ -1048,8 +1250,13 @@ int main(void)
     tcase_add_test(cohesion, cohesion_held_against_every_step);
     tcase_add_test(cohesion, xsph_and_viscosity_within_each_phase);
     suite_add_tcase(s, cohesion);
+    TCase *bubbles = tcase_create("bubbles");
+    tcase_set_timeout(bubbles, 300);
+    tcase_add_test(bubbles, unresolved_bubble_leaves_after_its_lifetime);
+    suite_add_tcase(s, bubbles);
     TCase *input = tcase_create("input");
     tcase_add_test(input, phase_survives_a_restart);
+    tcase_add_test(input, unresolved_bubbles_need_two_phase);
     tcase_add_test(input, bad_input);
     suite_add_tcase(s, input);
     return test_run_suite(s);
