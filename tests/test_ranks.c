@@ -144,7 +144,10 @@ static const char *two_phase_scene =
  * and 2000 (t = 0.38 s: the surge has run 1 m, and particles cross the slab
  * boundaries), then with the slab boundaries balanced during the run; on
  * mdbc walls; on ghost particles with the pressure filter and the vorticity
- * (on-demand pair passes between steps); the two-phase scene above. */
+ * (on-demand pair passes between steps); the two-phase scene above, and
+ * with a lone air particle and a pocket of two in its water under
+ * unresolved_bubbles (the lone one leaves at t = 0.0101 s on every rank
+ * count: its air neighbours are searched among the halo too). */
 /* A periodic channel 1.2 m long (x periodic), water 0.6 m deep on a DBC
  * bed, driven along x by a tilted gravity (1 m/s^2): particles cross the
  * periodic side, which a cut along x puts between two ranks (on 2 ranks
@@ -220,6 +223,11 @@ static const ranks_case cases[] = {
      balanced_ranks_text, 1, 2000, "vorticity"},
     {"two-phase dam break: held cohesion, dissolved oxygen", &two_phase_scene, NULL, NULL, NULL, 0,
      2000, "dissolved_oxygen"},
+    {"two-phase dam break: unresolved bubbles (a lone air particle in the water, a pocket of two)",
+     &two_phase_scene, "0.25]], air_box_max: [[1.6, 0.4], [0.8, 0.4]]}\n",
+     "0.25], [0.4, 0.04], [0.68, 0.04]], air_box_max: [[1.6, 0.4], [0.8, 0.4], [0.42, 0.06], "
+     "[0.72, 0.06]]}\n  unresolved_bubbles: {lifetime: 0.01, check_every: 10}\n",
+     NULL, 0, 2000, "isolation_time"},
     {"dam break cut along x and y (2 x 2 on 4 ranks), balanced", &scene, NULL, NULL,
      "ranks: {split: xy, balance: count, every: 20, tolerance: 0.01}\n", 1, 2000, NULL},
     {"dam break cut along y, balanced", &scene, NULL, NULL,
