@@ -367,6 +367,25 @@ START_TEST(bad_input_refused)
             "outlet: {form: frozen, position: 1.45}", 1, "needs the domain to reach");
     refused("inlet: {position: 0, depth: 0.1, velocity: -1}", "outlet: {position: 1}", 1,
             "velocity");
+    refused("inlet: {position: 0, depth: 0.1, velocity: 0.5}",
+            "outlet: {position: 1, tailwater: controlled, control_position: 0.6}", 1,
+            "needs form: buffer");
+    refused("inlet: {position: 0, depth: 0.1, velocity: 0.5}",
+            "outlet: {form: buffer, position: 1, depth: 0.1, velocity: 0.5, "
+            "tailwater: controlled, control_position: 1.2}",
+            1, "upstream of the outlet plane");
+    refused("inlet: {position: 0, depth: 0.1, velocity: 0.5}",
+            "outlet: {form: buffer, position: 1, depth: 0.1, tailwater: controlled, "
+            "control_position: 0.6}",
+            1, "give 'velocity' > 0");
+    refused("inlet: {position: 0, depth: 0.1, velocity: 0.5}",
+            "outlet: {form: buffer, position: 1, depth: 0.1, velocity: 0.5, "
+            "tailwater: controlled, control_position: -3}",
+            1, "outside the domain");
+    refused("inlet: {position: 0, depth: 0.1, velocity: 0.5}",
+            "outlet: {form: buffer, position: 1, depth: 0.1, velocity: 0.5, "
+            "tailwater: gated, control_position: 0.6}",
+            1, "tailwater");
 }
 END_TEST
 
@@ -1212,6 +1231,94 @@ START_TEST(air_vent_refused)
 }
 END_TEST
 
+/* A controlled tailwater: the subcritical channel (d = 0.1 m, V = 0.5 m/s,
+ * q = 0.05 m^2/s, dx = 0.02 m) with its buffer outlet asked for yt = 0.11 m
+ * at x = 0.6 m, starting from Vt = 0.5 m/s. Imposed, that layer drains
+ * Vt d_plane, so the water settles at q / Vt = 0.1 m and the section reads
+ * 9 % under yt; controlled (control_time 1 s), the gate closes until the
+ * section reads yt. Over 6-10 s the section's depth (the same strip sum as
+ * the controller, sampled by the test every 0.05 s) averages within 2 % of
+ * yt (its samples move by one particle in 22, 4.5 %), the outflow within
+ * 2 % of q, and the gate's velocity within 3 % of q / yt. The run with the
+ * imposed tailwater is the control: its section stays more than 5 % under
+ * yt. */
+static void tailwater_run(int controlled, double *depth, double *outflow, double *velocity)
+{
+    const double dx = 0.02, yt = 0.11, q = 0.05, end = 10, xc = 0.6, strip = 4 * dx;
+    char outlet[512];
+    snprintf(outlet, sizeof outlet,
+             "outlet: {form: buffer, position: 1.0, depth: %g, velocity: 0.5, interval: 0.05%s}",
+             yt, controlled ? ", tailwater: controlled, control_position: 0.6, control_time: 1"
+                            : "");
+    char *yaml = channel_scene(dx, 0.1, 0.5, 1.0, 20,
+                               "inlet: {form: buffer, position: 0, depth: 0.1, velocity: 0.5, "
+                               "interval: 0.05}",
+                               outlet, end, 0.5);
+    const char *tag = controlled ? "tailwater-controlled" : "tailwater-imposed";
+    sluice_sim *sim = test_load(tag, yaml, NULL, 0);
+    free(yaml);
+    char *dir = test_scratch(tag);
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    double next = 6, sum = 0, lowest = INFINITY, highest = 0;
+    int samples = 0;
+    while (sluice_sim_time(sim) < end - 1e-9) {
+        ck_assert_msg(sluice_sim_step(sim) == SLUICE_RUN_COMPLETE, "run stopped: %s",
+                      sluice_sim_failure(sim));
+        if (sluice_sim_time(sim) + 1e-9 < next)
+            continue;
+        next += 0.05;
+        const section at = measure(sim, xc - strip / 2, xc + strip / 2);
+        sum += at.depth;
+        lowest = fmin(lowest, at.depth);
+        highest = fmax(highest, at.depth);
+        samples++;
+    }
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    char path[4096];
+    snprintf(path, sizeof path, "%s/outlet.csv", dir);
+    /* the outflow over 6-10 s from the cumulative mass */
+    FILE *f = fopen(path, "r");
+    ck_assert_ptr_nonnull(f);
+    char line[1024];
+    double m6 = NAN, m10 = NAN, t6 = NAN, t10 = NAN;
+    while (fgets(line, sizeof line, f)) {
+        double t, flux, discharge, momentum, mass;
+        if (sscanf(line, "%lf,%lf,%lf,%lf,%lf", &t, &flux, &discharge, &momentum, &mass) != 5)
+            continue;
+        if (isnan(m6) && t >= 6 - 1e-9) {
+            m6 = mass;
+            t6 = t;
+        }
+        m10 = mass;
+        t10 = t;
+    }
+    fclose(f);
+    *depth = sum / samples;
+    *outflow = (m10 - m6) / (1000 * (t10 - t6));
+    *velocity = controlled ? csv_last(path, 6) : 0.5;
+    fprintf(stderr,
+            "tailwater %s: depth at x = %g m over 6-10 s %.5f m (samples %.4f-%.4f, yt %g), "
+            "outflow %.5f m^2/s (q %g), layer velocity %.4f m/s (q / yt %.4f)\n",
+            controlled ? "controlled" : "imposed", xc, *depth, lowest, highest, yt, *outflow, q,
+            *velocity, q / yt);
+    sluice_sim_free(sim);
+    free(dir);
+}
+
+START_TEST(controlled_tailwater)
+{
+    const double yt = 0.11, q = 0.05;
+    double depth, outflow, velocity;
+    tailwater_run(1, &depth, &outflow, &velocity);
+    ck_assert_msg(fabs(depth / yt - 1) < 0.02, "controlled: depth %g m at the section", depth);
+    ck_assert_msg(fabs(outflow / q - 1) < 0.02, "controlled: outflow %g m^2/s", outflow);
+    ck_assert_msg(fabs(velocity / (q / yt) - 1) < 0.03, "controlled: gate velocity %g m/s",
+                  velocity);
+    tailwater_run(0, &depth, &outflow, &velocity);
+    ck_assert_msg(depth / yt - 1 < -0.05, "imposed: depth %g m at the section", depth);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("open_boundaries");
@@ -1226,6 +1333,7 @@ int main(void)
     tcase_add_test(uniform, uniform_supercritical_free);
     tcase_add_test(uniform, backflow_leaves_through_the_inlet);
     tcase_add_test(uniform, submerged_inlet_density);
+    tcase_add_test(uniform, controlled_tailwater);
     suite_add_tcase(s, uniform);
     TCase *scenes = tcase_create("jump_scenes");
     tcase_set_timeout(scenes, 300);

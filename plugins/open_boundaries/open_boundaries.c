@@ -96,6 +96,7 @@
 
 enum { INLET_BUFFER = 0, INLET_BLOCK = 1 };
 enum { OUTLET_FREE = 0, OUTLET_FROZEN = 1, OUTLET_BUFFER = 2 };
+enum { TAILWATER_IMPOSED = 0, TAILWATER_CONTROLLED = 1 };
 
 typedef struct boundary_config {
     int form;
@@ -108,6 +109,8 @@ typedef struct boundary_config {
     int phase;             /* outlet: SLUICE_PHASE_* */
     sluice_real box_min[3], box_max[3]; /* air_vent */
     sluice_real response_time;          /* air_vent */
+    int tailwater;                      /* outlet buffer: TAILWATER_* */
+    sluice_real control_position, control_time;
 } boundary_config;
 
 typedef struct boundary_state {
@@ -153,6 +156,13 @@ typedef struct boundary_state {
     double response_time, air_pressure; /* the air's mean pressure, filtered */
     double water_total;
     int water_warned;
+    /* outlet buffer with a controlled tailwater: the depth at the control
+     * section (filtered) and the imposed velocity, the integral part of
+     * the controller and whether the filter has its first value */
+    int controlled;
+    double control_position, control_time, control_strip;
+    double control_depth, velocity_integral;
+    int control_started;
 } boundary_state;
 
 static const sluice_param_spec inlet_params[] = {
@@ -222,6 +232,22 @@ static const sluice_param_spec outlet_params[] = {
      NULL, 0},
     {"span", SLUICE_PARAM_VECTOR, offsetof(boundary_config, span), "[0, 0]", 0, 0, 0, "m",
      "buffer, 3D: the lateral (y) extent [y_min, y_max] of the tailwater layer", NULL, 2},
+    {"tailwater", SLUICE_PARAM_ENUM, offsetof(boundary_config, tailwater), "imposed", 0, 0, 0,
+     NULL,
+     "buffer: imposed: the velocity Vt and the depth yt's hydrostatic density are imposed in the "
+     "layer; controlled: the layer's velocity is adjusted (a tailgate) until the water depth at "
+     "control_position, upstream, is yt, starting from Vt",
+     "imposed|controlled", 0},
+    {"control_position", SLUICE_PARAM_REAL, offsetof(boundary_config, control_position), "0", 0,
+     0, 0, "m",
+     "controlled tailwater: x of the section where the depth is held at yt (upstream of the "
+     "plane, downstream of the jump: where an experiment measures its tailwater)",
+     NULL, 0},
+    {"control_time", SLUICE_PARAM_REAL, offsetof(boundary_config, control_time), "2", 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s",
+     "controlled tailwater: integral time of the controller (the depth is averaged over a "
+     "quarter of it); longer than the reach's gravity-wave travel time",
+     NULL, 0},
     {"phase", SLUICE_PARAM_ENUM, offsetof(boundary_config, phase), "all", 0, 0, 0, NULL,
      "the phase that crosses into the outlet's treatment (removed, frozen or imposed): all, or "
      "water or air only (field 'phase' of two_phase, which must then be loaded); the other "
@@ -322,6 +348,29 @@ static int boundary_create(const sluice_api *api, sluice_host *host, const void 
         if (s->form == OUTLET_BUFFER && s->dims == 3 && !(c->span[1] > c->span[0])) {
             api->error(host, "a 3D buffer outlet needs 'span: [y_min, y_max]' with y_max > y_min");
             goto fail;
+        }
+        if (c->tailwater == TAILWATER_CONTROLLED) {
+            if (s->form != OUTLET_BUFFER) {
+                api->error(host, "tailwater: controlled needs form: buffer (the layer whose "
+                                 "velocity is adjusted)");
+                goto fail;
+            }
+            if (!(c->control_position < c->position)) {
+                api->error(host,
+                           "control_position x = %g m must lie upstream of the outlet plane "
+                           "(position x = %g m)",
+                           (double)c->control_position, (double)c->position);
+                goto fail;
+            }
+            if (!(c->velocity > 0)) {
+                api->error(host, "tailwater: controlled starts from the tailwater velocity Vt: "
+                                 "give 'velocity' > 0");
+                goto fail;
+            }
+            s->controlled = 1;
+            s->control_position = c->control_position;
+            s->control_time = c->control_time;
+            s->velocity_integral = c->velocity;
         }
     }
     *state = s;
@@ -737,13 +786,15 @@ static int inlet_initialise(void *state, sluice_host *host)
 static int write_flux_row(boundary_state *s, double time)
 {
     const double span = time - s->row_time;
-    double row[6] = {time,
+    double row[8] = {time,
                      span > 0 ? s->mass_interval / span : 0,
                      span > 0 ? s->mass_interval / span / s->rho0 : 0,
                      span > 0 ? s->momentum_interval / span : 0,
                      s->mass_total,
-                     (double)s->open_count};
-    if (s->api->table_row(s->table, row, 6) != SLUICE_OK)
+                     (double)s->open_count,
+                     s->velocity,
+                     s->control_started ? s->control_depth : s->depth};
+    if (s->api->table_row(s->table, row, s->controlled ? 8 : 6) != SLUICE_OK)
         return SLUICE_ERROR;
     s->mass_interval = s->momentum_interval = 0;
     s->row_time = time;
@@ -867,6 +918,15 @@ static int inlet_after_step(void *state, sluice_host *host)
 static int outlet_initialise(void *state, sluice_host *host)
 {
     boundary_state *s = state;
+    if (s->controlled) {
+        /* the control section: a strip four spacings wide, within the domain */
+        s->control_strip = 4 * s->dx;
+        if (s->control_position - 0.5 * s->control_strip < s->domain_min[0]) {
+            s->api->error(host, "control_position x = %g m lies outside the domain (x from %g m)",
+                          s->control_position, s->domain_min[0]);
+            return SLUICE_ERROR;
+        }
+    }
     if (s->form == OUTLET_BUFFER) {
         /* the tailwater layer exists from the start, so that the fluid
          * reaching the outlet meets its imposed state, not a free end */
@@ -879,8 +939,49 @@ static int outlet_initialise(void *state, sluice_host *host)
         s->open_count = columns * s->rows * s->lanes;
     }
     s->table = s->api->table_open(
-        host, s->file, "time,mass_flux,discharge,momentum_flux,mass_total,open_particles");
+        host, s->file,
+        s->controlled ? "time,mass_flux,discharge,momentum_flux,mass_total,open_particles,"
+                        "imposed_velocity,control_depth"
+                      : "time,mass_flux,discharge,momentum_flux,mass_total,open_particles");
     return s->table ? SLUICE_OK : SLUICE_ERROR;
+}
+
+/* A controlled tailwater (a tailgate): the water depth at the control
+ * section, d = sum m_i / (rho0 w) over the water in a strip w = 4 dx wide
+ * (times the span in 3D) centred on control_position, is averaged
+ * exponentially over control_time / 4; the layer's velocity is
+ *     V = V_I (1 + e),  dV_I/dt = V_I e / control_time,  e = (d - yt) / yt
+ * (proportional-integral: deeper water than yt opens the gate). At rest
+ * (e = 0) the outflow V d_plane equals the inflow and the depth at the
+ * section is yt. The sums are over every rank, so V is the same on all. */
+static int control_tailwater(boundary_state *s, sluice_host *host, const sluice_view *v,
+                             double dt)
+{
+    const sluice_real *mass = sluice_real_column(v, s->mass_field, 0);
+    const uint8_t *phase = s->has_phase ? (const uint8_t *)v->columns[s->phase_field.column] : NULL;
+    const double lo = s->control_position - 0.5 * s->control_strip,
+                 hi = s->control_position + 0.5 * s->control_strip;
+    double sum = 0;
+    for (sluice_index i = 0; i < v->count; i++) {
+        const double x = (double)v->position[0][i];
+        if (v->kind[i] == SLUICE_KIND_FLUID && x >= lo && x < hi && !(phase && phase[i]))
+            sum += (double)mass[i];
+    }
+    if (s->api->reduce(host, &sum, 1, SLUICE_REDUCE_SUM) != SLUICE_OK)
+        return SLUICE_ERROR;
+    const double lateral = s->dims == 3 ? s->span[1] - s->span[0] : 1.0;
+    const double depth = sum / (s->rho0 * s->control_strip * lateral);
+    if (!s->control_started) {
+        s->control_depth = depth;
+        s->control_started = 1;
+    } else {
+        s->control_depth += (depth - s->control_depth) * fmin(1.0, 4 * dt / s->control_time);
+    }
+    double e = (s->control_depth - s->depth) / s->depth;
+    e = fmax(-0.5, fmin(0.5, e));
+    s->velocity_integral *= 1 + e * fmin(1.0, dt / s->control_time);
+    s->velocity = s->velocity_integral * (1 + e);
+    return SLUICE_OK;
 }
 
 static int outlet_after_step(void *state, sluice_host *host)
@@ -905,12 +1006,18 @@ static int outlet_after_step(void *state, sluice_host *host)
         u[d] = sluice_real_column(v, s->velocity_field, d);
         pos[d] = (sluice_real *)v->position[d];
     }
+    if (s->controlled && dt > 0 && control_tailwater(s, host, v, dt) != SLUICE_OK)
+        return SLUICE_ERROR;
     sluice_index converted = 0, removed = 0, open = 0;
     double step_mass = 0, step_momentum = 0;
     for (sluice_index i = 0; i < v->count; i++) {
         if (!(pos[0][i] >= plane))
             continue;
         if (v->kind[i] == SLUICE_KIND_OPEN) {
+            /* a controlled tailwater moves the whole layer at the gate's
+             * velocity */
+            if (s->controlled)
+                u[0][i] = (sluice_real)s->velocity;
             /* already in the outlet layer: move on with its (frozen or
              * imposed) velocity; removed at the end of the layer or the
              * domain */
@@ -1306,6 +1413,13 @@ static int boundary_save(void *state, sluice_host *host)
         api->state_write(host, "rows_written,open_count", SLUICE_STATE_INT64, 2, counts) !=
             SLUICE_OK)
         return SLUICE_ERROR;
+    /* a controlled tailwater: the gate's state */
+    const double control[4] = {s->velocity, s->velocity_integral, s->control_depth,
+                               (double)s->control_started};
+    if (s->controlled &&
+        api->state_write(host, "velocity,velocity_integral,control_depth,control_started",
+                         SLUICE_STATE_DOUBLE, 4, control) != SLUICE_OK)
+        return SLUICE_ERROR;
     return SLUICE_OK;
 }
 
@@ -1329,6 +1443,16 @@ static int boundary_load(void *state, sluice_host *host)
     s->row_time = values[5];
     s->written = counts[0];
     s->open_count = (sluice_index)counts[1];
+    double control[4];
+    if (s->controlled) {
+        if (api->state_read(host, "velocity,velocity_integral,control_depth,control_started",
+                            SLUICE_STATE_DOUBLE, 4, control) != SLUICE_OK)
+            return SLUICE_ERROR;
+        s->velocity = control[0];
+        s->velocity_integral = control[1];
+        s->control_depth = control[2];
+        s->control_started = control[3] != 0;
+    }
     return SLUICE_OK;
 }
 
@@ -1399,6 +1523,6 @@ static const sluice_component components[] = {
     },
 };
 
-SLUICE_DEFINE_LIBRARY("open_boundaries", "1.2.0",
+SLUICE_DEFINE_LIBRARY("open_boundaries", "1.3.0",
                       "inlets and outlets for channel flows, and an air vent", SLUICE_DIMS_ALL,
                       components)
