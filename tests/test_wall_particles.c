@@ -273,6 +273,111 @@ START_TEST(ghost_mirror_values_tension)
 }
 END_TEST
 
+/* A drop between two walls that meet without sharing a vertex, as in the
+ * abrupt-drop scenes: an upper bed and the drop's face (one polyline,
+ * (-0.5, 0.2) -> (0.5, 0.2) -> (0.5, 0)) and a lower bed that starts inside
+ * the step (0.3, 0) -> (1.5, 0), so that its layers fill the block behind
+ * the concave corner at (0.5, 0). A wall particle in that block just left
+ * of x = 0.5 is nearest the lower bed, whose mirror lands inside the step,
+ * behind the face, where no fluid is; its mirror must be the next nearest
+ * wall point's (the corner vertex: the point reflection, in the fluid). The
+ * expected mirror of every wall particle is computed here from the two
+ * walls' geometry: of the walls' nearest points, the nearest whose mirror
+ * lies in the fluid (above the upper bed or right of the face, above the
+ * lower bed). With the hand-made linear density field, the wall pressure
+ * is then tait(rho(x_m)) + rho(x_m) (-g) (y_b - y_m) exactly. */
+static double segment_closest(const double p[2], const double a[2], const double b[2],
+                              double c[2])
+{
+    const double dx = b[0] - a[0], dy = b[1] - a[1];
+    double t = ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy);
+    t = t < 0 ? 0 : (t > 1 ? 1 : t);
+    c[0] = a[0] + t * dx;
+    c[1] = a[1] + t * dy;
+    return hypot(p[0] - c[0], p[1] - c[1]);
+}
+
+START_TEST(ghost_mirror_at_a_drop)
+{
+    const char *yaml =
+        "dimensions: 2\n"
+        "particles: {spacing: 0.05, smoothing_length_ratio: 1.5}\n"
+        "time: {end: 1}\n"
+        "domain: {min: [-0.8, -0.3], max: [1.8, 1.0]}\n"
+        "geometry:\n"
+        "  fluid:\n"
+        "    - {shape: box, min: [-0.5, 0.2], max: [0.5, 0.7]}\n"
+        "    - {shape: box, min: [0.5, 0], max: [1.5, 0.7]}\n"
+        "  walls:\n"
+        "    - {shape: polyline, points: [[-0.5, 0.2], [0.5, 0.2], [0.5, 0]], name: upper}\n"
+        "    - {shape: polyline, points: [[0.3, 0], [1.5, 0]], name: lower}\n"
+        "initial: {density: rest}\n"
+        "plugins:\n"
+        "  wendland_c2: {}\n"
+        "  tait: {speed_of_sound: 20}\n"
+        "  continuity: {}\n"
+        "  pressure_gradient: {}\n"
+        "  gravity: {}\n"
+        "  ghost_particles: {slip: free_slip}\n"
+        "  time_step: {}\n"
+        "  symplectic: {}\n";
+    sluice_sim *sim = test_load("mirror-drop", yaml, NULL, 0);
+    const double U[2] = {0.3, -0.2};
+    hand_made_state(sim, U, 1.01);
+    ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
+    const sluice_view *v = sluice_sim_view(sim);
+    const sluice_real *p = test_column(sim, "pressure", 0);
+    const double seg[3][2][2] = {{{-0.5, 0.2}, {0.5, 0.2}}, {{0.5, 0.2}, {0.5, 0}},
+                                 {{0.3, 0}, {1.5, 0}}};
+    double worst = 0;
+    int checked = 0, corner = 0;
+    for (sluice_index i = 0; i < v->count; i++) {
+        if (v->kind[i] != SLUICE_KIND_WALL)
+            continue;
+        const double xb[2] = {v->position[0][i], v->position[1][i]};
+        if (xb[0] < -0.2 || xb[0] > 1.2) /* away from the walls' open ends */
+            continue;
+        /* nearest point of each wall (the polyline: the nearer segment) */
+        double c[2][2], d[2], q[2];
+        d[0] = segment_closest(xb, seg[0][0], seg[0][1], c[0]);
+        const double d1 = segment_closest(xb, seg[1][0], seg[1][1], q);
+        if (d1 < d[0]) {
+            d[0] = d1;
+            c[0][0] = q[0];
+            c[0][1] = q[1];
+        }
+        d[1] = segment_closest(xb, seg[2][0], seg[2][1], c[1]);
+        const int order[2] = {d[0] <= d[1] ? 0 : 1, d[0] <= d[1] ? 1 : 0};
+        double xm[2] = {0, 0};
+        int found = 0;
+        for (int k = 0; k < 2 && !found; k++) {
+            const double *cc = c[order[k]];
+            xm[0] = 2 * cc[0] - xb[0];
+            xm[1] = 2 * cc[1] - xb[1];
+            const int in_fluid = xm[0] < 0.5 ? xm[1] > 0.2 : xm[1] > 0;
+            found = in_fluid;
+            if (found && k == 1)
+                corner++;
+        }
+        ck_assert_msg(found, "no mirror in the fluid for the wall particle at (%g, %g)", xb[0],
+                      xb[1]);
+        const double rho_m = density_field(1.01, xm[0], xm[1]);
+        const double expected = tait(rho_m) + rho_m * (-G) * (xb[1] - xm[1]);
+        worst = fmax(worst, fabs((double)p[i] - expected));
+        checked++;
+    }
+    fprintf(stderr,
+            "ghost_particles at a drop: %d wall particles checked, %d of them in the corner block "
+            "mirrored through the corner instead of into the step; largest pressure error "
+            "%.2e Pa\n",
+            checked, corner, worst);
+    ck_assert_int_gt(checked, 50);
+    ck_assert_int_gt(corner, 0);
+    ck_assert_msg(worst <= 1e-7, "pressure off by %g Pa", worst);
+    sluice_sim_free(sim);
+}
+END_TEST
+
 /* The same in 3D (4 x 4 corrected interpolation; walls of triangles, with
  * edges and corners): an open tank [0, 0.5]^2 x [0, 0.4] whose nearest point
  * to a wall particle is the particle clamped to the box. Ghost particles
@@ -991,6 +1096,7 @@ int main(void)
     tcase_add_test(values, ghost_mirror_values_no_slip);
     tcase_add_test(values, ghost_mirror_values_free_slip);
     tcase_add_test(values, ghost_mirror_values_tension);
+    tcase_add_test(values, ghost_mirror_at_a_drop);
     tcase_add_test(values, rest_values_without_fluid);
     tcase_add_test(values, mixed_schemes);
     tcase_add_test(values, mirror_values_3d);

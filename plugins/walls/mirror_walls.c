@@ -336,6 +336,34 @@ static int mirror_bind(void *state, sluice_host *host)
     return SLUICE_OK;
 }
 
+/* 1 when the mirror of x_b across the wall point c (x_m = 2 c - x_b) lies
+ * in the fluid: in front of every wall of the scene, of any scheme (a point
+ * past an open end of a polyline counts as in front); 0 when it lies behind
+ * one; -1 on error. Where two walls meet at a concave corner without
+ * sharing a vertex (a bed that starts inside the solid under a step, as the
+ * abrupt drop's lower bed does, so that its layers fill the corner block),
+ * the nearest wall of a particle in the corner block can be the one whose
+ * mirror lands inside the step, behind the other wall, where there is no
+ * fluid to interpolate; the other wall's nearest point (the corner's vertex)
+ * then gives the point reflection through the corner, in the fluid. */
+static int mirror_in_fluid(const sluice_api *api, sluice_host *host, const sluice_real *xb,
+                           const sluice_wall_point *c, uint32_t walls)
+{
+    sluice_real xm[3];
+    for (int d = 0; d < 3; d++)
+        xm[d] = 2 * c->closest[d] - xb[d];
+    for (uint32_t w = 0; w < walls; w++) {
+        sluice_wall_point at;
+        if (!api->wall(host, w))
+            continue;
+        if (api->wall_nearest(host, xm, (int32_t)w, &at) != SLUICE_OK)
+            return -1;
+        if (at.distance < 0 && !at.beyond_end)
+            return 0;
+    }
+    return 1;
+}
+
 static int mirror_initialise(void *state, sluice_host *host)
 {
     mirror_state *s = state;
@@ -371,29 +399,42 @@ static int mirror_initialise(void *state, sluice_host *host)
         return SLUICE_ERROR;
     }
     /* the mirror point of each wall particle across the nearest of the
-     * scheme's walls */
+     * scheme's walls whose mirror point lies in the fluid (see
+     * mirror_in_fluid); when none does, across the nearest */
     const uint32_t walls = api->wall_count(host);
     double margin = 0;
     for (size_t k = 0; k < n; k++) {
         const sluice_real *xb = s->wall_position + 3 * k;
-        sluice_wall_point best, candidate;
+        sluice_wall_point best, nearest, candidate;
         memset(&best, 0, sizeof best);
-        int found = 0;
+        memset(&nearest, 0, sizeof nearest);
+        int found = 0, found_valid = 0;
         for (uint32_t w = 0; w < walls; w++) {
             const sluice_wall *wall = api->wall(host, w);
             if (!wall || strcmp(wall->scheme, s->name) != 0)
                 continue;
             if (api->wall_nearest(host, xb, (int32_t)w, &candidate) != SLUICE_OK)
                 return SLUICE_ERROR;
-            if (!found || fabs((double)candidate.distance) < fabs((double)best.distance)) {
-                best = candidate;
+            if (!found || fabs((double)candidate.distance) < fabs((double)nearest.distance)) {
+                nearest = candidate;
                 found = 1;
+            }
+            if (found_valid && fabs((double)candidate.distance) >= fabs((double)best.distance))
+                continue;
+            const int valid = mirror_in_fluid(api, host, xb, &candidate, walls);
+            if (valid < 0)
+                return SLUICE_ERROR;
+            if (valid) {
+                best = candidate;
+                found_valid = 1;
             }
         }
         if (!found) {
             api->error(host, "no wall of scheme '%s' for wall particle %zu", s->name, k);
             return SLUICE_ERROR;
         }
+        if (!found_valid)
+            best = nearest;
         double length = 0, r[3] = {0, 0, 0};
         for (int d = 0; d < 3; d++) {
             s->mirror[3 * k + d] = 2 * best.closest[d] - xb[d];
@@ -764,7 +805,7 @@ static const sluice_component components[] = {
     },
 };
 
-SLUICE_DEFINE_LIBRARY("mirror_walls", "1.1.0",
+SLUICE_DEFINE_LIBRARY("mirror_walls", "1.2.0",
                       "wall particles with values from the fluid at their mirror points: ghost "
                       "particles and modified DBC",
                       SLUICE_DIMS_ALL, components)
