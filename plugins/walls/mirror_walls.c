@@ -403,6 +403,7 @@ static int mirror_initialise(void *state, sluice_host *host)
      * mirror_in_fluid); when none does, across the nearest */
     const uint32_t walls = api->wall_count(host);
     double margin = 0;
+    size_t farther = 0, behind = 0;
     for (size_t k = 0; k < n; k++) {
         const sluice_real *xb = s->wall_position + 3 * k;
         sluice_wall_point best, nearest, candidate;
@@ -433,8 +434,11 @@ static int mirror_initialise(void *state, sluice_host *host)
             api->error(host, "no wall of scheme '%s' for wall particle %zu", s->name, k);
             return SLUICE_ERROR;
         }
-        if (!found_valid)
+        if (!found_valid) {
             best = nearest;
+            behind++;
+        } else if (best.wall != nearest.wall)
+            farther++;
         double length = 0, r[3] = {0, 0, 0};
         for (int d = 0; d < 3; d++) {
             s->mirror[3 * k + d] = 2 * best.closest[d] - xb[d];
@@ -449,6 +453,12 @@ static int mirror_initialise(void *state, sluice_host *host)
             if (fabs(r[d]) > margin)
                 margin = fabs(r[d]);
     }
+    if (farther || behind)
+        api->info(host,
+                  "%zu wall particles mirrored across a farther wall (the nearest one's mirror "
+                  "point lay behind a wall), %zu with no mirror point in front of every wall "
+                  "(mirrored across the nearest)",
+                  farther, behind);
     /* across ranks the rank of a wall particle interpolates at its mirror
      * point, up to `margin` along an axis outside its box */
     return api->request_point_margin(host, (sluice_real)margin);
