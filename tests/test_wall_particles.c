@@ -273,6 +273,74 @@ START_TEST(ghost_mirror_values_tension)
 }
 END_TEST
 
+/* continuity's wall_velocity (1.2.0). A uniform flow U = (0.1, -0.2) in the
+ * tank on no-slip ghost walls: the wall particles carry v_b = -U (the
+ * mirrored velocity; the corrected interpolation reproduces a uniform field
+ * exactly), and the fluid-fluid terms of sum_j m_j (v_i - v_j) . grad W
+ * vanish. With wall_velocity: particle the wall pairs count v_i - v_b = 2U,
+ * with rest (the fixed wall's own velocity, zero) U: the fluid's density
+ * rate with `particle` is twice the one with `rest`, particle by particle,
+ * to round-off. */
+START_TEST(continuity_wall_velocity_rest)
+{
+    sluice_real *rates[2] = {NULL, NULL};
+    sluice_index count = 0;
+    const char *modes[2] = {"particle", "rest"};
+    sluice_sim *sims[2];
+    for (int m = 0; m < 2; m++) {
+        char yaml[2048];
+        snprintf(yaml, sizeof yaml,
+                 "dimensions: 2\n"
+                 "particles: {spacing: 0.05, smoothing_length_ratio: 1.5}\n"
+                 "time: {end: 1}\n"
+                 "domain: {min: [-0.3, -0.3], max: [1.3, 1.3]}\n"
+                 "geometry:\n"
+                 "  fluid: [{shape: box, min: [0, 0], max: [1, 1]}]\n"
+                 "  walls: [{shape: tank, min: [0, 0], max: [1, 0.8]}]\n"
+                 "initial: {density: rest}\n"
+                 "plugins:\n"
+                 "  wendland_c2: {}\n"
+                 "  tait: {speed_of_sound: 20}\n"
+                 "  continuity: {wall_velocity: %s}\n"
+                 "  pressure_gradient: {}\n"
+                 "  gravity: {}\n"
+                 "  ghost_particles: {slip: no_slip}\n"
+                 "  time_step: {}\n"
+                 "  symplectic: {}\n",
+                 modes[m]);
+        sims[m] = test_load("continuity-wall-velocity", yaml, NULL, 0);
+        const double U[2] = {0.1, -0.2};
+        hand_made_state(sims[m], U, 1.01);
+        ck_assert_int_eq(sluice_sim_evaluate(sims[m]), SLUICE_OK);
+        rates[m] = test_column(sims[m], "density_rate", 0);
+        count = sluice_sim_view(sims[m])->count;
+    }
+    const sluice_view *v = sluice_sim_view(sims[1]);
+    double largest = 0;
+    for (sluice_index i = 0; i < count; i++)
+        if (v->kind[i] == SLUICE_KIND_FLUID)
+            largest = fmax(largest, fabs((double)rates[1][i]));
+    double worst = 0;
+    int near_wall = 0;
+    for (sluice_index i = 0; i < count; i++) {
+        if (v->kind[i] != SLUICE_KIND_FLUID)
+            continue;
+        if (fabs((double)rates[1][i]) > 1e-6 * largest)
+            near_wall++;
+        worst = fmax(worst, fabs((double)rates[0][i] - 2 * (double)rates[1][i]));
+    }
+    fprintf(stderr,
+            "continuity wall_velocity: %d fluid particles with a wall term, largest rate %.3g "
+            "kg m^-3 s^-1 (rest); |rate(particle) - 2 rate(rest)| at most %.2e\n",
+            near_wall, largest, worst);
+    ck_assert_double_gt(largest, 1);
+    ck_assert_int_gt(near_wall, 20);
+    ck_assert_msg(worst <= 1e-9 * largest, "rates off by %g", worst);
+    sluice_sim_free(sims[0]);
+    sluice_sim_free(sims[1]);
+}
+END_TEST
+
 /* A drop between two walls that meet without sharing a vertex, as in the
  * abrupt-drop scenes: an upper bed and the drop's face (one polyline,
  * (-0.5, 0.2) -> (0.5, 0.2) -> (0.5, 0)) and a lower bed that starts inside
@@ -1097,6 +1165,7 @@ int main(void)
     tcase_add_test(values, ghost_mirror_values_free_slip);
     tcase_add_test(values, ghost_mirror_values_tension);
     tcase_add_test(values, ghost_mirror_at_a_drop);
+    tcase_add_test(values, continuity_wall_velocity_rest);
     tcase_add_test(values, rest_values_without_fluid);
     tcase_add_test(values, mixed_schemes);
     tcase_add_test(values, mirror_values_3d);

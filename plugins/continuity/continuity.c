@@ -21,6 +21,12 @@
  * bed ending under an outlet without them runs away as the gate did). The
  * batch's neighbour_kinds says whether an OPEN particle is among the pairs
  * at all: a scene without open boundaries never takes that path.
+ * With wall_velocity: rest a wall neighbour counts with zero velocity, its
+ * fixed wall's own, whatever its velocity field holds: no-slip ghost
+ * particles carry the mirrored -v_m for the viscous terms, which Adami et
+ * al. (2012) keep out of the continuity equation (on the abrupt drop's face
+ * it compressed the fluid beside the wall; docs/validation.md). A batch
+ * without wall neighbours takes the plain path.
  * Both forms vanish for a uniform velocity and are exact for the divergence
  * of a linear velocity field on a lattice (with renormalisation, on any
  * particle set). */
@@ -29,13 +35,14 @@
 typedef struct continuity_config {
     int form;
     int renormalise;
+    int wall_velocity;
 } continuity_config;
 
 enum { FORM_MASS = 0, FORM_VOLUME = 1 };
 
 typedef struct continuity_state {
     const sluice_api *api;
-    int form, renormalise;
+    int form, renormalise, rest_walls;
     sluice_field velocity, mass, density, density_rate, correction;
 } continuity_state;
 
@@ -47,6 +54,12 @@ static const sluice_param_spec params[] = {
     {"renormalise", SLUICE_PARAM_BOOL, offsetof(continuity_config, renormalise), "false", 0, 0, 0,
      NULL, "use the renormalised kernel gradient L_i grad W (seed 004; needs kernel_correction)",
      NULL, 0},
+    {"wall_velocity", SLUICE_PARAM_ENUM, offsetof(continuity_config, wall_velocity), "particle",
+     0, 0, 0, NULL,
+     "particle: a wall neighbour counts with its velocity field (dbc's moving wall, ghost "
+     "particles' mirrored velocity); rest: with zero velocity, the fixed wall's own (Adami et "
+     "al. 2012: no-slip ghost velocities belong in the viscous terms only)",
+     "particle|rest", 0},
 };
 
 static const sluice_field_spec fields[] = {
@@ -72,6 +85,7 @@ static int continuity_create(const sluice_api *api, sluice_host *host, const voi
     s->api = api;
     s->form = c->form;
     s->renormalise = c->renormalise;
+    s->rest_walls = c->wall_velocity == 1;
     /* only what the chosen form reads is declared (and gathered) */
     if (s->form == FORM_VOLUME) {
         const sluice_field_spec density = {"density", SLUICE_TYPE_REAL, 1, "kg m^-3",
@@ -123,7 +137,8 @@ static void continuity_destroy(void *state)
 
 static inline void continuity_pairs(const continuity_state *s, const sluice_view *v,
                                     const sluice_pair_batch *b, const uint32_t dims,
-                                    const int volume, const int renormalise)
+                                    const int volume, const int renormalise,
+                                    const int rest_walls)
 {
     const sluice_real *vel[3], *vj[3];
     for (uint32_t d = 0; d < dims; d++) {
@@ -140,6 +155,9 @@ static inline void continuity_pairs(const continuity_state *s, const sluice_view
     const sluice_real *restrict vzj = dims == 3 ? vj[2] : vj[1];
     sluice_real *restrict rate = sluice_real_column(v, s->density_rate, 0);
     const int open_pairs = (b->neighbour_kinds & SLUICE_KIND_MASK(SLUICE_KIND_OPEN)) != 0;
+    const uint8_t *restrict kinds = b->neighbour_kind;
+    /* rest_walls: a wall neighbour's velocity counts as zero (keep = 0) */
+#define KEEP(k) (rest_walls ? (sluice_real)(kinds[k] != SLUICE_KIND_WALL) : (sluice_real)1)
     for (sluice_index t = 0; t < b->target_count; t++) {
         const sluice_index i = b->target[t];
         const sluice_real vxi = vel[0][i], vyi = vel[1][i], vzi = dims == 3 ? vel[2][i] : 0;
@@ -154,7 +172,9 @@ static inline void continuity_pairs(const continuity_state *s, const sluice_view
                     L[a] = sluice_real_column(v, s->correction, a) + i;
             for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
                 const sluice_real weight = volume ? mj[k] / rhoj[k] * F[k] : mj[k] * F[k];
-                const sluice_real u[3] = {vxi - vxj[k], vyi - vyj[k], dims == 3 ? vzi - vzj[k] : 0};
+                const sluice_real keep = KEEP(k);
+                const sluice_real u[3] = {vxi - keep * vxj[k], vyi - keep * vyj[k],
+                                          dims == 3 ? vzi - keep * vzj[k] : 0};
                 const sluice_real r[3] = {rx[k], ry[k], dims == 3 ? rz[k] : 0};
                 sluice_real dot = 0;
                 for (uint32_t a = 0; a < dims; a++) {
@@ -174,9 +194,10 @@ static inline void continuity_pairs(const continuity_state *s, const sluice_view
         } else if (!renormalise) {
             for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
                 const sluice_real weight = volume ? mj[k] / rhoj[k] * F[k] : mj[k] * F[k];
-                sluice_real dot = (vxi - vxj[k]) * rx[k] + (vyi - vyj[k]) * ry[k];
+                const sluice_real keep = KEEP(k);
+                sluice_real dot = (vxi - keep * vxj[k]) * rx[k] + (vyi - keep * vyj[k]) * ry[k];
                 if (dims == 3)
-                    dot += (vzi - vzj[k]) * rz[k];
+                    dot += (vzi - keep * vzj[k]) * rz[k];
                 sum += weight * dot;
             }
         } else {
@@ -186,13 +207,15 @@ static inline void continuity_pairs(const continuity_state *s, const sluice_view
             sluice_real m[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
             for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
                 const sluice_real weight = volume ? mj[k] / rhoj[k] * F[k] : mj[k] * F[k];
-                const sluice_real ux = (vxi - vxj[k]) * weight, uy = (vyi - vyj[k]) * weight;
+                const sluice_real keep = KEEP(k);
+                const sluice_real ux = (vxi - keep * vxj[k]) * weight,
+                                  uy = (vyi - keep * vyj[k]) * weight;
                 m[0] += ux * rx[k];
                 m[1] += ux * ry[k];
                 m[3] += uy * rx[k];
                 m[4] += uy * ry[k];
                 if (dims == 3) {
-                    const sluice_real uz = (vzi - vzj[k]) * weight;
+                    const sluice_real uz = (vzi - keep * vzj[k]) * weight;
                     m[2] += ux * rz[k];
                     m[5] += uy * rz[k];
                     m[6] += uz * rx[k];
@@ -206,24 +229,27 @@ static inline void continuity_pairs(const continuity_state *s, const sluice_view
         }
         rate[i] += volume ? rho[i] * sum : sum;
     }
+#undef KEEP
 }
+
+#define CONTINUITY_FORMS(dims, rest)                                                              \
+    (s->renormalise ? (volume ? continuity_pairs(s, v, b, dims, 1, 1, rest)                      \
+                              : continuity_pairs(s, v, b, dims, 0, 1, rest))                     \
+                    : (volume ? continuity_pairs(s, v, b, dims, 1, 0, rest)                      \
+                              : continuity_pairs(s, v, b, dims, 0, 0, rest)))
 
 static void continuity_pair(void *state, const sluice_view *v, const sluice_pair_batch *b)
 {
     const continuity_state *s = state;
     const int volume = s->form == FORM_VOLUME;
-    if (v->dimensions == 3) {
-        if (s->renormalise)
-            volume ? continuity_pairs(s, v, b, 3, 1, 1) : continuity_pairs(s, v, b, 3, 0, 1);
-        else
-            volume ? continuity_pairs(s, v, b, 3, 1, 0) : continuity_pairs(s, v, b, 3, 0, 0);
-    } else {
-        if (s->renormalise)
-            volume ? continuity_pairs(s, v, b, 2, 1, 1) : continuity_pairs(s, v, b, 2, 0, 1);
-        else
-            volume ? continuity_pairs(s, v, b, 2, 1, 0) : continuity_pairs(s, v, b, 2, 0, 0);
-    }
+    /* rest_walls only where a wall is among the batch's neighbours */
+    const int rest = s->rest_walls && (b->neighbour_kinds & SLUICE_KIND_MASK(SLUICE_KIND_WALL));
+    if (v->dimensions == 3)
+        rest ? CONTINUITY_FORMS(3, 1) : CONTINUITY_FORMS(3, 0);
+    else
+        rest ? CONTINUITY_FORMS(2, 1) : CONTINUITY_FORMS(2, 0);
 }
+#undef CONTINUITY_FORMS
 
 static const sluice_component components[] = {{
     .name = "continuity",
@@ -243,4 +269,4 @@ static const sluice_component components[] = {{
     .pair = continuity_pair,
 }};
 
-SLUICE_DEFINE_LIBRARY("continuity", "1.1.0", "continuity equation", SLUICE_DIMS_ALL, components)
+SLUICE_DEFINE_LIBRARY("continuity", "1.2.0", "continuity equation", SLUICE_DIMS_ALL, components)
