@@ -399,24 +399,31 @@ static const char *const jump_scenes[] = {
     "abrupt_drop_T6.yaml",             "abrupt_drop_T7.yaml",
 };
 
-START_TEST(jump_scenes_start)
+static void run_jump_scene(const char *config, const char *variant)
 {
-    char *path = test_config(jump_scenes[_i]);
-    char *text = test_read_file(path);
-    ck_assert_ptr_nonnull(text);
-    sluice_sim *sim = test_load("jump-scene", text, NULL, 0);
-    free(text);
+    char *path = test_config(config);
+    ck_assert_ptr_nonnull(path);
+    sluice_diag *diag = sluice_diag_create();
+    sluice_load_options options = {NULL, 0, 0, 0, 0, NULL};
+    sluice_sim *sim = sluice_sim_load_variant(path, variant, &options, diag);
+    if (!sim)
+        for (size_t i = 0; i < sluice_diag_count(diag); i++)
+            fprintf(stderr, "%s\n", sluice_diag_message(diag, i));
+    ck_assert_msg(sim != NULL, "%s (variant %s) failed to load", config,
+                  variant ? variant : "none");
+    sluice_diag_destroy(diag);
     char *dir = test_scratch("jump-scene-run");
     ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
     const sluice_index start = sluice_sim_view(sim)->count;
     for (int step = 0; step < 100; step++) {
         const int status = sluice_sim_step(sim);
-        ck_assert_msg(status == SLUICE_RUN_COMPLETE, "%s stopped at step %d: %s", jump_scenes[_i],
-                      step, sluice_sim_failure(sim));
+        ck_assert_msg(status == SLUICE_RUN_COMPLETE, "%s stopped at step %d: %s", config, step,
+                      sluice_sim_failure(sim));
     }
     const sluice_index end = sluice_sim_view(sim)->count;
-    fprintf(stderr, "%s: 100 steps to t = %.4f s, particles %u -> %u\n", jump_scenes[_i],
-            sluice_sim_time(sim), start, end);
+    fprintf(stderr, "%s%s%s: 100 steps to t = %.4f s, particles %u -> %u\n", config,
+            variant ? " --variant " : "", variant ? variant : "", sluice_sim_time(sim), start,
+            end);
     /* every particle accounted for: the count changed only through the
      * boundaries */
     const uint64_t added = sim->next_id - sim->particles_initial;
@@ -429,6 +436,19 @@ START_TEST(jump_scenes_start)
     sluice_sim_free(sim);
     free(path);
     free(dir);
+}
+
+START_TEST(jump_scenes_start)
+{
+    run_jump_scene(jump_scenes[_i], NULL);
+}
+END_TEST
+
+/* The abrupt drop on seed 004's walls (variant ghost_walls: no-slip ghost
+ * particles, continuity at the walls' rest velocity) loads and starts. */
+START_TEST(abrupt_drop_ghost_walls_start)
+{
+    run_jump_scene("abrupt_drop_T3.yaml", "ghost_walls");
 }
 END_TEST
 
@@ -1339,6 +1359,7 @@ int main(void)
     tcase_set_timeout(scenes, 300);
     tcase_add_loop_test(scenes, jump_scenes_start, 0,
                         (int)(sizeof jump_scenes / sizeof *jump_scenes));
+    tcase_add_test(scenes, abrupt_drop_ghost_walls_start);
     suite_add_tcase(s, scenes);
     TCase *kinds = tcase_create("open_particles");
     tcase_add_test(kinds, dbc_walls_not_compressed_by_open_particles);
