@@ -147,7 +147,17 @@ static double density_field(double base, double x, double y)
     return RHO0 * (base + 0.004 * x - 0.012 * (y - 0.8));
 }
 
+static sluice_sim *mirror_scene_with(const char *walls, double fluid_top,
+                                     const char *const *sets, size_t set_count);
+
 static sluice_sim *mirror_scene(const char *walls, double fluid_top)
+{
+    return mirror_scene_with(walls, fluid_top, NULL, 0);
+}
+
+/* mirror_scene with `--set` overrides */
+static sluice_sim *mirror_scene_with(const char *walls, double fluid_top,
+                                     const char *const *sets, size_t set_count)
 {
     char yaml[2048];
     snprintf(yaml, sizeof yaml,
@@ -169,7 +179,7 @@ static sluice_sim *mirror_scene(const char *walls, double fluid_top)
              "  time_step: {}\n"
              "  symplectic: {}\n",
              fluid_top, walls);
-    return test_load("mirror-values", yaml, NULL, 0);
+    return test_load("mirror-values", yaml, sets, set_count);
 }
 
 /* Sets the hand-made state: uniform velocity U, the linear density field and
@@ -288,27 +298,10 @@ START_TEST(continuity_wall_velocity_rest)
     const char *modes[2] = {"particle", "rest"};
     sluice_sim *sims[2];
     for (int m = 0; m < 2; m++) {
-        char yaml[2048];
-        snprintf(yaml, sizeof yaml,
-                 "dimensions: 2\n"
-                 "particles: {spacing: 0.05, smoothing_length_ratio: 1.5}\n"
-                 "time: {end: 1}\n"
-                 "domain: {min: [-0.3, -0.3], max: [1.3, 1.3]}\n"
-                 "geometry:\n"
-                 "  fluid: [{shape: box, min: [0, 0], max: [1, 1]}]\n"
-                 "  walls: [{shape: tank, min: [0, 0], max: [1, 0.8]}]\n"
-                 "initial: {density: rest}\n"
-                 "plugins:\n"
-                 "  wendland_c2: {}\n"
-                 "  tait: {speed_of_sound: 20}\n"
-                 "  continuity: {wall_velocity: %s}\n"
-                 "  pressure_gradient: {}\n"
-                 "  gravity: {}\n"
-                 "  ghost_particles: {slip: no_slip}\n"
-                 "  time_step: {}\n"
-                 "  symplectic: {}\n",
-                 modes[m]);
-        sims[m] = test_load("continuity-wall-velocity", yaml, NULL, 0);
+        char set[64];
+        snprintf(set, sizeof set, "plugins.continuity.wall_velocity=%s", modes[m]);
+        const char *const sets[1] = {set};
+        sims[m] = mirror_scene_with("ghost_particles: {slip: no_slip}", 1.0, sets, 1);
         const double U[2] = {0.1, -0.2};
         hand_made_state(sims[m], U, 1.01);
         ck_assert_int_eq(sluice_sim_evaluate(sims[m]), SLUICE_OK);
