@@ -27,6 +27,11 @@
  *    trapezoid error, so q = a/2 (d^2 - (H - d)^2) = a H (2 d - H) / 2 to the
  *    CSV's digits when d < H (a H^2/2 plus at most a H (d - H) otherwise);
  *    generally |q - a d^2/2| <= 2 a H eps + a eps^2.
+ *  - Section gauge with forces on that block under hydrostatic pressure
+ *    (linear EOS, reference pressure subtracted) moving at U0: the pressure
+ *    force P and momentum flux M exactly as the shear case predicts, and
+ *    within the surface's bound of rho0 g d^2/2 and rho0 U0^2 d (with the
+ *    compression); see section_momentum_and_pressure.
  *  - vorticity: a uniform flow gives 0 to round-off; a rigid rotation
  *    v = Omega x (r - c) gives, at particles with a full support on the
  *    lattice, 2 m Omega with m the lattice second moment of the kernel,
@@ -503,6 +508,97 @@ START_TEST(section_linear_shear)
 }
 END_TEST
 
+/* The block under hydrostatic pressure, moving at U0: linear equation of
+ * state p - p0 = c^2 (rho - rho0) with p0 = 1000 Pa (which the gauge must
+ * subtract), rho_j = rho0 (1 + g (H - y_j) / c^2) so that p_j - p0 =
+ * rho0 g (H - y_j), and m_j = rho_j dx^2 so that V_j = dx^2 exactly (the
+ * kernel sum, eta and the wet part are the rest block's).
+ * p - p0 = rho0 g H - rho0 g y is a constant minus the shear of
+ * section_linear_shear with a = rho0 g, so over the wet part
+ *   P = rho0 g H wet - rho0 g q_shear:
+ *   d < H:  P = rho0 g H (2 d - H) / 2 to the CSV's digits;
+ *   d >= H: rho0 g H^2/2 <= P <= rho0 g H^2/2 + rho0 g H (d - H);
+ * and |P - rho0 g d^2/2| <= rho0 g (H eps + eps^2/2) either way (the
+ * hydrostatic force on the depth d). rho u^2 = U0^2 rho is linear in y too,
+ * with rho = rho0 + (p - p0) / c^2, so M = U0^2 (rho0 wet + P / c^2) to the
+ * CSV's digits, and |M - U0^2 (rho0 d + rho0 g d^2 / (2 c^2))| <=
+ * U0^2 (rho0 eps + rho0 g (H eps + eps^2/2) / c^2). */
+static const char *block_forces_scene =
+    "dimensions: 2\n"
+    "particles: {spacing: 0.01, smoothing_length_ratio: 1.5}\n"
+    "time: {end: 0.01}\n"
+    "domain: {min: [-0.1, -0.1], max: [0.7, 0.3]}\n"
+    "initial: {density: rest}\n"
+    "geometry:\n"
+    "  fluid: [{shape: box, min: [0, 0], max: [0.6, 0.2]}]\n"
+    "plugins:\n"
+    "  wendland_c2: {}\n"
+    "  linear_eos: {speed_of_sound: 20, reference_pressure: 1000}\n"
+    "  continuity: {}\n"
+    "  pressure_gradient: {}\n"
+    "  gravity: {}\n"
+    "  time_step: {}\n"
+    "  symplectic: {}\n"
+    "  section_gauge: {positions: [0.3, 0.3025], bed_elevation: [0], forces: true}\n";
+
+START_TEST(section_momentum_and_pressure)
+{
+    const double U0 = 0.8, g = 9.81, c = 20, rho0 = 1000, H = BLOCK_H, dx = BLOCK_DX;
+    sluice_sim *sim = test_load("section-forces", block_forces_scene, NULL, 0);
+    set_flow(sim, U0, 0);
+    const sluice_view *v = sluice_sim_view(sim);
+    sluice_real *rho = test_column(sim, "density", 0), *m = test_column(sim, "mass", 0),
+                *p = test_column(sim, "pressure", 0);
+    /* the t = 0 row comes before the first evaluation: the pressure is
+     * written here as the equation of state gives it */
+    for (sluice_index i = 0; i < v->count; i++)
+        if (v->kind[i] == SLUICE_KIND_FLUID) {
+            const double density = rho0 * (1 + g * (H - (double)v->position[1][i]) / (c * c));
+            rho[i] = (sluice_real)density;
+            m[i] = (sluice_real)(density * dx * dx);
+            p[i] = (sluice_real)(1000 + c * c * (density - rho0));
+        }
+    const double xs[] = {0.3, 0.3025};
+    block_ref ref[2];
+    for (int k = 0; k < 2; k++)
+        ref[k] = block_reference(sim, xs[k], 0, 0.3);
+    char *dir = sample_now(sim, "section-forces-out");
+    char *path = out_file(dir, "sections.csv");
+    double row[16];
+    ck_assert_int_eq(first_row(path, row, 16), 13);
+    for (int k = 0; k < 2; k++) {
+        const double d = row[1 + 6 * k], M = row[5 + 6 * k], P = row[6 + 6 * k];
+        const double eps = ref[k].eps, wet = d < H ? 2 * d - H : d;
+        const double P_h = rho0 * g * d * d / 2;
+        const double M_h = U0 * U0 * (rho0 * d + rho0 * g * d * d / (2 * c * c));
+        fprintf(stderr, "block under hydrostatic pressure, u = %g m/s, x = %.4f: d = %.9f m, "
+                        "P = %.6f N/m (rho0 g d^2/2 = %.6f, difference %+.2e), M = %.6f N/m "
+                        "(U0^2 integral of rho = %.6f, difference %+.2e); eps = %.2e m\n",
+                U0, xs[k], d, P, P_h, P - P_h, M, M_h, M - M_h, eps);
+        if (d < H)
+            ck_assert_msg(fabs(P - rho0 * g * H * (2 * d - H) / 2) <= 3 * CSV_DIGITS * P,
+                          "P = %.10f, rho0 g H (2d - H)/2 = %.10f", P,
+                          rho0 * g * H * (2 * d - H) / 2);
+        else
+            ck_assert_msg(P >= rho0 * g * H * H / 2 * (1 - 3 * CSV_DIGITS) &&
+                              P <= rho0 * g * H * H / 2 + rho0 * g * H * (d - H) +
+                                       3 * CSV_DIGITS * P,
+                          "P = %.10f, d = %.10f", P, d);
+        ck_assert_msg(fabs(P - P_h) <= rho0 * g * (H * eps + eps * eps / 2), "P = %.9f, %.9f",
+                      P, P_h);
+        ck_assert_msg(fabs(M - U0 * U0 * (rho0 * wet + P / (c * c))) <= 3 * CSV_DIGITS * M,
+                      "M = %.10f, U0^2 (rho0 wet + P/c^2) = %.10f", M,
+                      U0 * U0 * (rho0 * wet + P / (c * c)));
+        ck_assert_msg(fabs(M - M_h) <=
+                          U0 * U0 * (rho0 * eps + rho0 * g * (H * eps + eps * eps / 2) / (c * c)),
+                      "M = %.9f, %.9f", M, M_h);
+    }
+    free(path);
+    free(dir);
+    sluice_sim_free(sim);
+}
+END_TEST
+
 /* ------------------------------------------------------- vorticity -- */
 
 /* -sum over lattice offsets of V F(r) r_x^2: the kernel's second moment m
@@ -797,6 +893,7 @@ int main(void)
     tcase_add_test(c, free_surface_3d);
     tcase_add_test(c, section_uniform_flow);
     tcase_add_test(c, section_linear_shear);
+    tcase_add_test(c, section_momentum_and_pressure);
     tcase_add_test(c, vorticity_rigid_rotation_2d);
     tcase_add_test(c, vorticity_rigid_rotation_3d);
     tcase_add_test(c, vorticity_renormalised);

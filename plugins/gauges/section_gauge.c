@@ -33,6 +33,23 @@
  * the exact integral of u over the wet part.
  * A dry section (no wet sample) gives d = 0, q = 0, U = Fr = nan.
  *
+ * With `forces: true` (1.2.0) each section also gives the two terms of the
+ * momentum function (specific force) per unit width, integrated over the
+ * same wet part by the same rule:
+ *  - momentum flux M = integral of rho u_x^2 dy (N m^-1), from the
+ *    Shepard-normalised rho u_x^2 = sum_j m_j u_j^2 W / S;
+ *  - pressure force P = integral of (p - p_ref) dy (N m^-1), from the
+ *    Shepard-normalised pressure, p_ref the equation of state's published
+ *    `reference_pressure` (background pressure; 0 when none).
+ * M + P is what a hydraulic jump conserves between its two sections (with
+ * the bed's friction and, at a drop, the face's force). With a column whose
+ * `top` is below the surface (the column fully wet), P is the force on that
+ * height: a section just in front of a step's face from its foot to its
+ * crest gives the face's pressure force. The pressure is the one of the
+ * step's last evaluation (the equation of state's field), as in the
+ * output files. For a hydrostatic pressure and a uniform flow P = rho0 g
+ * d^2 / 2 and M = rho0 U^2 d (test `section_momentum_and_pressure`).
+ *
  * In a two-phase scene `phase: water` sums over the water only: the depth,
  * discharge and Froude number of the water, not of the air above it
  * (phase_filter.h).
@@ -42,11 +59,12 @@
  * (position, velocity, mass, density): no evaluation is needed. Cost: one
  * api->point_pass over all samples per output row (bounded by MAX_SAMPLES).
  * Columns: time, then for each section k: d_x<k> (m), q_x<k> (m^2 s^-1),
- * U_x<k> (m s^-1), Fr_x<k> (1).
+ * U_x<k> (m s^-1), Fr_x<k> (1), and with `forces` M_x<k> (N m^-1),
+ * P_x<k> (N m^-1).
  *
  * Across MPI ranks (ABI 1.8, SLUICE_COMPONENT_ACROSS_RANKS): each rank's
  * point pass sums over its own particles only, so the gauge adds the ranks'
- * S and sum_j V_j u_j W of every sample (one api->reduce) before it divides,
+ * sums of every sample (one api->reduce) before it divides,
  * compares with the threshold or integrates; rank 0 writes the row. The rows
  * are the one-rank rows up to the order of the sums. */
 #include <math.h>
@@ -57,12 +75,14 @@
 #include "phase_filter.h"
 
 #define MAX_SAMPLES 1000000u
+#define SUMS 4
 
 typedef struct sg_config {
     sluice_real_list positions, bed_elevation, top;
     sluice_real sample_spacing, threshold, interval;
     const char *file;
     int phase;
+    int forces;
 } sg_config;
 
 typedef struct sg_state {
@@ -70,13 +90,16 @@ typedef struct sg_state {
     sluice_index sections;
     sluice_index *first;  /* sections + 1: samples of section k are first[k] .. first[k+1]-1 */
     sluice_real *points;  /* 3 reals per sample, bed to top within a section */
-    double *sums;         /* 2 per sample: S, sum_j V_j u_j W */
+    double *sums;         /* SUMS per sample: S, sum_j V_j W times u_j, p_j - p_ref, rho_j u_j^2 */
     double *row;
+    int forces;           /* M and P columns */
+    sluice_index columns; /* per section: 4, or 6 with forces */
+    double reference_pressure; /* Pa */
     sluice_real *bed;
     sluice_real threshold, interval;
     double g;             /* gravity along -y, m s^-2 */
     const char *file;
-    sluice_field density, mass, velocity, phase;
+    sluice_field density, mass, velocity, pressure, phase;
     int phase_filter;
     sluice_table *table;
     int64_t written;
@@ -105,6 +128,10 @@ static const sluice_param_spec params[] = {
     {"file", SLUICE_PARAM_STRING, offsetof(sg_config, file), "sections.csv", 0, 0, 0, NULL,
      "output file in the run directory", NULL, 0},
     SLUICE_PHASE_PARAM(sg_config, phase),
+    {"forces", SLUICE_PARAM_BOOL, offsetof(sg_config, forces), "false", 0, 0, 0, NULL,
+     "also the momentum flux M = integral of rho u^2 dy and the pressure force P = integral of "
+     "(p - p_ref) dy over the wet part (N m^-1), columns M_x<k> and P_x<k>",
+     NULL, 0},
 };
 
 static const sluice_field_spec fields[] = {
@@ -168,7 +195,15 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
     s->interval = c->interval;
     s->file = c->file;
     s->phase_filter = c->phase;
+    s->forces = c->forces;
+    s->columns = s->forces ? 6 : 4;
     if (sluice_phase_declare(api, host, s->phase_filter) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
+    static const sluice_field_spec pressure = {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_READ,
+                                               0, NULL, 0, "pressure"};
+    if (s->forces && api->declare_field(host, &pressure) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
@@ -203,8 +238,8 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
         s->first[k + 1] = (sluice_index)total;
     }
     s->points = malloc(3 * total * sizeof *s->points);
-    s->sums = calloc(2 * total, sizeof *s->sums);
-    s->row = calloc(4 * (size_t)s->sections + 1, sizeof *s->row);
+    s->sums = calloc(SUMS * total, sizeof *s->sums);
+    s->row = calloc((size_t)s->columns * s->sections + 1, sizeof *s->row);
     if (!s->points || !s->sums || !s->row) {
         api->error(host, "out of memory (%zu samples)", total);
         sg_destroy(s);
@@ -238,6 +273,14 @@ static int sg_bind(void *state, sluice_host *host)
     s->velocity = f[2];
     if (sluice_phase_bind(api, host, s->phase_filter, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
+    s->pressure.column = -1;
+    if (s->forces) {
+        if (api->field(host, "pressure", &s->pressure) != SLUICE_OK)
+            return SLUICE_ERROR;
+        sluice_real p_ref = 0;
+        if (api->constant(host, "reference_pressure", &p_ref, 1) == 1)
+            s->reference_pressure = (double)p_ref;
+    }
     sluice_real g[3] = {0, 0, 0};
     if (api->constant(host, "gravity", g, 3) < 2) {
         api->error(host, "needs the constant 'gravity' for the Froude number: load the gravity "
@@ -257,34 +300,40 @@ static int sg_bind(void *state, sluice_host *host)
 static int sg_initialise(void *state, sluice_host *host)
 {
     sg_state *s = state;
-    size_t size = 16 + 64 * (size_t)s->sections;
+    size_t size = 16 + 96 * (size_t)s->sections;
     char *header = malloc(size);
     if (!header) {
         s->api->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     size_t used = (size_t)snprintf(header, size, "time");
-    for (sluice_index k = 0; k < s->sections; k++)
+    for (sluice_index k = 0; k < s->sections; k++) {
         used += (size_t)snprintf(header + used, size - used, ",d_x%u,q_x%u,U_x%u,Fr_x%u", k, k, k,
                                  k);
+        if (s->forces)
+            used += (size_t)snprintf(header + used, size - used, ",M_x%u,P_x%u", k, k);
+    }
     s->table = s->api->table_open(host, s->file, header);
     free(header);
     return s->table ? SLUICE_OK : SLUICE_ERROR;
 }
 
-/* S and sum_j V_j u_j W at each sample of the batch (fluid neighbours). */
+/* S and sum_j V_j W times u_j (and, with forces, p_j - p_ref and rho_j u_j^2)
+ * at each sample of the batch (fluid neighbours). */
 static void section_sums(void *context, const sluice_view *v, const sluice_pair_batch *b)
 {
     sg_state *s = context;
     const sluice_real *restrict rho = sluice_real_column(v, s->density, 0);
     const sluice_real *restrict m = sluice_real_column(v, s->mass, 0);
     const sluice_real *restrict u = sluice_real_column(v, s->velocity, 0);
+    const sluice_real *restrict p = s->forces ? sluice_real_column(v, s->pressure, 0) : NULL;
     const sluice_real *restrict W = b->kernel;
     const sluice_index *restrict nb = b->neighbour;
     const uint8_t *phase = sluice_phase_column(v, s->phase);
     const uint8_t wanted = sluice_phase_wanted(s->phase_filter);
+    const double p_ref = s->reference_pressure;
     for (sluice_index t = 0; t < b->target_count; t++) {
-        double sum = 0, flux = 0;
+        double sum = 0, flux = 0, force = 0, momentum = 0;
         for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
             const sluice_index j = nb[k];
             if (sluice_phase_skips(phase, wanted, j))
@@ -292,54 +341,78 @@ static void section_sums(void *context, const sluice_view *v, const sluice_pair_
             const double w = (double)(m[j] / rho[j] * W[k]);
             sum += w;
             flux += w * (double)u[j];
+            if (p) {
+                force += w * ((double)p[j] - p_ref);
+                momentum += w * (double)rho[j] * (double)u[j] * (double)u[j];
+            }
         }
-        s->sums[2 * (size_t)b->target[t]] = sum;
-        s->sums[2 * (size_t)b->target[t] + 1] = flux;
+        double *out = s->sums + SUMS * (size_t)b->target[t];
+        out[0] = sum;
+        out[1] = flux;
+        out[2] = force;
+        out[3] = momentum;
     }
 }
 
-/* d, q, U, Fr of section k from its samples. */
+/* The integral over the wet part of the column of samples [0, n) of the
+ * Shepard-normalised sum number `which` (1: u_x, 2: p - p_ref, 3: rho u_x^2),
+ * threshold c: the trapezoid rule, each wet interval ending where S crosses c
+ * (linear interpolation of S, the value linearly interpolated there). Above
+ * eta nothing is wet by its definition. */
+static double wet_integral(const double *sums, const sluice_real *p, sluice_index n, double c,
+                           int which)
+{
+#define S_(i) sums[SUMS * (size_t)(i)]
+#define F_(i) (S_(i) > 0 ? sums[SUMS * (size_t)(i) + (size_t)which] / S_(i) : NAN)
+#define Y_(i) ((double)p[3 * (size_t)(i) + 1])
+    double integral = 0;
+    for (sluice_index i = 0; i + 1 < n; i++) {
+        const int wet0 = S_(i) >= c, wet1 = S_(i + 1) >= c;
+        const double dy = Y_(i + 1) - Y_(i);
+        if (wet0 && wet1) {
+            integral += 0.5 * (F_(i) + F_(i + 1)) * dy;
+        } else if (wet0 || wet1) {
+            const sluice_index w = wet0 ? i : i + 1, d = wet0 ? i + 1 : i;
+            const double theta = (S_(w) - c) / (S_(w) - S_(d));
+            const double fw = F_(w), fd = S_(d) > 0 ? F_(d) : fw;
+            const double fc = fw + theta * (fd - fw);
+            integral += 0.5 * (fw + fc) * theta * dy;
+        }
+    }
+#undef S_
+#undef F_
+#undef Y_
+    return integral;
+}
+
+/* d, q, U, Fr (and M, P) of section k from its samples. */
 static void measure(const sg_state *s, sluice_index k, double *out)
 {
     const sluice_index a = s->first[k], n = s->first[k + 1] - a;
-    const double *sums = s->sums + 2 * (size_t)a;
+    const double *sums = s->sums + SUMS * (size_t)a;
     const sluice_real *p = s->points + 3 * (size_t)a;
     const double c = (double)s->threshold;
-#define S_(i) sums[2 * (size_t)(i)]
-#define U_(i) (S_(i) > 0 ? sums[2 * (size_t)(i) + 1] / S_(i) : NAN)
-#define Y_(i) ((double)p[3 * (size_t)(i) + 1])
-    const double eta = sluice_gauge_surface(n, sums, 2, p, 1, c);
+    const double eta = sluice_gauge_surface(n, sums, SUMS, p, 1, c);
     if (isnan(eta)) {
         out[0] = 0;
         out[1] = 0;
         out[2] = NAN;
         out[3] = NAN;
+        if (s->forces)
+            out[4] = out[5] = 0;
         return;
     }
-    /* trapezoid over the wet part; above eta nothing is wet by its definition */
-    double q = 0;
-    for (sluice_index i = 0; i + 1 < n; i++) {
-        const int wet0 = S_(i) >= c, wet1 = S_(i + 1) >= c;
-        const double dy = Y_(i + 1) - Y_(i);
-        if (wet0 && wet1) {
-            q += 0.5 * (U_(i) + U_(i + 1)) * dy;
-        } else if (wet0 || wet1) {
-            const sluice_index w = wet0 ? i : i + 1, d = wet0 ? i + 1 : i;
-            const double theta = (S_(w) - c) / (S_(w) - S_(d));
-            const double uw = U_(w), ud = S_(d) > 0 ? U_(d) : uw;
-            const double uc = uw + theta * (ud - uw);
-            q += 0.5 * (uw + uc) * theta * dy;
-        }
-    }
-#undef S_
-#undef U_
-#undef Y_
+    const double q = wet_integral(sums, p, n, c, 1);
     const double depth = eta - (double)s->bed[k];
     const double U = depth > 0 ? q / depth : NAN;
     out[0] = depth;
     out[1] = q;
     out[2] = U;
     out[3] = depth > 0 ? fabs(U) / sqrt(s->g * depth) : NAN;
+    if (s->forces) {
+        out[4] = wet_integral(sums, p, n, c, 3);
+        out[5] = wet_integral(sums, p, n, c, 2);
+    }
 }
 
 static int sg_after_step(void *state, sluice_host *host)
@@ -356,13 +429,13 @@ static int sg_after_step(void *state, sluice_host *host)
         return SLUICE_ERROR;
     /* across ranks each rank summed its own particles: add the ranks' sums
      * (collective; the identity on one rank) before any division */
-    if (api->reduce(host, s->sums, 2 * total, SLUICE_REDUCE_SUM) != SLUICE_OK)
+    if (api->reduce(host, s->sums, (uint32_t)(SUMS * total), SLUICE_REDUCE_SUM) != SLUICE_OK)
         return SLUICE_ERROR;
     v = api->view(host);
     s->row[0] = v->time;
     for (sluice_index k = 0; k < s->sections; k++)
-        measure(s, k, s->row + 1 + 4 * (size_t)k);
-    if (api->table_row(s->table, s->row, 4 * s->sections + 1) != SLUICE_OK)
+        measure(s, k, s->row + 1 + (size_t)s->columns * k);
+    if (api->table_row(s->table, s->row, s->columns * s->sections + 1) != SLUICE_OK)
         return SLUICE_ERROR;
     while ((double)s->written * (double)s->interval <= v->time + tolerance)
         s->written++;
@@ -386,7 +459,8 @@ static int sg_load(void *state, sluice_host *host)
 static const sluice_component components[] = {{
     .name = "section_gauge",
     .summary = "2D cross-sections: depth, discharge per unit width, mean velocity and Froude "
-               "number (kernel-sum free surface, Shepard velocity), as a CSV time series",
+               "number (kernel-sum free surface, Shepard velocity), optionally momentum flux and "
+               "pressure force, as a CSV time series",
     .reference = "seed 000 (Jonsson et al. 2016) sequent depth at a section; seed 004 (De Padova "
                  "et al. 2017) Fr = V / sqrt(g y); DualSPHysics MeasureTool kernel sum",
     .dimensions = SLUICE_DIMS_2,
@@ -405,5 +479,6 @@ static const sluice_component components[] = {{
     .load_state = sg_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("section_gauge", "1.1.0", "2D section gauges: depth, discharge, Froude",
+SLUICE_DEFINE_LIBRARY("section_gauge", "1.2.0",
+                      "2D section gauges: depth, discharge, Froude, momentum function",
                       SLUICE_DIMS_2, components)
