@@ -1001,6 +1001,67 @@ START_TEST(cli)
         free(drop_run);
     }
 
+    /* momentum on a synthetic section table with forces: over [1, 3] s (rows
+     * every 1/128 s) the sines average to zero, so the means are the
+     * constants: section 0 (x = 0.5 m) d = 0.1 m, q = 0.05, M = 25, P = 49.05,
+     * S = 74.05 N/m and rho0 g d^2/2 = 998 x 9.81 x 0.01 / 2 = 48.9519 N/m
+     * with the scene's rest density; section 1 (x = 0.8 m, top 0.032 m) is
+     * wet to its top: S = 41 N/m, no hydrostatic figure. Without the M and P
+     * columns: refused, naming the setting. */
+    {
+        char *mrun = test_scratch("analysis-momentum");
+        ck_assert_ptr_nonnull(mrun);
+        ck_assert(asprintf(&path, "%s/scene.resolved.yaml", mrun) > 0);
+        FILE *scene = fopen(path, "w");
+        ck_assert_ptr_nonnull(scene);
+        fputs("dimensions: 2\nparticles:\n  rest_density: 998\nplugins:\n  section_gauge:\n"
+              "    positions: [0.5, 0.8]\n    bed_elevation: [0, 0]\n    top: [0.4, 0.032]\n"
+              "    forces: true\n",
+              scene);
+        fclose(scene);
+        free(path);
+        for (int with_forces = 1; with_forces >= 0; with_forces--) {
+            ck_assert(asprintf(&path, "%s/sections.csv", mrun) > 0);
+            FILE *t = fopen(path, "w");
+            ck_assert_ptr_nonnull(t);
+            fputs(with_forces ? "time,d_x0,q_x0,U_x0,Fr_x0,M_x0,P_x0,d_x1,q_x1,U_x1,Fr_x1,M_x1,P_x1\n"
+                              : "time,d_x0,q_x0,U_x0,Fr_x0,d_x1,q_x1,U_x1,Fr_x1\n",
+                  t);
+            for (int i = 0; i <= 512; i++) {
+                const double time = i / 128.0, s1 = sin(2 * M_PI * time), s2 = sin(4 * M_PI * time);
+                if (with_forces)
+                    fprintf(t, "%.17g,%.17g,0.05,0.5,0.5,%.17g,%.17g,0.032,0,0,0,1,40\n", time,
+                            0.1 + 0.01 * s2, 25 + 2 * s1, 49.05 + 3 * s1);
+                else
+                    fprintf(t, "%.17g,%.17g,0.05,0.5,0.5,0.032,0,0,0\n", time, 0.1 + 0.01 * s2);
+            }
+            fclose(t);
+            free(path);
+            ck_assert(asprintf(&args, "momentum %s --from 1 --to 3 --no-plot", mrun) > 0);
+            status = analyze(mrun, args, &out, &err);
+            fprintf(stderr, "cli momentum (forces %d): exit %d\n%s%s", with_forces, status, out,
+                    err);
+            if (with_forces) {
+                ck_assert_int_eq(status, 0);
+                ck_assert_double_eq_tol(headline(out, "S_x0"), 74.05, 1e-9);
+                ck_assert_double_eq_tol(headline(out, "S_x1"), 41, 1e-9);
+                ck_assert_double_eq(headline(out, "rest_density"), 998);
+                ck_assert_ptr_nonnull(strstr(out, "0.5, 0, 0.1, 0.05, 25, 49.05, 74.05, 48.9519\n"));
+                ck_assert_ptr_nonnull(strstr(out, "0.8, 0, 0.032, 0, 1, 40, 41, nan (wet to its top"));
+            } else {
+                ck_assert_int_eq(status, 2);
+                ck_assert_ptr_nonnull(strstr(err, "forces: true"));
+            }
+            free(args);
+            free(out);
+            free(err);
+        }
+        ck_assert(asprintf(&args, "rm -rf '%s'", mrun) > 0);
+        ck_assert_int_eq(system(args), 0);
+        free(args);
+        free(mrun);
+    }
+
     /* bad input: one line on stderr naming the problem, exit 2 */
     static const struct {
         const char *args, *needle;

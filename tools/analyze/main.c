@@ -110,6 +110,8 @@ static const char usage[] =
     "  l2        RUN --reference REF.csv [--time]  free-surface L2 error, RMSE (seed 002)\n"
     "  classify  --y1 --yt --v1 --drop S           jump at an abrupt drop (momentum limits)\n"
     "  drop-type RUN --drop-x X [--drop S]         jump type at an abrupt drop from a run\n"
+    "  momentum  RUN                               mean momentum function M + P per section\n"
+    "                                              (section_gauge with forces: true)\n"
     "  step-profiles POINTS.csv --per-line N --edges x,y;x,y.. --theta DEG --dc DC --uc UC\n"
     "            [--first-step 1] [--threshold 0.05] [--h H] [--points x,y;..]\n"
     "                                              U/Uc, air concentration, Y90, inception\n"
@@ -2201,6 +2203,131 @@ done:
     return status;
 }
 
+/* The momentum function per section: the means over the window of d, q,
+ * the momentum flux M, the pressure force P and S = M + P from the columns
+ * of section_gauge with `forces: true` (N per metre of width), and, for a
+ * column not wet to its top, the hydrostatic force rho0 g d^2 / 2 of its
+ * mean depth (rho0 from particles.rest_density, default 1000; --g). A column
+ * wet to its top (a face) has none: its surface is not in it. */
+static int cmd_momentum(analyze_ctx *cx, const options *o)
+{
+    const char *run = run_dir(cx, o);
+    if (!run)
+        return -1;
+    run_data r;
+    if (run_open(cx, run, &r) != 0)
+        return -1;
+    int status = -1;
+    gauge_table g = {0};
+    double *xs = NULL, *beds = NULL, *tops = NULL, *column = NULL, *means = NULL;
+    char *dir = NULL, *path = NULL, *csv = NULL;
+    long nb = 0, nt = 0;
+    long n = gauge_positions(cx, o, &r, "section_gauge", &xs);
+    if (n < 0)
+        goto done;
+    if (r.scene) {
+        nb = analyze_scene_numbers(cx, r.scene, "section_gauge", "bed_elevation", &beds);
+        nt = analyze_scene_numbers(cx, r.scene, "section_gauge", "top", &tops);
+        if (nb < 0 || nt < 0)
+            goto done;
+    }
+    double rho0 = 1000;
+    if (r.scene)
+        analyze_scene_setting(r.scene, "particles", "rest_density", &rho0);
+    path = gauge_path(cx, &r, "section_gauge", "sections.csv");
+    if (!path || gauge_table_load(cx, o, path, &g) != 0)
+        goto done;
+    static const char *const names[5] = {"d", "q", "M", "P", "S"};
+    column = analyze_alloc(cx, g.table.rows, sizeof *column);
+    means = analyze_alloc(cx, 5 * (size_t)n, sizeof *means);
+    if (!column || !means)
+        goto done;
+    for (long k = 0; k < n; k++) {
+        long c[4];
+        for (int q = 0; q < 4; q++) {
+            char name[64];
+            snprintf(name, sizeof name, "%s_x%ld", names[q], k);
+            if (q >= 2 && analyze_table_find(&g.table, name) < 0) {
+                analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                             "%s has no column %s: run with plugins.section_gauge.forces: true",
+                             path, name);
+                goto done;
+            }
+            c[q] = analyze_table_column(cx, &g.table, name);
+            if (c[q] < 0)
+                goto done;
+        }
+        for (int q = 0; q < 5; q++) {
+            if (q < 4)
+                analyze_table_copy(&g.table, (size_t)c[q], column);
+            else
+                for (size_t i = 0; i < g.table.rows; i++)
+                    column[i] = g.table.data[i * g.table.cols + (size_t)c[2]] +
+                                g.table.data[i * g.table.cols + (size_t)c[3]];
+            double mean, std;
+            size_t used;
+            if (sluice_hyd_mean_std(column + g.first, g.last - g.first, &mean, &std, &used) != 0)
+                mean = NAN;
+            means[5 * k + q] = mean;
+        }
+    }
+    printf("source = %s\n", path);
+    print_window(&g);
+    headline("rest_density", rho0, "kg/m^3");
+    printf("# x (m), bed (m), d (m), q (m^2/s), M (N/m), P (N/m), S = M + P (N/m), "
+           "rho0 g d^2/2 (N/m)\n");
+    dir = out_dir(cx, o, run);
+    if (!dir)
+        goto done;
+    FILE *f = open_csv(cx, dir, "momentum.csv", &csv);
+    if (!f)
+        goto done;
+    fprintf(f, "x,bed,d,q,M,P,S,P_hydrostatic\n");
+    for (long k = 0; k < n; k++) {
+        const double bed = nb > 0 ? beds[nb == 1 ? 0 : k] : 0;
+        const double top = nt > 0 ? tops[nt == 1 ? 0 : k] : INFINITY;
+        const double *m = means + 5 * k;
+        /* a column wet to its top reads d = top - bed in every row */
+        const int to_top = fabs(m[0] - (top - bed)) <= 1e-9 * (1 + fabs(top));
+        const double hydrostatic = to_top ? NAN : rho0 * o->g * m[0] * m[0] / 2;
+        printf("%g, %g, %.6g, %.6g, %.6g, %.6g, %.6g, %.6g%s\n", xs[k], bed, m[0], m[1], m[2],
+               m[3], m[4], hydrostatic, to_top ? " (wet to its top: a face's force)" : "");
+        fprintf(f, "%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n", xs[k], bed, m[0], m[1],
+                m[2], m[3], m[4], hydrostatic);
+    }
+    for (long k = 0; k < n; k++) {
+        char name[64];
+        snprintf(name, sizeof name, "S_x%ld", k);
+        headline(name, means[5 * k + 4], "N/m");
+    }
+    if (close_csv(cx, f, csv) != 0)
+        goto done;
+    csv = NULL;
+    char body[1024];
+    snprintf(body, sizeof body,
+             "set xlabel 'x (m)'\nset ylabel 'N per m of width'\nset key left top\n"
+             "set title 'momentum function over [%g, %g] s'\n"
+             "plot 'momentum.csv' using 1:7 skip 1 with linespoints title 'S = M + P', "
+             "'' using 1:5 skip 1 with linespoints title 'M', "
+             "'' using 1:6 skip 1 with linespoints title 'P', "
+             "'' using 1:8 skip 1 with points title 'rho0 g d^2/2'\n",
+             g.time[g.first], g.time[g.last - 1]);
+    plot(cx, o, dir, "momentum", body);
+    status = 0;
+done:
+    gauge_table_free(&g);
+    analyze_scene_free(r.scene);
+    free(xs);
+    free(beds);
+    free(tops);
+    free(column);
+    free(means);
+    free(dir);
+    free(path);
+    free(csv);
+    return status;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -2236,7 +2363,7 @@ int main(int argc, char **argv)
         {"belanger", cmd_belanger}, {"conjugate", cmd_conjugate}, {"toe", cmd_toe},
         {"roller", cmd_roller},     {"vmax", cmd_vmax},           {"surface", cmd_surface},
         {"spectrum", cmd_spectrum}, {"correlate", cmd_correlate}, {"l2", cmd_l2},
-        {"classify", cmd_classify}, {"drop-type", cmd_drop_type},
+        {"classify", cmd_classify}, {"drop-type", cmd_drop_type}, {"momentum", cmd_momentum},
         {"step-profiles", cmd_step_profiles}, {"dissolved-oxygen", cmd_dissolved_oxygen},
     };
     int (*command)(analyze_ctx *, const options *) = NULL;
