@@ -32,6 +32,9 @@
  *    force P and momentum flux M exactly as the shear case predicts, and
  *    within the surface's bound of rho0 g d^2/2 and rho0 U0^2 d (with the
  *    compression); see section_momentum_and_pressure.
+ *  - Still water over an abrupt drop: the face column's P is the hydrostatic
+ *    force on the face's height within rho0 g s dx/2 (the surface's
+ *    bound); see section_face_force_at_rest.
  *  - vorticity: a uniform flow gives 0 to round-off; a rigid rotation
  *    v = Omega x (r - c) gives, at particles with a full support on the
  *    lattice, 2 m Omega with m the lattice second moment of the kernel,
@@ -599,6 +602,104 @@ START_TEST(section_momentum_and_pressure)
 }
 END_TEST
 
+/* Still water over an abrupt drop (seed 004's geometry, scaled: a step
+ * s = 0.04 m = 4 dx high, dbc walls, the lower bed starting inside the
+ * step as in the abrupt_drop scenes), surface about 0.14 m above the lower
+ * bed. A section column 1.5 dx in front of the face, from its foot to its
+ * crest, is wet to its top, so its P is the pressure force on the face's
+ * height; at rest it must be the hydrostatic rho0 g s (eta - s/2), eta the
+ * surface read by a full section 0.15 m downstream. Means over 0.25-0.5 s
+ * (the start's acoustic waves average out). Bound: the gauge locates eta
+ * within dx/2 of the water's top (free_surface_still_tank), which moves
+ * the hydrostatic force by rho0 g s dx/2; the full section's P against
+ * rho0 g d^2/2 within rho0 g d dx/2 likewise. */
+static const char *drop_still_scene =
+    "dimensions: 2\n"
+    "particles: {spacing: 0.01, smoothing_length_ratio: 1.5}\n"
+    "time: {end: 0.5}\n"
+    "domain: {min: [-0.1, -0.1], max: [0.7, 0.3]}\n"
+    "geometry:\n"
+    "  fluid:\n"
+    "    - {shape: box, min: [0, 0.04], max: [0.3, 0.14], lattice_origin: [0, 0.04]}\n"
+    "    - {shape: box, min: [0.3, 0], max: [0.6, 0.14]}\n"
+    "  walls:\n"
+    "    - {shape: polyline, points: [[0, 0.25], [0, 0.04], [0.3, 0.04], [0.3, 0]],\n"
+    "       lattice_origin: [0, 0.04]}\n"
+    "    - {shape: polyline, points: [[0.26, 0], [0.6, 0], [0.6, 0.25]]}\n"
+    "plugins:\n"
+    "  wendland_c2: {}\n"
+    "  linear_eos: {speed_of_sound: 30}\n"
+    "  continuity: {form: mass}\n"
+    "  pressure_gradient: {form: symmetric}\n"
+    "  artificial_viscosity: {alpha: 0.1}\n"
+    "  gravity: {}\n"
+    "  dbc: {}\n"
+    "  time_step: {courant: 0.2}\n"
+    "  predictor_corrector: {}\n"
+    "  section_gauge: {positions: [0.315, 0.45], bed_elevation: [0, 0], top: [0.04, 0.3], "
+    "forces: true, interval: 0.01}\n";
+
+START_TEST(section_face_force_at_rest)
+{
+    const double rho0 = 1000, g = 9.81, s = 0.04, dx = 0.01;
+    sluice_sim *sim = test_load("drop-still", drop_still_scene, NULL, 0);
+    char *dir = test_scratch("drop-still-out");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    while (sluice_sim_time(sim) < 0.5 - 1e-12)
+        ck_assert_int_eq(sluice_sim_step(sim), SLUICE_RUN_COMPLETE);
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    char *path = out_file(dir, "sections.csv");
+    FILE *f = fopen(path, "r");
+    ck_assert_ptr_nonnull(f);
+    char line[4096];
+    ck_assert_ptr_nonnull(fgets(line, sizeof line, f));
+    ck_assert_ptr_nonnull(strstr(line, "time,d_x0,q_x0,U_x0,Fr_x0,M_x0,P_x0,d_x1"));
+    double face = 0, depth = 0, full = 0, face_depth_min = 1, face_depth_max = 0;
+    int rows = 0;
+    while (fgets(line, sizeof line, f)) {
+        double v[13];
+        int n = 0;
+        char *p = line;
+        while (*p && n < 13) {
+            char *end;
+            v[n++] = strtod(p, &end);
+            p = *end == ',' ? end + 1 : end;
+        }
+        ck_assert_int_eq(n, 13);
+        if (v[0] < 0.25 - 1e-9)
+            continue;
+        face += v[6];
+        depth += v[7];
+        full += v[12];
+        face_depth_min = fmin(face_depth_min, v[1]);
+        face_depth_max = fmax(face_depth_max, v[1]);
+        rows++;
+    }
+    fclose(f);
+    ck_assert_int_ge(rows, 25);
+    face /= rows;
+    depth /= rows;
+    full /= rows;
+    const double hydrostatic = rho0 * g * s * (depth - s / 2);
+    fprintf(stderr, "still water over a %.2f m drop, means over 0.25-0.5 s (%d rows): surface "
+                    "%.5f m; face column P = %.4f N/m, rho0 g s (eta - s/2) = %.4f N/m (ratio "
+                    "%.4f, bound %.4f N/m); full section P = %.4f N/m, rho0 g d^2/2 = %.4f "
+                    "(bound %.4f)\n",
+            s, rows, depth, face, hydrostatic, face / hydrostatic, rho0 * g * s * dx / 2, full,
+            rho0 * g * depth * depth / 2, rho0 * g * depth * dx / 2);
+    /* the face column is wet to its top in every row */
+    ck_assert_msg(face_depth_min == s && face_depth_max == s, "face column depth %g .. %g",
+                  face_depth_min, face_depth_max);
+    ck_assert_msg(fabs(face - hydrostatic) <= rho0 * g * s * dx / 2, "face P = %.4f, %.4f", face,
+                  hydrostatic);
+    ck_assert_msg(fabs(full - rho0 * g * depth * depth / 2) <= rho0 * g * depth * dx / 2,
+                  "full section P = %.4f, %.4f", full, rho0 * g * depth * depth / 2);
+    free(path);
+    free(dir);
+    sluice_sim_free(sim);
+}
+END_TEST
+
 /* ------------------------------------------------------- vorticity -- */
 
 /* -sum over lattice offsets of V F(r) r_x^2: the kernel's second moment m
@@ -894,6 +995,7 @@ int main(void)
     tcase_add_test(c, section_uniform_flow);
     tcase_add_test(c, section_linear_shear);
     tcase_add_test(c, section_momentum_and_pressure);
+    tcase_add_test(c, section_face_force_at_rest);
     tcase_add_test(c, vorticity_rigid_rotation_2d);
     tcase_add_test(c, vorticity_rigid_rotation_3d);
     tcase_add_test(c, vorticity_renormalised);
