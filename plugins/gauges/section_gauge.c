@@ -45,9 +45,10 @@
  * the bed's friction and, at a drop, the face's force). With a column whose
  * `top` is below the surface (the column fully wet), P is the force on that
  * height: a section just in front of a step's face from its foot to its
- * crest gives the face's pressure force. The pressure is the one of the
- * step's last evaluation (the equation of state's field), as in the
- * output files. For a hydrostatic pressure and a uniform flow P = rho0 g
+ * crest gives the face's pressure force. With forces the gauge brings the
+ * equation of state to the current state first (one evaluation per row,
+ * as point_gauge), so the pressure is the sampled state's, also at t = 0.
+ * For a hydrostatic pressure and a uniform flow P = rho0 g
  * d^2 / 2 and M = rho0 U^2 d (test `section_momentum_and_pressure`).
  *
  * In a two-phase scene `phase: water` sums over the water only: the depth,
@@ -424,6 +425,10 @@ static int sg_after_step(void *state, sluice_host *host)
     if (v->time + tolerance < (double)s->written * (double)s->interval)
         return SLUICE_OK;
     const sluice_index total = s->first[s->sections];
+    /* with forces: the pressure of the current state (one evaluation, as
+     * point_gauge), not of the step's last stage */
+    if (s->forces && api->evaluate(host) != SLUICE_OK)
+        return SLUICE_ERROR;
     if (api->point_pass(host, s->points, total, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
                         section_sums, s) != SLUICE_OK)
         return SLUICE_ERROR;
