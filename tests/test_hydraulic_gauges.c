@@ -35,6 +35,9 @@
  *  - Still water over an abrupt drop: the face column's P is the hydrostatic
  *    force on the face's height within rho0 g s dx/2 (the surface's
  *    bound); see section_face_force_at_rest.
+ *  - wall_force: the still tank's bottom carries the water's weight and its
+ *    side rho0 g H^2/2 (t = 0), the drop's face the same force as the
+ *    section column; see wall_force_still_tank, section_face_force_at_rest.
  *  - vorticity: a uniform flow gives 0 to round-off; a rigid rotation
  *    v = Omega x (r - c) gives, at particles with a full support on the
  *    lattice, 2 m Omega with m the lattice second moment of the kernel,
@@ -622,7 +625,7 @@ static const char *drop_still_scene =
     "    - {shape: box, min: [0.3, 0], max: [0.6, 0.14]}\n"
     "  walls:\n"
     "    - {shape: polyline, points: [[0, 0.25], [0, 0.04], [0.3, 0.04], [0.3, 0]],\n"
-    "       lattice_origin: [0, 0.04]}\n"
+    "       lattice_origin: [0, 0.04], name: step}\n"
     "    - {shape: polyline, points: [[0.26, 0], [0.6, 0], [0.6, 0.25]]}\n"
     "plugins:\n"
     "  wendland_c2: {}\n"
@@ -635,7 +638,9 @@ static const char *drop_still_scene =
     "  time_step: {courant: 0.2}\n"
     "  predictor_corrector: {}\n"
     "  section_gauge: {positions: [0.315, 0.45], bed_elevation: [0, 0], top: [0.04, 0.3], "
-    "forces: true, interval: 0.01}\n";
+    "forces: true, interval: 0.01}\n"
+    "  wall_force: {walls: step, box_min: [0.29, 0.0005], box_max: [0.31, 0.0395], "
+    "interval: 0.01}\n";
 
 START_TEST(section_face_force_at_rest)
 {
@@ -693,8 +698,107 @@ START_TEST(section_face_force_at_rest)
     ck_assert_msg(fabs(full - rho0 * g * depth * depth / 2) <= rho0 * g * depth * dx / 2,
                   "full section P = %.4f, %.4f", full, rho0 * g * depth * depth / 2);
     free(path);
+    /* wall_force on the face (the part of wall 'step' in the box): the
+     * fluid pushes it in -x, by the same hydrostatic force within the same
+     * bound; the face is wet over its whole height 0.04 m */
+    path = out_file(dir, "wall_forces.csv");
+    f = fopen(path, "r");
+    ck_assert_ptr_nonnull(f);
+    ck_assert_ptr_nonnull(fgets(line, sizeof line, f));
+    ck_assert_str_eq(line, "time,Fx_step,Fy_step,wet_step\n");
+    double fx = 0, fy = 0, wet_min = 1, wet_max = 0;
+    int wall_rows = 0;
+    while (fgets(line, sizeof line, f)) {
+        double t, a, b, w;
+        ck_assert_int_eq(sscanf(line, "%lf,%lf,%lf,%lf", &t, &a, &b, &w), 4);
+        if (t < 0.25 - 1e-9)
+            continue;
+        fx += a;
+        fy += b;
+        wet_min = fmin(wet_min, w);
+        wet_max = fmax(wet_max, w);
+        wall_rows++;
+    }
+    fclose(f);
+    ck_assert_int_eq(wall_rows, rows);
+    fx /= wall_rows;
+    fy /= wall_rows;
+    fprintf(stderr, "wall_force on the face: Fx = %.4f N/m (hydrostatic -%.4f, ratio %.4f), Fy = "
+                    "%.3g, wet %.4f .. %.4f m\n",
+            fx, hydrostatic, -fx / hydrostatic, fy, wet_min, wet_max);
+    ck_assert_msg(fabs(-fx - hydrostatic) <= rho0 * g * s * dx / 2, "Fx = %.4f, %.4f", fx,
+                  hydrostatic);
+    ck_assert_msg(fabs(fy) <= 1e-9 * fabs(fx), "Fy = %g on a vertical face", fy);
+    ck_assert_msg(fabs(wet_min - s) <= 1e-12 && fabs(wet_max - s) <= 1e-12, "wet %g .. %g",
+                  wet_min, wet_max);
+    free(path);
     free(dir);
     sluice_sim_free(sim);
+}
+END_TEST
+
+/* wall_force on the still tank (dbc, 1 m wide, H = 0.5 m, dx = 0.02 m) at
+ * t = 0, the hydrostatic start (p_j = rho0 g (H - y_j) to 1e-9): on the
+ * whole tank Fx = 0 (the two sides cancel: the lattice and the tank are
+ * symmetric) and Fy = -rho0 g H L (the water's weight on the bottom); on the
+ * left side alone (a box) Fx = -rho0 g H^2/2. Bounds: the Shepard pressure
+ * is exact for p linear in y where the kernel support is whole in y; it is
+ * one-sided within 2h of the surface and of the bottom, where its bias is
+ * at most rho0 g h (the support's centroid moves by at most h), over a
+ * length of at most 2h at each end of a side: |dFx| <= 4 rho0 g h^2; along
+ * the bottom the sample points (offset dx) are in the one-sided band, so
+ * |dFy| <= rho0 g h L. The wet length of a side is H within 2h. */
+static const char *wall_force_tank_scene =
+    "dimensions: 2\n"
+    "particles: {spacing: 0.02, smoothing_length_ratio: 1.5}\n"
+    "time: {end: 0.01}\n"
+    "domain: {min: [-0.2, -0.2], max: [1.2, 1.0]}\n"
+    "geometry:\n"
+    "  fluid: [{shape: box, min: [0, 0], max: [1.0, 0.5]}]\n"
+    "  walls: [{shape: tank, min: [0, 0], max: [1.0, 0.8], name: tank}]\n"
+    "plugins:\n"
+    "  wendland_c2: {}\n"
+    "  tait: {speed_of_sound: 22.1}\n"
+    "  continuity: {}\n"
+    "  pressure_gradient: {}\n"
+    "  gravity: {}\n"
+    "  dbc: {}\n"
+    "  time_step: {}\n"
+    "  symplectic: {}\n"
+    "  wall_force: {%s}\n";
+
+START_TEST(wall_force_still_tank)
+{
+    const double rho0 = 1000, g = 9.81, H = 0.5, L = 1.0, h = 0.03;
+    for (int side = 0; side < 2; side++) {
+        char *yaml = NULL;
+        ck_assert(asprintf(&yaml, wall_force_tank_scene,
+                           side ? "walls: tank, box_min: [-0.1, -0.1], box_max: [0.001, 0.9]"
+                                : "walls: tank") > 0);
+        sluice_sim *sim = test_load(side ? "wf-side" : "wf-tank", yaml, NULL, 0);
+        free(yaml);
+        char *dir = sample_now(sim, side ? "wf-side-out" : "wf-tank-out");
+        char *path = out_file(dir, "wall_forces.csv");
+        double row[4];
+        ck_assert_int_eq(first_row(path, row, 4), 4);
+        fprintf(stderr, "wall_force, still tank at t = 0 (%s): Fx = %.4f N/m, Fy = %.4f N/m, wet "
+                        "%.4f m; rho0 g H^2/2 = %.4f, rho0 g H L = %.4f\n",
+                side ? "left side" : "whole tank", row[1], row[2], row[3],
+                rho0 * g * H * H / 2, rho0 * g * H * L);
+        if (side) {
+            ck_assert_msg(fabs(row[1] + rho0 * g * H * H / 2) <= 4 * rho0 * g * h * h,
+                          "Fx = %.4f", row[1]);
+            ck_assert_msg(row[2] == 0, "Fy = %g on a vertical side", row[2]);
+            ck_assert_msg(fabs(row[3] - H) <= 2 * h, "wet %g", row[3]);
+        } else {
+            ck_assert_msg(fabs(row[1]) <= 1e-9 * rho0 * g * H * H / 2, "Fx = %g", row[1]);
+            ck_assert_msg(fabs(row[2] + rho0 * g * H * L) <= rho0 * g * h * L, "Fy = %.4f",
+                          row[2]);
+        }
+        free(path);
+        free(dir);
+        sluice_sim_free(sim);
+    }
 }
 END_TEST
 
@@ -973,6 +1077,20 @@ START_TEST(refusals)
     free(yaml);
     yaml = vortex_scene(3, "  gravity: {}\n  section_gauge: {positions: [0.1]}\n");
     expect_refusal("section-3d", yaml, "does not support 3D");
+    static const struct {
+        const char *tag, *settings, *message;
+    } wall_force_refusals[] = {
+        {"wf-name", "walls: 'tank, nosuch'", "no wall is named 'nosuch'"},
+        {"wf-box-empty", "box_min: [5, 5], box_max: [6, 6]", "no part of the measured walls"},
+        {"wf-box-order", "box_min: [0.5, 0], box_max: [0.2, 1]", "must exceed box_min"},
+        {"wf-empty-name", "walls: 'tank,,'", "empty name"},
+    };
+    for (size_t k = 0; k < sizeof wall_force_refusals / sizeof *wall_force_refusals; k++) {
+        char *scene = NULL;
+        ck_assert(asprintf(&scene, wall_force_tank_scene, wall_force_refusals[k].settings) > 0);
+        expect_refusal(wall_force_refusals[k].tag, scene, wall_force_refusals[k].message);
+        free(scene);
+    }
     free(yaml);
     yaml = vortex_scene(3, "  free_surface_gauge: {positions: [0.1]}\n");
     expect_refusal("fs-3d-lateral", yaml, "needs 'lateral' in 3D");
@@ -994,6 +1112,7 @@ int main(void)
     tcase_add_test(c, section_linear_shear);
     tcase_add_test(c, section_momentum_and_pressure);
     tcase_add_test(c, section_face_force_at_rest);
+    tcase_add_test(c, wall_force_still_tank);
     tcase_add_test(c, vorticity_rigid_rotation_2d);
     tcase_add_test(c, vorticity_rigid_rotation_3d);
     tcase_add_test(c, vorticity_renormalised);
