@@ -1016,9 +1016,18 @@ START_TEST(cli)
         ck_assert_ptr_nonnull(scene);
         fputs("dimensions: 2\nparticles:\n  rest_density: 998\nplugins:\n  section_gauge:\n"
               "    positions: [0.5, 0.8]\n    bed_elevation: [0, 0]\n    top: [0.4, 0.032]\n"
-              "    forces: true\n",
+              "    forces: true\n  wall_force:\n    walls: step\n",
               scene);
         fclose(scene);
+        free(path);
+        /* the face's force: Fx = -30 + 5 sin(2 pi t) N/m, mean -30 over [1, 3] */
+        ck_assert(asprintf(&path, "%s/wall_forces.csv", mrun) > 0);
+        FILE *wf = fopen(path, "w");
+        ck_assert_ptr_nonnull(wf);
+        fputs("time,Fx_step,Fy_step,wet_step\n", wf);
+        for (int i = 0; i <= 512; i++)
+            fprintf(wf, "%.17g,%.17g,0,0.032\n", i / 128.0, -30 + 5 * sin(2 * M_PI * i / 128.0));
+        fclose(wf);
         free(path);
         for (int with_forces = 1; with_forces >= 0; with_forces--) {
             ck_assert(asprintf(&path, "%s/sections.csv", mrun) > 0);
@@ -1045,6 +1054,8 @@ START_TEST(cli)
                 ck_assert_int_eq(status, 0);
                 ck_assert_double_eq_tol(headline(out, "S_x0"), 74.05, 1e-9);
                 ck_assert_double_eq_tol(headline(out, "S_x1"), 41, 1e-9);
+                ck_assert_double_eq_tol(headline(out, "Fx_step"), -30, 1e-9);
+                ck_assert_double_eq_tol(headline(out, "Fy_step"), 0, 1e-12);
                 ck_assert_double_eq(headline(out, "rest_density"), 998);
                 ck_assert_ptr_nonnull(strstr(out, "0.5, 0, 0.1, 0.05, 25, 49.05, 74.05, 48.9519\n"));
                 ck_assert_ptr_nonnull(strstr(out, "0.8, 0, 0.032, 0, 1, 40, 41, nan (wet to its top"));

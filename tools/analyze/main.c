@@ -2300,6 +2300,36 @@ static int cmd_momentum(analyze_ctx *cx, const options *o)
         snprintf(name, sizeof name, "S_x%ld", k);
         headline(name, means[5 * k + 4], "N/m");
     }
+    /* the walls' forces over the same window, when the run has wall_force */
+    if (r.scene && analyze_scene_has(r.scene, "wall_force")) {
+        char *walls_path = gauge_path(cx, &r, "wall_force", "wall_forces.csv");
+        gauge_table w = {0};
+        if (!walls_path || gauge_table_load(cx, o, walls_path, &w) != 0) {
+            free(walls_path);
+            goto done;
+        }
+        double *values = analyze_alloc(cx, w.table.rows, sizeof *values);
+        if (!values) {
+            gauge_table_free(&w);
+            free(walls_path);
+            goto done;
+        }
+        printf("# wall forces (%s), means over the window\n", walls_path);
+        for (size_t c = 0; c < w.table.cols; c++) {
+            const char *name = w.table.names[c];
+            if (strncmp(name, "Fx_", 3) != 0 && strncmp(name, "Fy_", 3) != 0)
+                continue;
+            analyze_table_copy(&w.table, c, values);
+            double mean, std;
+            size_t used;
+            if (sluice_hyd_mean_std(values + w.first, w.last - w.first, &mean, &std, &used) != 0)
+                mean = NAN;
+            headline(name, mean, "N/m");
+        }
+        free(values);
+        gauge_table_free(&w);
+        free(walls_path);
+    }
     if (close_csv(cx, f, csv) != 0)
         goto done;
     csv = NULL;
