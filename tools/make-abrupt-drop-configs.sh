@@ -126,5 +126,17 @@ plugins:
     interval: 0.5
   hdf5:
     interval: 0.5
+
+variants:
+  controlled_tailwater:
+    description: "the layer's velocity adjusted (a tailgate) until the depth at x = 1.5 m, past the roller, is yt (with Vt imposed it settles 1-4 % above; docs/validation.md)"
+    set: {plugins.outlet.tailwater: controlled, plugins.outlet.control_position: 1.5}
+  ghost_walls:
+    description: "seed 004's walls: no-slip ghost particles (with wall_backstop), the continuity equation at the walls' rest velocity (Adami et al. 2012); the stream keeps a smooth bed's friction where dbc loses 23 % in 0.2 m (docs/validation.md)"
+    remove: [plugins.dbc]
+    set:
+      plugins.ghost_particles: {determinant_threshold: 0.1}
+      plugins.wall_backstop: {}
+      plugins.continuity.wall_velocity: rest
 EOF
 done
