@@ -407,12 +407,15 @@ END_TEST
 /* ------------------------------------------------- output across ranks -- */
 
 /* The dam break with what a user writes: snapshots (parallel HDF5 across
- * ranks), a front gauge and a point gauge (tables written by rank 0 from
- * reduced sums), and a checkpoint at t = 0.05 s (gathered on rank 0). */
+ * ranks), a front gauge, a point gauge, a section gauge with its forces and
+ * the tank's wall force (tables written by rank 0 from reduced sums), and a
+ * checkpoint at t = 0.05 s (gathered on rank 0). */
 static const char *output_plugins =
     "  front_gauge: {interval: 0.01, origin: 0.0}\n"
     "  point_gauge: {interval: 0.01, points: [[1.0, 0.1], [0.5, 0.5], [2.0, 0.05]], fields: "
     "\"pressure,velocity\"}\n"
+    "  section_gauge: {interval: 0.01, positions: [0.5, 1.5], forces: true}\n"
+    "  wall_force: {interval: 0.01, walls: tank}\n"
     "  hdf5: {interval: 0.05}\n";
 
 static char *output_scene(void)
@@ -637,11 +640,15 @@ START_TEST(output_as_one_rank)
         /* the restarts rewrite from the checkpoint's time on: t = 0.1 s and the end */
         ck_assert_int_eq(compare_snapshots(one, again, 0), 4);
         ck_assert_int_eq(compare_snapshots(one, alone, 0), 4);
-        int front_rows = 0, point_rows = 0;
+        int front_rows = 0, point_rows = 0, other_rows = 0;
         compare_table(one, across, "front.csv", &front_rows);
         compare_table(one, across, "points.csv", &point_rows);
         ck_assert_int_eq(front_rows, 13); /* t = 0, 0.01, ..., 0.12 s */
         ck_assert_int_eq(point_rows, 13);
+        compare_table(one, across, "sections.csv", &other_rows);
+        ck_assert_int_eq(other_rows, 13);
+        compare_table(one, across, "wall_forces.csv", &other_rows);
+        ck_assert_int_eq(other_rows, 13);
         for (int k = 0; k < 2; k++) {
             const char *restarted = k == 0 ? again : alone;
             compare_table(one, restarted, "front.csv", &front_rows);
