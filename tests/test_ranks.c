@@ -655,6 +655,10 @@ START_TEST(output_as_one_rank)
             compare_table(one, restarted, "points.csv", &point_rows);
             ck_assert_int_eq(front_rows, 13);
             ck_assert_int_eq(point_rows, 13);
+            compare_table(one, restarted, "sections.csv", &other_rows);
+            ck_assert_int_eq(other_rows, 13);
+            compare_table(one, restarted, "wall_forces.csv", &other_rows);
+            ck_assert_int_eq(other_rows, 13);
         }
         /* run.json: the counts of every rank */
         char path[600];
