@@ -2282,7 +2282,7 @@ static int cmd_momentum(analyze_ctx *cx, const options *o)
     FILE *f = open_csv(cx, dir, "momentum.csv", &csv);
     if (!f)
         goto done;
-    fprintf(f, "x,bed,d,q,M,P,S,P_hydrostatic\n");
+    fprintf(f, "x,bed,d,q,M,P,S,P_hydrostatic,face\n");
     for (long k = 0; k < n; k++) {
         const double bed = nb > 0 ? beds[nb == 1 ? 0 : k] : 0;
         const double top = nt > 0 ? tops[nt == 1 ? 0 : k] : INFINITY;
@@ -2292,8 +2292,8 @@ static int cmd_momentum(analyze_ctx *cx, const options *o)
         const double hydrostatic = to_top ? NAN : rho0 * o->g * m[0] * m[0] / 2;
         printf("%g, %g, %.6g, %.6g, %.6g, %.6g, %.6g, %.6g%s\n", xs[k], bed, m[0], m[1], m[2],
                m[3], m[4], hydrostatic, to_top ? " (wet to its top: a face's force)" : "");
-        fprintf(f, "%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n", xs[k], bed, m[0], m[1],
-                m[2], m[3], m[4], hydrostatic);
+        fprintf(f, "%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%d\n", xs[k], bed, m[0],
+                m[1], m[2], m[3], m[4], hydrostatic, to_top);
     }
     for (long k = 0; k < n; k++) {
         char name[64];
@@ -2337,10 +2337,14 @@ static int cmd_momentum(analyze_ctx *cx, const options *o)
     snprintf(body, sizeof body,
              "set xlabel 'x (m)'\nset ylabel 'N per m of width'\nset key left top\n"
              "set title 'momentum function over [%g, %g] s'\n"
-             "plot 'momentum.csv' using 1:7 skip 1 with linespoints title 'S = M + P', "
-             "'' using 1:5 skip 1 with linespoints title 'M', "
-             "'' using 1:6 skip 1 with linespoints title 'P', "
-             "'' using 1:8 skip 1 with points title 'rho0 g d^2/2'\n",
+             "set datafile separator ','\n"
+             "plot 'momentum.csv' using 1:($9 == 0 ? $7 : 1/0) skip 1 with linespoints "
+             "title 'S = M + P', "
+             "'' using 1:($9 == 0 ? $5 : 1/0) skip 1 with linespoints title 'M', "
+             "'' using 1:($9 == 0 ? $6 : 1/0) skip 1 with linespoints title 'P', "
+             "'' using 1:8 skip 1 with points title 'rho0 g d^2/2', "
+             "'' using 1:($9 == 1 ? $6 : 1/0) skip 1 with points pt 7 ps 1.5 "
+             "title 'P of a face column'\n",
              g.time[g.first], g.time[g.last - 1]);
     plot(cx, o, dir, "momentum", body);
     status = 0;
