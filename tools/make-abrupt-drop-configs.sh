@@ -12,6 +12,9 @@ xb=$(awk -v d=$dx 'BEGIN{printf "%.6g", (int(0.8/d+0.5)-4)*d}')
 top=$(awk -v a=$y1m 'BEGIN{printf "%.4f", 0.032+a}')
 fr=$(awk -v v=$v1 -v d=$y1m 'BEGIN{printf "%.2f", v/sqrt(9.81*d)}')
 lmax=$(awk -v a=$ytm 'BEGIN{printf "%.4f", 0.5*a}')
+xf=$(awk -v x=$xd -v d=$dx 'BEGIN{printf "%.6g", x+1.5*d}')
+xfa=$(awk -v x=$xd -v d=$dx 'BEGIN{printf "%.6g", x-d}')
+xfb=$(awk -v x=$xd -v d=$dx 'BEGIN{printf "%.6g", x+d}')
 cat > configs/abrupt_drop_$t.yaml <<EOF
 # Hydraulic jump at an abrupt drop: seed 004 (De Padova, Mossa & Sibilla
 # 2017), test $t (run $run of Mossa et al. 2003; tests/data/depadova2017_table1.csv):
@@ -113,9 +116,16 @@ plugins:
     positions: [0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5, 0.55, 0.6, 0.65, 0.7, 0.75,
                 0.8, 0.85, 0.9, 0.95, 1.0, 1.05, 1.1, 1.15, 1.2, 1.3, 1.4, 1.5, 1.6, 1.7, 1.8]
     interval: 0.02
-  section_gauge:
-    positions: [0.4, 0.7, 1.0, 1.2, 1.5, 1.8]
-    bed_elevation: [0.032, 0.032, 0, 0, 0, 0]
+  section_gauge:                # depth, discharge, Froude number and the momentum function
+    positions: [0.05, 0.4, 0.7, $xf, 1.0, 1.2, 1.5, 1.8]   # $xf: the face (1.5 dx in front of it, 0-0.032 m)
+    bed_elevation: [0.032, 0.032, 0.032, 0, 0, 0, 0, 0]
+    top: [0.4, 0.4, 0.4, 0.032, 0.4, 0.4, 0.4, 0.4]
+    forces: true
+    interval: 0.02
+  wall_force:                   # the fluid's force on the drop's face (sluice-analyze momentum)
+    walls: upper_bed_and_drop
+    box_min: [$xfa, 0.0005]
+    box_max: [$xfb, 0.0315]
     interval: 0.02
   point_gauge:                  # bed pressure downstream of the drop
     points: [[0.9, 0.01], [1.0, 0.01], [1.1, 0.01], [1.2, 0.01], [1.3, 0.01]]
