@@ -25,7 +25,8 @@
  * the sample points of one wall lie close to the other: where S falls below
  * min_kernel_sum that part is missed. Columns per selected wall: Fx_<name>,
  * Fy_<name> (N per metre of width), wet_<name> (the wet length, m); an
- * unnamed wall is wall<k>, k its index in the scene.
+ * unnamed wall is wall<k>, k its index in the scene, and a second wall of
+ * the same name <name><k>.
  *
  * The gauge evaluates the current state first (as point_gauge), so the
  * pressure is the sampled state's, at t = 0 too. 2D only (3D walls are
@@ -273,8 +274,14 @@ static int wf_initialise(void *state, sluice_host *host)
             const uint32_t slot = s->wall_count++;
             if (pass == 0) {
                 s->wall_index[slot] = w;
-                if (*name)
+                int repeated = 0;
+                for (uint32_t k = 0; k < slot; k++)
+                    repeated |= *name && strcmp(s->column_name[k], name) == 0;
+                if (*name && !repeated)
                     snprintf(s->column_name[slot], sizeof s->column_name[slot], "%s", name);
+                else if (*name)
+                    snprintf(s->column_name[slot], sizeof s->column_name[slot], "%.60s%u", name,
+                             w);
                 else
                     snprintf(s->column_name[slot], sizeof s->column_name[slot], "wall%u", w);
             }
