@@ -1015,7 +1015,8 @@ START_TEST(cli)
         FILE *scene = fopen(path, "w");
         ck_assert_ptr_nonnull(scene);
         fputs("dimensions: 2\nparticles:\n  rest_density: 998\nplugins:\n  section_gauge:\n"
-              "    positions: [0.5, 0.8]\n    bed_elevation: [0, 0]\n    top: [0.4, 0.032]\n"
+              "    positions: [0.5, 0.8, 1.2]\n    bed_elevation: [0, 0, 0]\n"
+              "    top: [0.4, 0.032, 0.4]\n"
               "    forces: true\n  wall_force:\n    walls: step\n",
               scene);
         fclose(scene);
@@ -1033,16 +1034,20 @@ START_TEST(cli)
             ck_assert(asprintf(&path, "%s/sections.csv", mrun) > 0);
             FILE *t = fopen(path, "w");
             ck_assert_ptr_nonnull(t);
-            fputs(with_forces ? "time,d_x0,q_x0,U_x0,Fr_x0,M_x0,P_x0,d_x1,q_x1,U_x1,Fr_x1,M_x1,P_x1\n"
-                              : "time,d_x0,q_x0,U_x0,Fr_x0,d_x1,q_x1,U_x1,Fr_x1\n",
+            fputs(with_forces ? "time,d_x0,q_x0,U_x0,Fr_x0,M_x0,P_x0,d_x1,q_x1,U_x1,Fr_x1,M_x1,"
+                                "P_x1,d_x2,q_x2,U_x2,Fr_x2,M_x2,P_x2\n"
+                              : "time,d_x0,q_x0,U_x0,Fr_x0,d_x1,q_x1,U_x1,Fr_x1,d_x2,q_x2,U_x2,"
+                                "Fr_x2\n",
                   t);
             for (int i = 0; i <= 512; i++) {
                 const double time = i / 128.0, s1 = sin(2 * M_PI * time), s2 = sin(4 * M_PI * time);
                 if (with_forces)
-                    fprintf(t, "%.17g,%.17g,0.05,0.5,0.5,%.17g,%.17g,0.032,0,0,0,1,40\n", time,
-                            0.1 + 0.01 * s2, 25 + 2 * s1, 49.05 + 3 * s1);
+                    fprintf(t, "%.17g,%.17g,0.05,0.5,0.5,%.17g,%.17g,0.032,0,0,0,1,40,0.15,0.05,"
+                               "0.33,0.27,16,110\n",
+                            time, 0.1 + 0.01 * s2, 25 + 2 * s1, 49.05 + 3 * s1);
                 else
-                    fprintf(t, "%.17g,%.17g,0.05,0.5,0.5,0.032,0,0,0\n", time, 0.1 + 0.01 * s2);
+                    fprintf(t, "%.17g,%.17g,0.05,0.5,0.5,0.032,0,0,0,0.15,0.05,0.33,0.27\n", time,
+                            0.1 + 0.01 * s2);
             }
             fclose(t);
             free(path);
@@ -1056,6 +1061,10 @@ START_TEST(cli)
                 ck_assert_double_eq_tol(headline(out, "S_x1"), 41, 1e-9);
                 ck_assert_double_eq_tol(headline(out, "Fx_step"), -30, 1e-9);
                 ck_assert_double_eq_tol(headline(out, "Fy_step"), 0, 1e-12);
+                /* the budget between the full sections 0 and 2 with the face's
+                 * force on the fluid, +30: 74.05 - 126 + 30 */
+                ck_assert_double_eq_tol(headline(out, "S_x2"), 126, 1e-9);
+                ck_assert_double_eq_tol(headline(out, "balance"), -21.95, 1e-9);
                 ck_assert_double_eq(headline(out, "rest_density"), 998);
                 ck_assert_ptr_nonnull(strstr(out, "0.5, 0, 0.1, 0.05, 25, 49.05, 74.05, 48.9519\n"));
                 ck_assert_ptr_nonnull(strstr(out, "0.8, 0, 0.032, 0, 1, 40, 41, nan (wet to its top"));

@@ -2283,6 +2283,7 @@ static int cmd_momentum(analyze_ctx *cx, const options *o)
     if (!f)
         goto done;
     fprintf(f, "x,bed,d,q,M,P,S,P_hydrostatic,face\n");
+    long first_full = -1, last_full = -1; /* sections not wet to their top */
     for (long k = 0; k < n; k++) {
         const double bed = nb > 0 ? beds[nb == 1 ? 0 : k] : 0;
         const double top = nt > 0 ? tops[nt == 1 ? 0 : k] : INFINITY;
@@ -2290,6 +2291,11 @@ static int cmd_momentum(analyze_ctx *cx, const options *o)
         /* a column wet to its top reads d = top - bed in every row */
         const int to_top = fabs(m[0] - (top - bed)) <= 1e-9 * (1 + fabs(top));
         const double hydrostatic = to_top ? NAN : rho0 * o->g * m[0] * m[0] / 2;
+        if (!to_top && !isnan(m[4])) {
+            if (first_full < 0)
+                first_full = k;
+            last_full = k;
+        }
         printf("%g, %g, %.6g, %.6g, %.6g, %.6g, %.6g, %.6g%s\n", xs[k], bed, m[0], m[1], m[2],
                m[3], m[4], hydrostatic, to_top ? " (wet to its top: a face's force)" : "");
         fprintf(f, "%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%d\n", xs[k], bed, m[0],
@@ -2301,6 +2307,8 @@ static int cmd_momentum(analyze_ctx *cx, const options *o)
         headline(name, means[5 * k + 4], "N/m");
     }
     /* the walls' forces over the same window, when the run has wall_force */
+    double walls_fx = 0;
+    int walls_measured = 0;
     if (r.scene && analyze_scene_has(r.scene, "wall_force")) {
         char *walls_path = gauge_path(cx, &r, "wall_force", "wall_forces.csv");
         gauge_table w = {0};
@@ -2325,10 +2333,24 @@ static int cmd_momentum(analyze_ctx *cx, const options *o)
             if (sluice_hyd_mean_std(values + w.first, w.last - w.first, &mean, &std, &used) != 0)
                 mean = NAN;
             headline(name, mean, "N/m");
+            if (name[1] == 'x') {
+                walls_fx += mean;
+                walls_measured++;
+            }
         }
         free(values);
         gauge_table_free(&w);
         free(walls_path);
+    }
+    /* the budget between the first and the last section that is not a
+     * face column: S in - S out + the measured walls' x-force on the fluid
+     * (-Fx), zero for a steady flow that no other force acts on */
+    if (first_full >= 0 && last_full > first_full) {
+        printf("# balance = S(x = %g) - S(x = %g) - sum of the measured walls' Fx (%d wall%s): "
+               "0 for a steady flow without friction or other forces\n",
+               xs[first_full], xs[last_full], walls_measured, walls_measured == 1 ? "" : "s");
+        headline("balance", means[5 * first_full + 4] - means[5 * last_full + 4] - walls_fx,
+                 "N/m");
     }
     if (close_csv(cx, f, csv) != 0)
         goto done;
