@@ -545,6 +545,15 @@ START_TEST(drop_limits_belanger)
     ck_assert_double_eq_tol(fb * fb - fa * fa, Y * S * (Y - 1 - S) / (Y - 1), 1e-12);
     ck_assert(fa < fb);
     ck_assert_int_eq(sluice_hyd_drop_limits(1.5, 0.9, &fa, &fb), -1);
+    /* the face's force the balance needs: the hydrostatic one under the
+     * tailwater at F_A (ratio 1), the one under the inflow's level at F_B */
+    double ratio;
+    ck_assert_int_eq(sluice_hyd_drop_face_ratio(fa, Y, S, &ratio), 0);
+    ck_assert_double_eq_tol(ratio, 1.0, 1e-12);
+    ck_assert_int_eq(sluice_hyd_drop_face_ratio(fb, Y, S, &ratio), 0);
+    ck_assert_double_eq_tol(ratio, ((1 + S) * (1 + S) - 1) / (Y * Y - (Y - S) * (Y - S)), 1e-12);
+    ck_assert_int_eq(sluice_hyd_drop_face_ratio(3.0, Y, 0.0, &ratio), -1);
+    ck_assert_int_eq(sluice_hyd_drop_face_ratio(3.0, 1.5, S, &ratio), -1);
 }
 END_TEST
 
@@ -949,6 +958,18 @@ START_TEST(cli)
     fprintf(stderr, "cli classify: exit %d\n%s%s", status, out, err);
     ck_assert_int_eq(status, 0);
     ck_assert_ptr_nonnull(strstr(out, "regime = wave-jump region"));
+    {
+        /* in the wave-jump region the face's needed force lies between the
+         * B limit's share and the hydrostatic one (it falls as F1 rises) */
+        const double Y = 0.1663 / 0.0351, S = 0.032 / 0.0351;
+        const double b_share = ((1 + S) * (1 + S) - 1) / (Y * Y - (Y - S) * (Y - S));
+        const double r = headline(out, "face_ratio");
+        fprintf(stderr, "cli classify T1: face_ratio %.4f, B limit %.4f\n", r, b_share);
+        ck_assert(r > b_share && r < 1);
+        ck_assert_double_eq_tol(headline(out, "face_force_needed"),
+                                r * headline(out, "face_force_hydrostatic"),
+                                1e-5 * headline(out, "face_force_hydrostatic"));
+    }
     ck_assert_double_eq_tol(headline(out, "F1"), sluice_hyd_froude(1.93, 0.0351, G), 5e-6 * 3.3);
     free(out);
     free(err);

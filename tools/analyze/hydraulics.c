@@ -519,6 +519,16 @@ int sluice_hyd_drop_limits(double Y, double S, double *fa, double *fb)
     return 0;
 }
 
+int sluice_hyd_drop_face_ratio(double F1, double Y, double S, double *ratio)
+{
+    if (!(S > 0.0) || !(Y > 1.0 + S))
+        return -1;
+    const double required = 2.0 * F1 * F1 * (1.0 / Y - 1.0) + Y * Y - 1.0;
+    const double hydrostatic = Y * Y - (Y - S) * (Y - S);
+    *ratio = required / hydrostatic;
+    return 0;
+}
+
 int sluice_hyd_drop_regime_of(double F1, double Y, double S, sluice_hyd_drop_regime *regime,
                               double *t)
 {

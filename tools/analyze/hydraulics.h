@@ -181,6 +181,15 @@ int sluice_hyd_roller_end(const double *x, const double *u, size_t n, double x1,
  * Y <= 1 + S (no tailwater above the step) or S < 0. */
 int sluice_hyd_drop_limits(double Y, double S, double *fa, double *fb);
 
+/* The force on the step face that the momentum balance between the inflow
+ * (y1, F1) and the tailwater (yt) needs, friction neglected, per unit width
+ * in units of rho g y1^2 / 2:  R = 2 F1^2 (1/Y - 1) + Y^2 - 1,  as a share
+ * of the hydrostatic force on the face under the tailwater level,
+ * H = Y^2 - (Y - S)^2:  *ratio = R / H (1 at F1 = F_A; ((1 + S)^2 - 1) / H
+ * at F_B). A run's measured face force (the wall_force plugin) compares
+ * with it. Returns -1 when S <= 0 or Y <= 1 + S. */
+int sluice_hyd_drop_face_ratio(double F1, double Y, double S, double *ratio);
+
 typedef enum sluice_hyd_drop_regime {
     SLUICE_HYD_DROP_A_JUMP = 0,   /* F1 <= F_A: the jump stays upstream of the drop */
     SLUICE_HYD_DROP_TRANSITION,   /* F_A < F1 < F_B: wave-jump region */

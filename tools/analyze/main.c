@@ -1533,6 +1533,16 @@ static int cmd_classify(analyze_ctx *cx, const options *o)
     headline("F_B", fb, NULL);
     headline("t", t, NULL);
     printf("regime = %s\n", names[regime]);
+    double face_ratio;
+    if (sluice_hyd_drop_face_ratio(fr1, Y, S, &face_ratio) == 0) {
+        /* the face's force the balance needs, and the hydrostatic one under
+         * the tailwater level, per metre of width with rho = 1000 kg/m^3 */
+        const double unit = 1000.0 * o->g * o->y1 * o->y1 / 2.0;
+        const double hydrostatic = unit * (Y * Y - (Y - S) * (Y - S));
+        headline("face_force_needed", face_ratio * hydrostatic, "N/m");
+        headline("face_force_hydrostatic", hydrostatic, "N/m");
+        headline("face_ratio", face_ratio, NULL);
+    }
     if (!o->out)
         return 0;
     if (analyze_mkdir(cx, o->out) != 0)
