@@ -307,24 +307,27 @@ END_TEST
 
 /* H = 0.2 m block at rest density, dx = 0.01 m, no walls: symmetric about
  * H/2; the section column [0, 0.3] at dy = dx/4 is too (H / dy = 80). */
+#define BLOCK_SCENE(eos, gauges)                                                                  \
+    "dimensions: 2\n"                                                                              \
+    "particles: {spacing: 0.01, smoothing_length_ratio: 1.5}\n"                                    \
+    "time: {end: 0.01}\n"                                                                          \
+    "domain: {min: [-0.1, -0.1], max: [0.7, 0.3]}\n"                                               \
+    "initial: {density: rest}\n"                                                                   \
+    "geometry:\n"                                                                                  \
+    "  fluid: [{shape: box, min: [0, 0], max: [0.6, 0.2]}]\n"                                      \
+    "plugins:\n"                                                                                   \
+    "  wendland_c2: {}\n"                                                                          \
+    "  " eos "\n"                                                                                  \
+    "  continuity: {}\n"                                                                           \
+    "  pressure_gradient: {}\n"                                                                    \
+    "  gravity: {}\n"                                                                              \
+    "  time_step: {}\n"                                                                            \
+    "  symplectic: {}\n" gauges
+
 static const char *block_scene =
-    "dimensions: 2\n"
-    "particles: {spacing: 0.01, smoothing_length_ratio: 1.5}\n"
-    "time: {end: 0.01}\n"
-    "domain: {min: [-0.1, -0.1], max: [0.7, 0.3]}\n"
-    "initial: {density: rest}\n"
-    "geometry:\n"
-    "  fluid: [{shape: box, min: [0, 0], max: [0.6, 0.2]}]\n"
-    "plugins:\n"
-    "  wendland_c2: {}\n"
-    "  tait: {speed_of_sound: 20}\n"
-    "  continuity: {}\n"
-    "  pressure_gradient: {}\n"
-    "  gravity: {}\n"
-    "  time_step: {}\n"
-    "  symplectic: {}\n"
-    "  free_surface_gauge: {positions: [0.3, 0.3025]}\n"
-    "  section_gauge: {positions: [0.3, 0.3025], bed_elevation: [0]}\n";
+    BLOCK_SCENE("tait: {speed_of_sound: 20}",
+                "  free_surface_gauge: {positions: [0.3, 0.3025]}\n"
+                "  section_gauge: {positions: [0.3, 0.3025], bed_elevation: [0]}\n");
 
 #define BLOCK_H 0.2
 #define BLOCK_DX 0.01
@@ -530,22 +533,8 @@ END_TEST
  * CSV's digits, and |M - U0^2 (rho0 d + rho0 g d^2 / (2 c^2))| <=
  * U0^2 (rho0 eps + rho0 g (H eps + eps^2/2) / c^2). */
 static const char *block_forces_scene =
-    "dimensions: 2\n"
-    "particles: {spacing: 0.01, smoothing_length_ratio: 1.5}\n"
-    "time: {end: 0.01}\n"
-    "domain: {min: [-0.1, -0.1], max: [0.7, 0.3]}\n"
-    "initial: {density: rest}\n"
-    "geometry:\n"
-    "  fluid: [{shape: box, min: [0, 0], max: [0.6, 0.2]}]\n"
-    "plugins:\n"
-    "  wendland_c2: {}\n"
-    "  linear_eos: {speed_of_sound: 20, reference_pressure: 1000}\n"
-    "  continuity: {}\n"
-    "  pressure_gradient: {}\n"
-    "  gravity: {}\n"
-    "  time_step: {}\n"
-    "  symplectic: {}\n"
-    "  section_gauge: {positions: [0.3, 0.3025], bed_elevation: [0], forces: true}\n";
+    BLOCK_SCENE("linear_eos: {speed_of_sound: 20, reference_pressure: 1000}",
+                "  section_gauge: {positions: [0.3, 0.3025], bed_elevation: [0], forces: true}\n");
 
 START_TEST(section_momentum_and_pressure)
 {
