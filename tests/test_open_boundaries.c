@@ -243,6 +243,83 @@ START_TEST(backflow_leaves_through_the_inlet)
 }
 END_TEST
 
+/* With `backflow: hold` the same reverse flow is held on the plane: a
+ * discharge-controlled feed takes nothing back. The channel of the test
+ * above (water at -0.4 m/s against an inflow of 0.1 m/s, dx = 0.02 m,
+ * d = 0.1 m: five rows), with a gate over the inflow as over a reservoir's
+ * feed, runs 0.3 s with the Verlet integrator (whose stored v^(n-1) the hold
+ * sets too). After every step no fluid lies upstream of
+ * the plane within the section; the inlet's mass_total is whole columns of
+ * five particles, V1 t / dx = 1.5 columns: one or two, never less (nothing
+ * left through the inlet, where the test above lost about 20 particles);
+ * the particle count balances exactly. */
+START_TEST(backflow_held_on_the_inlet_plane)
+{
+    const double dx = 0.02, end = 0.3;
+    char *yaml = channel_scene(dx, 0.1, -0.4, 1.0, 20,
+                               "inlet: {form: buffer, position: 0, depth: 0.1, velocity: 0.1, "
+                               "interval: 0.05, backflow: hold}",
+                               "outlet: {position: 1.0}", end, 0.5);
+    char *integrator = strstr(yaml, "symplectic: {}");
+    ck_assert_ptr_nonnull(integrator);
+    memcpy(integrator, "verlet: {}    ", 14);
+    /* a gate over the inflow, as over a reservoir's feed: above the section
+     * the reverse flow would otherwise run back over the buffer and leave */
+    const char *bed = "name: bed}\n";
+    char *after_bed = strstr(yaml, bed);
+    ck_assert_ptr_nonnull(after_bed);
+    after_bed += strlen(bed);
+    const char *gate = "    - {shape: polyline, points: [[0, 0.4], [0, 0.1]], name: gate}\n";
+    ck_assert_uint_lt(strlen(yaml) + strlen(gate), 8192);
+    memmove(after_bed + strlen(gate), after_bed, strlen(after_bed) + 1);
+    memcpy(after_bed, gate, strlen(gate));
+    sluice_sim *sim = test_load("backflow-hold", yaml, NULL, 0);
+    free(yaml);
+    char *dir = test_scratch("backflow-hold-run");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    const section start = measure(sim, 0, 1.0);
+    uint64_t held_steps = 0;
+    while (sluice_sim_time(sim) < end - 1e-9) {
+        ck_assert_msg(sluice_sim_step(sim) == SLUICE_RUN_COMPLETE, "run stopped: %s",
+                      sluice_sim_failure(sim));
+        const sluice_view *v = sluice_sim_view(sim);
+        const sluice_real *u = test_column(sim, "velocity", 0);
+        int on_plane = 0;
+        for (sluice_index i = 0; i < v->count; i++) {
+            if (v->kind[i] != SLUICE_KIND_FLUID)
+                continue;
+            ck_assert_msg(v->position[0][i] >= (v->position[1][i] < 0.1 ? 0 : -dx / 2),
+                          "fluid particle at (%g, %g) m, upstream of the inlet plane",
+                          (double)v->position[0][i], (double)v->position[1][i]);
+            if (v->position[0][i] == 0 && v->position[1][i] < 0.1) {
+                ck_assert_msg(fabs(u[i] - 0.1) < 1e-12, "held particle at %g m/s", (double)u[i]);
+                on_plane = 1;
+            }
+        }
+        held_steps += (uint64_t)on_plane;
+    }
+    const section final = measure(sim, 0, 1.0);
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    char path[4096];
+    snprintf(path, sizeof path, "%s/inlet.csv", dir);
+    const double net_in = csv_last(path, 4) / (1000 * dx * dx);
+    snprintf(path, sizeof path, "%s/outlet.csv", dir);
+    const double out = csv_last(path, 4) / (1000 * dx * dx);
+    fprintf(stderr,
+            "backflow held on the inlet plane: fluid %u -> %u, net inflow %.6g particles, "
+            "outflow %.6g, steps with a particle held %llu\n",
+            start.fluid, final.fluid, net_in, out, (unsigned long long)held_steps);
+    ck_assert_msg(held_steps > 0, "the reverse flow never reached the plane: nothing tested");
+    ck_assert_msg(fabs(net_in - nearbyint(net_in)) < 1e-6, "net inflow %g particles", net_in);
+    ck_assert_msg(nearbyint(net_in) == 5 || nearbyint(net_in) == 10,
+                  "net inflow %g particles, not one or two columns of five", net_in);
+    ck_assert_int_eq((long long)final.fluid,
+                     (long long)start.fluid + llround(net_in) - llround(out));
+    sluice_sim_free(sim);
+    free(dir);
+}
+END_TEST
+
 /* A submerged inflow: an inlet 0.1 m deep under a gate, with 0.2 m of water
  * standing above its top (submergence), feeding a tank 0.3 m deep. The
  * lattice has the Tait density of the full depth, rho0 (1 + rho0 g (0.3 - y)
@@ -357,6 +434,8 @@ START_TEST(bad_input_refused)
             "outlet: {position: 1}", 1, "exactly one of 'velocity'");
     refused("inlet: {position: 0, depth: 0.1}", "outlet: {position: 1}", 1,
             "exactly one of 'velocity'");
+    refused("inlet: {position: 0, depth: 0.1, velocity: 0.5, backflow: return}",
+            "outlet: {position: 1}", 1, "expected one of: leave, hold");
     refused("inlet: {position: 0.5, depth: 0.1, velocity: 0.5}", "outlet: {position: 0.2}", 1,
             "downstream of the inlet");
     refused("inlet: {form: block, position: 0, depth: 0.1, velocity: 0.5}",
@@ -1352,6 +1431,7 @@ int main(void)
     tcase_add_test(uniform, uniform_supercritical_block_frozen);
     tcase_add_test(uniform, uniform_supercritical_free);
     tcase_add_test(uniform, backflow_leaves_through_the_inlet);
+    tcase_add_test(uniform, backflow_held_on_the_inlet_plane);
     tcase_add_test(uniform, submerged_inlet_density);
     tcase_add_test(uniform, controlled_tailwater);
     suite_add_tcase(s, uniform);

@@ -16,10 +16,15 @@
  * submerged under a gate (a reservoir fed below its surface) and the
  * hydrostatic density is that of depth d1 + s. A particle that passes x = position
  * becomes fluid with that state. Fluid that flows back upstream across the
- * plane within the inflow's section (below its top row's top; a reservoir's
- * sloshing) is removed: it leaves through the inlet, a negative mass flux in
- * inlet.csv. Above the section it is removed once dx/2 upstream of the
- * plane (less is fluid touching a gate's face).
+ * plane within the inflow's section (below its top row's top) is removed:
+ * it leaves through the inlet, a negative mass flux in inlet.csv (an open
+ * channel's reverse flow). With `backflow: hold` it stays on the plane with
+ * the velocity V1 along x instead (and so does the integrator's stored
+ * v^(n-1)), so that a discharge-controlled feed delivers q whatever the
+ * water downstream does: a reservoir's sloshing is of the order of a
+ * submerged feed's slow V1 and, removed, took half of Cheng's q back.
+ * Above the section such fluid is removed once dx/2 upstream of the plane
+ * (less is fluid touching a gate's face).
  *   form buffer (seed 004, De Padova et al. 2017): the layer stays `width`
  *     long: a new column enters at its back every dx / V1.
  *   form block (seed 000, Jonsson et al. 2016): the whole inflow of the run
@@ -97,6 +102,7 @@
 enum { INLET_BUFFER = 0, INLET_BLOCK = 1 };
 enum { OUTLET_FREE = 0, OUTLET_FROZEN = 1, OUTLET_BUFFER = 2 };
 enum { TAILWATER_IMPOSED = 0, TAILWATER_CONTROLLED = 1 };
+enum { BACKFLOW_LEAVE = 0, BACKFLOW_HOLD = 1 };
 
 typedef struct boundary_config {
     int form;
@@ -106,6 +112,7 @@ typedef struct boundary_config {
     sluice_real interval;
     const char *file;
     sluice_real air_depth, submergence; /* inlet */
+    int backflow;                       /* inlet: BACKFLOW_* */
     int phase;             /* outlet: SLUICE_PHASE_* */
     sluice_real box_min[3], box_max[3]; /* air_vent */
     sluice_real response_time;          /* air_vent */
@@ -132,6 +139,10 @@ typedef struct boundary_state {
     int phase_filter;    /* outlet: the phase it treats (SLUICE_PHASE_*) */
     double air_depth;    /* inlet: depth of the air layer above the water */
     double submergence;  /* inlet: water standing above the inflow's top */
+    int backflow;        /* inlet: BACKFLOW_* */
+    int has_velocity_previous; /* the integrator's v^(n-1) (verlet), set with v when held: */
+    int velocity_previous_known; /* looked up at the first step (declared in bind) */
+    sluice_field velocity_previous_field;
     double rho_a, gamma_a, B, air_mass; /* rho0_a, gamma_a, Tait B, rho0_a dx^d */
     /* inlet lattice */
     uint32_t rows, lanes;   /* vertical rows of water, lateral lanes (3D) */
@@ -208,6 +219,13 @@ static const sluice_param_spec inlet_params[] = {
      "with k-epsilon: eps = c_mu^(3/4) k^(3/2) / (factor d1) (seed 004: 0.5)", NULL, 0},
     {"interval", SLUICE_PARAM_REAL, offsetof(boundary_config, interval), "0.05", 1e-6, 0,
      SLUICE_PARAM_HAS_MIN, "s", "time between flux rows", NULL, 0},
+    {"backflow", SLUICE_PARAM_ENUM, offsetof(boundary_config, backflow), "leave", 0, 0, 0, NULL,
+     "fluid flowing back upstream across the plane within the inflow's section. leave: it "
+     "leaves through the inlet, a negative flux (an open channel's reverse flow); hold: it "
+     "stays on the plane with the inflow velocity V1 along x, so the inlet delivers q whatever "
+     "the water downstream does (a discharge-controlled feed, such as the pump under a "
+     "reservoir, whose slow V1 the reservoir's sloshing would otherwise reverse)",
+     "leave|hold", 0},
     {"file", SLUICE_PARAM_STRING, offsetof(boundary_config, file), "inlet.csv", 0, 0, 0, NULL,
      "flux time series in the run directory", NULL, 0},
 };
@@ -321,6 +339,7 @@ static int boundary_create(const sluice_api *api, sluice_host *host, const void 
         }
         s->air_depth = c->air_depth;
         s->submergence = c->submergence;
+        s->backflow = c->backflow;
         if (s->submergence > 0 && s->air_depth > 0) {
             api->error(host, "give submergence (water above a gated inflow) or air_depth (air "
                              "above a free inflow), not both");
@@ -868,8 +887,26 @@ static int inlet_after_step(void *state, sluice_host *host)
              * lattice: it leaves through the inlet, a negative flux. Above
              * the section it leaves once dx/2 upstream: less is fluid
              * touching a gate's face, which dbc lets it do. */
-            if (!(v->position[s->vertical][i] < section_top) && !(x[i] < plane - half_dx))
+            const int in_section = v->position[s->vertical][i] < section_top;
+            if (!in_section && !(x[i] < plane - half_dx))
                 continue;
+            if (in_section && s->backflow == BACKFLOW_HOLD) {
+                if (!s->velocity_previous_known) {
+                    s->has_velocity_previous = sluice_util_optional_field(
+                        api, host, "velocity_previous", &s->velocity_previous_field);
+                    s->velocity_previous_known = 1;
+                }
+                /* a discharge-controlled feed takes nothing back: the
+                 * particle stays on the plane, moving at V1 (and so does
+                 * the integrator's v^(n-1), or the next leapfrog step
+                 * would bring the reversed velocity back) */
+                x[i] = plane;
+                sluice_real_column(v, s->velocity_field, 0)[i] = (sluice_real)s->velocity;
+                if (s->has_velocity_previous)
+                    sluice_real_column(v, s->velocity_previous_field, 0)[i] =
+                        (sluice_real)s->velocity;
+                continue;
+            }
             s->to_remove[returned++] = i;
             if (phase && phase[i])
                 continue;
@@ -1523,6 +1560,6 @@ static const sluice_component components[] = {
     },
 };
 
-SLUICE_DEFINE_LIBRARY("open_boundaries", "1.3.0",
+SLUICE_DEFINE_LIBRARY("open_boundaries", "1.4.0",
                       "inlets and outlets for channel flows, and an air vent", SLUICE_DIMS_ALL,
                       components)
