@@ -18,6 +18,17 @@
 #   FROM_CHANSON=4 FROM_CHENG=2 VARIANT= (e.g. no_cohesion, single_phase)
 #   OUT=runs/stepped-spillway-study THREADS= CHECKPOINT=0.5
 #   SETS="key=value ..." (extra --set overrides for both scenes)
+#   SPINUP=T: start the two-phase run from a single-phase spin-up instead
+#     of from rest (docs/validation.md, "Cheng at the seed's spacing from a
+#     single-phase spin-up"): the scene's single_phase variant runs T
+#     seconds (OUT/<scene>-spinup-1p), the two-phase scene 0.0002 s for a
+#     template checkpoint (OUT/<scene>-spinup-template), and
+#     tools/spinup-two-phase.py (python3-h5py, python3-yaml) makes the
+#     two-phase state: the single-phase water, the air everywhere else, and
+#     for Cheng the step cavities under the pseudo-bottom filled with water
+#     (WATER_BELOW="X0 Y0 X1 Y1", default the line through Cheng's first
+#     and last step edges; "" for none). The two-phase run's clock starts
+#     at the template's 0.0002 s, so FROM and END count from the switch.
 set -eu
 cd "$(dirname "$0")/.."
 build=${1:-build}
@@ -45,6 +56,24 @@ for scene in $scenes; do
     [ -n "${THREADS:-}" ] && set -- "$@" --threads "$THREADS"
     for s in ${SETS:-}; do set -- "$@" --set "$s"; done
     newest=$(ls "$dir"/checkpoint_*.h5 2>/dev/null | sort | tail -n 1 || true)
+    if [ -z "$newest" ] && [ -n "${SPINUP:-}" ]; then
+        one="$out/$scene-spinup-1p" template="$out/$scene-spinup-template"
+        [ "$scene" = cheng ] && below=${WATER_BELOW-0.7144 1.3213 1.7144 0.0013} ||
+            below=${WATER_BELOW:-}
+        "$build/sluice" run "$config" --variant single_phase --out "$one" \
+            --set particles.spacing="$dx" --set time.end="$SPINUP" --no-progress \
+            ${THREADS:+--threads "$THREADS"}
+        # the template: the same run as below, 0.0002 s long (later
+        # --set and --out override the earlier ones)
+        "$build/sluice" "$@" --set time.end=0.0002 --set checkpoint.interval=0.0002 \
+            --out "$template"
+        mkdir -p "$dir"
+        newest="$dir/spinup.h5"
+        # shellcheck disable=SC2086 # WATER_BELOW is four numbers
+        tools/spinup-two-phase.py "$(ls "$template"/checkpoint_*.h5 | sort | tail -n 1)" \
+            "$(ls "$one"/particles_0*.h5 | sort | tail -n 1)" "$template/particles_000000.h5" \
+            "$newest" "$dx" ${below:+--water-below $below}
+    fi
     [ -n "$newest" ] && set -- "$@" --restart "$newest"
     start=$(date +%s)
     "$build/sluice" "$@"
