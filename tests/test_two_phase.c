@@ -1188,6 +1188,100 @@ START_TEST(unresolved_bubble_leaves_after_its_lifetime)
 }
 END_TEST
 
+/* max_compression: the scene above, whose three air particles 0.095 m deep
+ * start at rho0_a; the water around them presses them toward their
+ * hydrostatic density rho0_a (1 + rho0 g 0.095 / B)^(1/1.4) = 1.0116 rho0_a
+ * (B = rho0 c0^2 / 7 = 57143 Pa) within a few steps (dx / c0_a = 4e-5 s),
+ * while the air above the water stays within 2e-5 of rho0_a. With c = 0.002
+ * the three leave within 0.005 s (less than the lifetime, 0.01 s), counted
+ * in particles_compressed_total and in the mass removed (3 rho0_a dx^2), and
+ * no other air does; with c = 0.05, above the compression the water can
+ * cause even with an overshoot of 100 %, none leaves. */
+static void run_compression(double c, long expected_removed)
+{
+    const double dx = 0.01, rho_a = 1.09, depth = 0.15 - 0.055;
+    char extra[160];
+    snprintf(extra, sizeof extra,
+             "  unresolved_bubbles: {lifetime: 0.01, check_every: 10, interval: 0.001, "
+             "max_compression: %g}\n",
+             c);
+    char *yaml = column_scene(1,
+                              "  two_phase: {speed_of_sound: 20, background_pressure: 2000,"
+                              " air_above: [[0, 0.15]], air_box_min: [[0.05, 0.05], [0.13, 0.05]],"
+                              " air_box_max: [[0.06, 0.06], [0.15, 0.06]]}\n",
+                              extra);
+    sluice_sim *sim = test_load("compressed-bubbles", yaml, NULL, 0);
+    char *dir = test_scratch("compressed-bubbles-run");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    const sluice_view *v = sluice_sim_view(sim);
+    const uint8_t *phase = phase_column(sim);
+    const sluice_real *rho = test_column(sim, "density", 0);
+    const double B = 1000.0 * 20 * 20 / 7, deep = rho_a * pow(1 + 1000 * 9.81 * depth / B, 1 / 1.4);
+    long air_start = 0, deep_count = 0;
+    for (sluice_index i = 0; i < v->count; i++) {
+        if (v->kind[i] != SLUICE_KIND_FLUID || !phase[i])
+            continue;
+        air_start++;
+        if (v->position[1][i] < 0.15) {
+            deep_count++;
+            ck_assert_msg(fabs(rho[i] - rho_a) < 1e-4 * rho_a, "deep air at %g kg/m^3 at the start",
+                          (double)rho[i]);
+        } else {
+            ck_assert_msg(fabs(rho[i] - rho_a) < 2e-5 * rho_a, "air above at %g kg/m^3",
+                          (double)rho[i]);
+        }
+    }
+    ck_assert_int_eq(deep_count, 3);
+    double densest = 0; /* the deep air's largest density while it is there */
+    while (sluice_sim_time(sim) < 0.005 - 1e-12) {
+        ck_assert_int_eq(sluice_sim_step(sim), SLUICE_RUN_COMPLETE);
+        v = sluice_sim_view(sim);
+        phase = phase_column(sim);
+        rho = test_column(sim, "density", 0);
+        for (sluice_index i = 0; i < v->count; i++)
+            if (v->kind[i] == SLUICE_KIND_FLUID && phase[i] && v->position[1][i] < 0.13)
+                densest = fmax(densest, (double)rho[i] / rho_a);
+    }
+    v = sluice_sim_view(sim);
+    phase = phase_column(sim);
+    long air_end = 0;
+    for (sluice_index i = 0; i < v->count; i++)
+        air_end += v->kind[i] == SLUICE_KIND_FLUID && phase[i];
+    ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
+    char *csv = NULL;
+    ck_assert_int_ge(asprintf(&csv, "%s/unresolved_bubbles.csv", dir), 0);
+    char *text = test_read_file(csv);
+    ck_assert_ptr_nonnull(text);
+    const char *last = text, *line = text;
+    while ((line = strchr(line, '\n')) && line[1])
+        last = ++line;
+    double row[7];
+    ck_assert_int_eq(sscanf(last, "%lf,%lf,%lf,%lf,%lf,%lf,%lf", &row[0], &row[1], &row[2],
+                            &row[3], &row[4], &row[5], &row[6]),
+                     7);
+    fprintf(stderr,
+            "max_compression %g: deep air hydrostatic at %.6g rho0_a, densest %.6g rho0_a "
+            "(after the step); air %ld -> %ld; table: %g compressed, %g kg/m removed\n",
+            c, deep / rho_a, densest, air_start, air_end, row[6], row[2]);
+    ck_assert_int_eq(air_end, air_start - expected_removed);
+    ck_assert_msg(densest <= 1 + c, "air at %g rho0_a stayed", densest);
+    ck_assert(row[6] == (double)expected_removed && row[4] == (double)expected_removed);
+    ck_assert_msg(fabs(row[2] - (double)expected_removed * rho_a * dx * dx) <= 1e-12 * rho_a * dx * dx,
+                  "mass removed %g", row[2]);
+    sluice_sim_free(sim);
+    free(text);
+    free(csv);
+    free(dir);
+    free(yaml);
+}
+
+START_TEST(compressed_air_leaves)
+{
+    run_compression(0.002, 3);
+    run_compression(0.05, 0);
+}
+END_TEST
+
 /* unresolved_bubbles without two_phase: refused, naming what to load. */
 START_TEST(unresolved_bubbles_need_two_phase)
 {
@@ -1233,6 +1327,7 @@ int main(void)
     TCase *bubbles = tcase_create("bubbles");
     tcase_set_timeout(bubbles, 300);
     tcase_add_test(bubbles, unresolved_bubble_leaves_after_its_lifetime);
+    tcase_add_test(bubbles, compressed_air_leaves);
     suite_add_tcase(s, bubbles);
     TCase *input = tcase_create("input");
     tcase_add_test(input, phase_survives_a_restart);
