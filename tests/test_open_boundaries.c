@@ -97,6 +97,17 @@ static double csv_last(const char *path, int col)
     return atof(p);
 }
 
+/* The inlet's net inflow and the outlet's outflow of a run (their tables'
+ * last mass_total), in particles of rho0 dx^2 with rho0 = 1000 kg/m^3 */
+static void particle_fluxes(const char *dir, double dx, double *net_in, double *out)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/inlet.csv", dir);
+    *net_in = csv_last(path, 4) / (1000 * dx * dx);
+    snprintf(path, sizeof path, "%s/outlet.csv", dir);
+    *out = csv_last(path, 4) / (1000 * dx * dx);
+}
+
 /* A uniform flow of depth d and velocity V held between an inlet and an
  * outlet for `end` seconds. Every 0.1 s the reach between them gives its
  * mean depth and discharge (measure()); over each second (the averaging a
@@ -225,11 +236,8 @@ START_TEST(backflow_leaves_through_the_inlet)
     }
     const section final = measure(sim, 0, 1.0);
     ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
-    char path[4096];
-    snprintf(path, sizeof path, "%s/inlet.csv", dir);
-    const double net_in = csv_last(path, 4) / (1000 * dx * dx);
-    snprintf(path, sizeof path, "%s/outlet.csv", dir);
-    const double out = csv_last(path, 4) / (1000 * dx * dx);
+    double net_in, out;
+    particle_fluxes(dir, dx, &net_in, &out);
     fprintf(stderr,
             "backflow through the inlet: fluid %u -> %u, net inflow %.6g particles, outflow "
             "%.6g\n",
@@ -300,11 +308,8 @@ START_TEST(backflow_held_on_the_inlet_plane)
     }
     const section final = measure(sim, 0, 1.0);
     ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
-    char path[4096];
-    snprintf(path, sizeof path, "%s/inlet.csv", dir);
-    const double net_in = csv_last(path, 4) / (1000 * dx * dx);
-    snprintf(path, sizeof path, "%s/outlet.csv", dir);
-    const double out = csv_last(path, 4) / (1000 * dx * dx);
+    double net_in, out;
+    particle_fluxes(dir, dx, &net_in, &out);
     fprintf(stderr,
             "backflow held on the inlet plane: fluid %u -> %u, net inflow %.6g particles, "
             "outflow %.6g, steps with a particle held %llu\n",

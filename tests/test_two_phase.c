@@ -1058,6 +1058,27 @@ static int find_id(const sluice_view *v, sluice_id id, sluice_index *at)
     return 0;
 }
 
+/* The last row of a run's unresolved_bubbles.csv: its first n columns */
+static void bubbles_last_row(const char *dir, double *row, int n)
+{
+    char *csv = NULL;
+    ck_assert_int_ge(asprintf(&csv, "%s/unresolved_bubbles.csv", dir), 0);
+    char *text = test_read_file(csv);
+    ck_assert_ptr_nonnull(text);
+    const char *last = text, *line = text;
+    while ((line = strchr(line, '\n')) && line[1])
+        last = ++line;
+    for (int k = 0; k < n; k++) {
+        char *end;
+        row[k] = strtod(last, &end);
+        ck_assert_msg(end != last && (k == n - 1 || *end == ','), "%s: column %d of the last row",
+                      csv, k);
+        last = end + 1;
+    }
+    free(text);
+    free(csv);
+}
+
 /* The lone particle leaves once its isolation time reaches the lifetime
  * (between the lifetime and the lifetime plus one check's span, 10 steps);
  * until then its isolation time is the time elapsed, to within a check's
@@ -1144,17 +1165,8 @@ START_TEST(unresolved_bubble_leaves_after_its_lifetime)
     ck_assert_msg(largest_lag <= span * (1 + 1e-9), "isolation time lags %g s", largest_lag);
     ck_assert_int_eq(air_end, air_start - 1);
     /* the table: one particle, its mass and volume */
-    char *csv = NULL;
-    ck_assert_int_ge(asprintf(&csv, "%s/unresolved_bubbles.csv", dir), 0);
-    char *text = test_read_file(csv);
-    ck_assert_ptr_nonnull(text);
-    const char *last = text, *line = text;
-    while ((line = strchr(line, '\n')) && line[1])
-        last = ++line;
     double row[6];
-    ck_assert_int_eq(sscanf(last, "%lf,%lf,%lf,%lf,%lf,%lf", &row[0], &row[1], &row[2], &row[3],
-                            &row[4], &row[5]),
-                     6);
+    bubbles_last_row(dir, row, 6);
     ck_assert_msg(fabs(row[2] - rho_a * dx * dx) < 1e-12 * rho_a * dx * dx, "mass %g", row[2]);
     ck_assert_msg(fabs(row[3] - dx * dx) < 1e-12 * dx * dx, "volume %g", row[3]);
     ck_assert(row[4] == 1);
@@ -1179,8 +1191,6 @@ START_TEST(unresolved_bubble_leaves_after_its_lifetime)
     ck_assert_int_eq(removed_again, removed_step);
     sluice_sim_free(again);
     sluice_sim_free(sim);
-    free(text);
-    free(csv);
     free(checkpoint);
     free(dir);
     free(dir2);
@@ -1248,17 +1258,8 @@ static void run_compression(double c, long expected_removed)
     for (sluice_index i = 0; i < v->count; i++)
         air_end += v->kind[i] == SLUICE_KIND_FLUID && phase[i];
     ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
-    char *csv = NULL;
-    ck_assert_int_ge(asprintf(&csv, "%s/unresolved_bubbles.csv", dir), 0);
-    char *text = test_read_file(csv);
-    ck_assert_ptr_nonnull(text);
-    const char *last = text, *line = text;
-    while ((line = strchr(line, '\n')) && line[1])
-        last = ++line;
     double row[7];
-    ck_assert_int_eq(sscanf(last, "%lf,%lf,%lf,%lf,%lf,%lf,%lf", &row[0], &row[1], &row[2],
-                            &row[3], &row[4], &row[5], &row[6]),
-                     7);
+    bubbles_last_row(dir, row, 7);
     fprintf(stderr,
             "max_compression %g: deep air hydrostatic at %.6g rho0_a, densest %.6g rho0_a "
             "(after the step); air %ld -> %ld; table: %g compressed, %g kg/m removed\n",
@@ -1269,8 +1270,6 @@ static void run_compression(double c, long expected_removed)
     ck_assert_msg(fabs(row[2] - (double)expected_removed * rho_a * dx * dx) <= 1e-12 * rho_a * dx * dx,
                   "mass removed %g", row[2]);
     sluice_sim_free(sim);
-    free(text);
-    free(csv);
     free(dir);
     free(yaml);
 }
