@@ -1438,8 +1438,13 @@ int main(void)
     tcase_add_test(uniform, backflow_leaves_through_the_inlet);
     tcase_add_test(uniform, backflow_held_on_the_inlet_plane);
     tcase_add_test(uniform, submerged_inlet_density);
-    tcase_add_test(uniform, controlled_tailwater);
     suite_add_tcase(s, uniform);
+    TCase *tailwater = tcase_create("tailwater_10s");
+    tcase_set_tags(tailwater, "validation"); /* 10 s of a channel: release pass only */
+    tcase_set_timeout(tailwater, 600);
+    tcase_add_test(tailwater, controlled_tailwater);
+    suite_add_tcase(s, tailwater);
+
     TCase *scenes = tcase_create("jump_scenes");
     tcase_set_timeout(scenes, 300);
     tcase_add_loop_test(scenes, jump_scenes_start, 0,

@@ -309,8 +309,12 @@ static Suite *spillway_suite(void)
     tcase_add_test(c, chanson_reduced);
     tcase_add_test(c, cheng_reduced);
     tcase_add_test(c, single_phase_variants);
-    tcase_add_test(c, cheng_source_scales_with_its_coefficient);
     suite_add_tcase(s, c);
+    TCase *source = tcase_create("reaeration_source");
+    tcase_set_tags(source, "validation"); /* two runs of the reduced Cheng scene: release only */
+    tcase_set_timeout(source, 600);
+    tcase_add_test(source, cheng_source_scales_with_its_coefficient);
+    suite_add_tcase(s, source);
     return s;
 }
 

@@ -1314,9 +1314,16 @@ int main(void)
     TCase *flow = tcase_create("flow");
     tcase_set_timeout(flow, 300);
     tcase_add_test(flow, still_two_layer_column);
-    tcase_add_test(flow, still_two_layer_column_with_delta_sph);
-    tcase_add_test(flow, dam_break_in_air);
     suite_add_tcase(s, flow);
+    /* the still column again with the phase-aware delta-SPH (which the
+     * spillway scenes' short runs also load), and the dam break in air and
+     * in vacuum to t sqrt(2g/a) = 2: each two runs of thousands of steps */
+    TCase *long_flow = tcase_create("flow_long");
+    tcase_set_tags(long_flow, "validation"); /* release pass only */
+    tcase_set_timeout(long_flow, 300);
+    tcase_add_test(long_flow, still_two_layer_column_with_delta_sph);
+    tcase_add_test(long_flow, dam_break_in_air);
+    suite_add_tcase(s, long_flow);
     TCase *cohesion = tcase_create("cohesion");
     tcase_add_test(cohesion, cohesion_against_brute_force);
     tcase_add_test(cohesion, cohesion_refusals);

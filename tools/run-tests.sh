@@ -41,7 +41,10 @@ meson test -C build --print-errorlogs --num-processes "$jobs"
 echo "== MPI build (build-mpi/, -Dmpi=enabled): runs across 1, 2 and 4 ranks, and the suite"
 [ -f build-mpi/build.ninja ] || meson setup build-mpi --buildtype=release -Dmpi=enabled
 meson compile -C build-mpi
-meson test -C build-mpi --print-errorlogs --num-processes "$jobs"
+# The runs across ranks in full; the rest of the suite (the same physics code
+# on one rank, built with MPI) without the long validations the release pass
+# has just asserted (Check tag `validation`, as in the sanitizer pass below).
+CK_EXCLUDE_TAGS=validation meson test -C build-mpi --print-errorlogs --num-processes "$jobs"
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build (build-asan/)"
 [ -f build-asan/build.ninja ] || meson setup build-asan --buildtype=debugoptimized \
