@@ -1,5 +1,6 @@
 /* XSPH transport-velocity corrections, between fluid particles. The term
- * writes transport_velocity_correction, du_i: the integrators move fluid
+ * adds to transport_velocity_correction, du_i (with transport_velocity's
+ * background-pressure term, if loaded): the integrators move fluid
  * particles with v_i + du_i, while the velocity field v itself is the
  * solution of the momentum equation and is left untouched.
  *
@@ -81,7 +82,7 @@ static const sluice_field_spec fields[] = {
     {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART,
      NULL, 0, "particle mass"},
     {"transport_velocity_correction", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
-     SLUICE_WRITE, 0, NULL, 0,
+     SLUICE_ACCUMULATE, 0, NULL, 0,
      "XSPH correction: fluid particles move with velocity + this"},
 };
 
@@ -188,10 +189,10 @@ static inline void xsph_pairs(const xsph_state *s, const sluice_view *v, const s
         /* velocity_smoothing: Shepard sum with the self term V_i W(0) > 0 */
         const sluice_real scale =
             smoothing ? coefficient / (mass[i] / rhoi * w0 + shepard) : coefficient;
-        ux[i] = scale * sx;
-        uy[i] = scale * sy;
+        ux[i] += scale * sx;
+        uy[i] += scale * sy;
         if (dims == 3)
-            uz[i] = scale * sz;
+            uz[i] += scale * sz;
     }
 }
 
@@ -242,5 +243,5 @@ static const sluice_component components[] = {{
     .pair = xsph_pair,
 }};
 
-SLUICE_DEFINE_LIBRARY("xsph", "1.2.0", "XSPH transport-velocity corrections", SLUICE_DIMS_ALL,
+SLUICE_DEFINE_LIBRARY("xsph", "1.3.0", "XSPH transport-velocity corrections", SLUICE_DIMS_ALL,
                       components)
