@@ -921,6 +921,20 @@ START_TEST(cohesion_refusals)
                            "  air_cohesion: {coefficient: 400, smoothing_length_ratio: 1}\n");
     test_load_refused("cohesion-pressure", yaml, "is not below the background pressure");
     free(yaml);
+    /* the transport velocity's p_b counts with the equation of state's:
+     * a rho0_a^2 = 475 Pa is below 400 + 100 Pa, not below 0 + 400 Pa */
+    yaml = box_scene("speed_of_sound: 28, background_pressure: 400, air_above: [[0, 0.1]]",
+                     "  air_cohesion: {coefficient: 400, smoothing_length_ratio: 1}\n"
+                     "  transport_velocity: {background_pressure: 100}\n");
+    sluice_sim *sim = test_load("cohesion-pressure-transport", yaml, NULL, 0);
+    sluice_sim_free(sim);
+    free(yaml);
+    yaml = box_scene("speed_of_sound: 28, background_pressure: 0, air_above: [[0, 0.1]]",
+                     "  air_cohesion: {coefficient: 400, smoothing_length_ratio: 1}\n"
+                     "  transport_velocity: {background_pressure: 400}\n");
+    test_load_refused("cohesion-pressure-transport-low", yaml,
+                      "is not below the background pressure");
+    free(yaml);
 }
 END_TEST
 

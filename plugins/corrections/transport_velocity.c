@@ -4,7 +4,9 @@
  *     v~_i = v_i + du_i,
  *     du_i = - dt (p_b / m_i) sum_j (V_i^2 + V_j^2) grad_i W_ij,
  * V = m / rho, over every neighbour (fluid, wall and open-boundary
- * particles), with dt the last step's size. The term writes du_i into
+ * particles), with dt the last step's size (recorded before each step: a
+ * one-evaluation integrator such as verlet evaluates before the core picks
+ * the new step; 0 at the first step, which is not shifted). The term writes du_i into
  * transport_velocity_correction, which the integrators add to the velocity
  * a particle is moved with; the momentum equation and the velocity field
  * are left as they are. On a regular lattice with a complete support the
@@ -25,6 +27,9 @@
  * rho0 c0^2 (Adami et al. take p_b = rho0 c0^2 with summation density and
  * a Courant number of 0.25).
  *
+ * Published constant: transport_background_pressure (p_b), which the air's
+ * cohesion (two_phase) counts with the equation of state's.
+ *
  * The sum is one-sided at a free surface, where it would push particles
  * out of the fluid: particles whose Shepard sum V_i W(0) + sum_j V_j W_ij
  * is below min_kernel_sum (a free surface, a splash; 1 inside the fluid)
@@ -41,6 +46,7 @@ typedef struct transport_config {
 typedef struct transport_state {
     const sluice_api *api;
     sluice_real background_pressure, min_kernel_sum;
+    double dt; /* the last step's size, recorded before each step */
     sluice_field density, mass, correction;
 } transport_state;
 
@@ -78,6 +84,13 @@ static int transport_create(const sluice_api *api, sluice_host *host, const void
     s->api = api;
     s->background_pressure = c->background_pressure;
     s->min_kernel_sum = c->min_kernel_sum;
+    /* published for the air's cohesion (two_phase), whose attraction the
+     * ordering has to outweigh */
+    if (api->publish_constant(host, "transport_background_pressure", &s->background_pressure, 1,
+                              "Pa") != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
     *state = s;
     return SLUICE_OK;
 }
@@ -100,6 +113,16 @@ static void transport_destroy(void *state)
     free(state);
 }
 
+/* Before a step the view still holds the last step's size (after a
+ * restart, the checkpoint's): during the step's first evaluation the core
+ * has not chosen the new one yet (it depends on the rates being evaluated). */
+static int transport_before_step(void *state, sluice_host *host)
+{
+    transport_state *s = state;
+    s->dt = s->api->view(host)->dt;
+    return SLUICE_OK;
+}
+
 static inline void transport_pairs(const transport_state *s, const sluice_view *v,
                                    const sluice_pair_batch *b, const uint32_t dims)
 {
@@ -114,7 +137,7 @@ static inline void transport_pairs(const transport_state *s, const sluice_view *
     sluice_real *restrict ux = sluice_real_column(v, s->correction, 0);
     sluice_real *restrict uy = sluice_real_column(v, s->correction, 1);
     sluice_real *restrict uz = dims == 3 ? sluice_real_column(v, s->correction, 2) : uy;
-    const sluice_real scale = (sluice_real)v->dt * s->background_pressure;
+    const sluice_real scale = (sluice_real)s->dt * s->background_pressure;
     const sluice_real w0 = b->kernel_self;
     for (sluice_index t = 0; t < b->target_count; t++) {
         const sluice_index i = b->target[t];
@@ -142,8 +165,8 @@ static inline void transport_pairs(const transport_state *s, const sluice_view *
 static void transport_pair(void *state, const sluice_view *v, const sluice_pair_batch *b)
 {
     const transport_state *s = state;
-    if (v->dt <= 0)
-        return; /* before the first step: no step size yet */
+    if (!(s->dt > 0))
+        return; /* the first step: no step size yet */
     if (v->dimensions == 3)
         transport_pairs(s, v, b, 3);
     else
@@ -169,6 +192,7 @@ static const sluice_component components[] = {{
     .destroy = transport_destroy,
     .bind = transport_bind,
     .pair = transport_pair,
+    .before_step = transport_before_step,
 }};
 
 SLUICE_DEFINE_LIBRARY("transport_velocity", "1.0.0",

@@ -591,12 +591,17 @@ static int cohesion_bind(void *state, sluice_host *host)
                          "'air_rest_density' and the background pressure: load two_phase");
         return SLUICE_ERROR;
     }
+    /* the transport velocity's background pressure orders the particles
+     * against the attraction as the equation of state's does (docs/physics.md) */
+    sluice_real transport = 0;
+    api->constant(host, "transport_background_pressure", &transport, 1);
+    background += transport;
     if (s->a > 0 && !(s->a * rho_a * rho_a < background)) {
         api->error(host,
                    "the cohesion pressure a rho0_a^2 = %g Pa is not below the background "
-                   "pressure p_b = %g Pa: the air's pressure p_b - a rho^2 would be negative "
-                   "(tensile instability); lower the coefficient below %g m^5 kg^-1 s^-2 or "
-                   "raise two_phase's background_pressure",
+                   "pressure p_b = %g Pa (two_phase's, plus transport_velocity's if loaded): "
+                   "the attraction would make the air clump (tensile instability); lower the "
+                   "coefficient below %g m^5 kg^-1 s^-2 or raise a background pressure",
                    (double)(s->a * rho_a * rho_a), (double)background,
                    (double)(background / (rho_a * rho_a)));
         return SLUICE_ERROR;
