@@ -1177,5 +1177,5 @@ static const sluice_component components[] = {
     },
 };
 
-SLUICE_DEFINE_LIBRARY("two_phase", "1.4.0", "air-water two-phase SPH: phases, equation of state, "
+SLUICE_DEFINE_LIBRARY("two_phase", "1.5.0", "air-water two-phase SPH: phases, equation of state, "
                       "cohesion of the air, unresolved bubbles", SLUICE_DIMS_ALL, components)
