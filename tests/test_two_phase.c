@@ -915,109 +915,6 @@ START_TEST(xsph_and_viscosity_within_each_phase)
 }
 END_TEST
 
-/* A copy of `text` with its first `from` replaced by `to`. */
-static __attribute__((noinline)) char *replace_once(const char *text, const char *from,
-                                                    const char *to)
-{
-    const char *found = strstr(text, from);
-    ck_assert_ptr_nonnull(found);
-    char *out = NULL;
-    ck_assert_int_ge(asprintf(&out, "%.*s%s%s", (int)(found - text), text, to,
-                              found + strlen(from)),
-                     0);
-    return out;
-}
-
-/* pressure_gradient's air_background_pressure p_a (two_phase's own p_b at
- * 0): on the still column the acceleration of every water particle is
- * bitwise that without it, and an air particle's differs by
- * -2 p_a sum_j m_j / (rho_i rho_j) grad_i W_ij over every neighbour (air,
- * water, wall), computed here by brute force, to round-off; the
- * difference is not zero (at the lid and the interface the sum does not
- * vanish). Refused without two_phase and with two_phase's p_b != 0. */
-START_TEST(air_background_pressure_on_the_air_only)
-{
-    const double pa = 3000;
-    const char *line = "  two_phase: {speed_of_sound: 20, background_pressure: 0,"
-                       " air_above: [[0, 0.15]]}\n";
-    char *yaml = column_scene(1, line, "");
-    const char *sets[] = {"plugins.pressure_gradient.air_background_pressure=3000"};
-    sluice_sim *plain = test_load("air-background-off", yaml, NULL, 0);
-    sluice_sim *with = test_load("air-background-on", yaml, sets, 1);
-    ck_assert_int_eq(sluice_sim_evaluate(plain), SLUICE_OK);
-    ck_assert_int_eq(sluice_sim_evaluate(with), SLUICE_OK);
-    const sluice_view *v = sluice_sim_view(with);
-    ck_assert_uint_eq(v->count, sluice_sim_view(plain)->count);
-    const uint8_t *phase = phase_column(with);
-    const sluice_real *ax0 = test_column(plain, "acceleration", 0);
-    const sluice_real *ay0 = test_column(plain, "acceleration", 1);
-    const sluice_real *ax1 = test_column(with, "acceleration", 0);
-    const sluice_real *ay1 = test_column(with, "acceleration", 1);
-    const sluice_real *mass = test_column(with, "mass", 0);
-    const sluice_real *rho = test_column(with, "density", 0);
-    const sluice_instance *kernel = &with->instances[with->kernel];
-    const double support = (double)with->support;
-    double worst = 0, largest = 0;
-    int air = 0, water = 0;
-    for (sluice_index i = 0; i < v->count; i++) {
-        ck_assert(v->position[0][i] == sluice_sim_view(plain)->position[0][i]);
-        if (v->kind[i] != SLUICE_KIND_FLUID)
-            continue;
-        if (!phase[i]) {
-            if (ax0[i] != ax1[i] || ay0[i] != ay1[i])
-                ck_abort_msg("water particle %u: acceleration changed by (%g, %g)", (unsigned)i,
-                             (double)(ax1[i] - ax0[i]), (double)(ay1[i] - ay0[i]));
-            water++;
-            continue;
-        }
-        double e[2] = {0, 0};
-        for (sluice_index j = 0; j < v->count; j++) {
-            const double dx = (double)v->position[0][i] - (double)v->position[0][j];
-            const double dy = (double)v->position[1][i] - (double)v->position[1][j];
-            const double r2 = dx * dx + dy * dy;
-            if (j == i || !(r2 < support * support))
-                continue;
-            sluice_real rr = (sluice_real)r2, r = 0, f = 0;
-            kernel->component->kernel(kernel->state, 1, &rr, &r, NULL, &f);
-            const double c = -2 * pa * (double)mass[j] / ((double)rho[i] * (double)rho[j]) * f;
-            e[0] += c * dx;
-            e[1] += c * dy;
-        }
-        const double d[2] = {(double)(ax1[i] - ax0[i]), (double)(ay1[i] - ay0[i])};
-        worst = fmax(worst, fmax(fabs(d[0] - e[0]), fabs(d[1] - e[1])));
-        largest = fmax(largest, hypot(e[0], e[1]));
-        air++;
-    }
-    /* the scale: 2 p_a / (rho_a h), of which the sums are O(1) fractions */
-    const double scale = 2 * pa / (1.09 * (double)v->smoothing_length);
-    fprintf(stderr,
-            "air_background_pressure %g Pa: %d water particles unchanged, %d air particles: "
-            "largest extra acceleration %.4g m/s^2 (scale 2 p_a / (rho_a h) = %.4g), brute force "
-            "to %.3g\n",
-            pa, water, air, largest, scale, worst);
-    ck_assert_int_gt(water, 0);
-    ck_assert_int_gt(air, 0);
-    /* lattice sums cancel to 1e-4 of the scale; the test needs some */
-    ck_assert_msg(largest > 1e-5 * scale, "no extra acceleration anywhere (%g)", largest);
-    ck_assert_msg(worst <= 1e-9 * scale, "differs from the brute-force sum by %g m/s^2", worst);
-    sluice_sim_free(plain);
-    sluice_sim_free(with);
-    free(yaml);
-    /* refused with two_phase's p_b = 100 Pa, and without two_phase */
-    for (int two = 1; two >= 0; two--) {
-        char *base = column_scene(two, NULL, "");
-        const char *from = "  pressure_gradient: {form: density_product}\n";
-        char *scene = replace_once(base, from,
-                                   "  pressure_gradient: {form: density_product, "
-                                   "air_background_pressure: 3000}\n");
-        test_load_refused(two ? "air-background-with-p_b" : "air-background-single-phase", scene,
-                          two ? "set two_phase's to 0" : "needs the field 'phase'");
-        free(scene);
-        free(base);
-    }
-}
-END_TEST
-
 START_TEST(cohesion_refusals)
 {
     char *yaml = box_scene("speed_of_sound: 28, background_pressure: 400, air_above: [[0, 0.1]]",
@@ -1444,7 +1341,6 @@ int main(void)
     TCase *cohesion = tcase_create("cohesion");
     tcase_add_test(cohesion, cohesion_against_brute_force);
     tcase_add_test(cohesion, cohesion_refusals);
-    tcase_add_test(cohesion, air_background_pressure_on_the_air_only);
     tcase_add_test(cohesion, cohesion_held_against_every_step);
     tcase_add_test(cohesion, xsph_and_viscosity_within_each_phase);
     suite_add_tcase(s, cohesion);

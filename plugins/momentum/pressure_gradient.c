@@ -6,31 +6,11 @@
  *      dv_i/dt += - sum_j m_j (p_i + p_j) / (rho_i rho_j) grad_i W_ij
  * Both are antisymmetric in i, j, so linear momentum is conserved exactly.
  * The kernel gradient is never renormalised here (seed 004).
- *
- * air_background_pressure p_a (two phases, with two_phase's own background
- * pressure at 0): the air feels absolute pressures, the water gauge ones.
- * For an air target i every pressure, its own and its neighbours' (air,
- * water, wall), is taken p + p_a:
- *      density_product: (p_i + p_j + 2 p_a) / (rho_i rho_j)
- *      symmetric: (p_i + p_a) / rho_i^2 + (p_j + p_a) / rho_j^2,
- * for a water target p itself. p_a keeps the air filling its box (at a gap
- * the air is pushed in by 2 p_a sum_j V_j grad W / rho_a, and its pressure
- * stays positive down to an expansion of 1 - (1 - p_a / B)^(1/gamma_a)),
- * without the force 2 p_b sum_j V_j grad W / rho_w that a background
- * pressure in the equation of state exerts on the water wherever its
- * particles are disordered (docs/validation.md: it brakes the chute's
- * water film). The pairs of an air and a water particle are then not
- * antisymmetric by 2 p_a V_i V_j grad W: summed over an interface this is
- * p_a times the interface's area, the atmosphere's push on the water,
- * which an incompressible water does not feel (in the gauge pressure it
- * is zero). Targets' phases only: no neighbour's phase is read.
- *
  * Targets fluid particles; wall particles act through their pressure (DBC). */
 #include "plugin_util.h"
 
 typedef struct pressure_config {
     int form;
-    sluice_real air_background_pressure;
 } pressure_config;
 
 enum { FORM_SYMMETRIC = 0, FORM_DENSITY_PRODUCT = 1 };
@@ -38,8 +18,7 @@ enum { FORM_SYMMETRIC = 0, FORM_DENSITY_PRODUCT = 1 };
 typedef struct pressure_state {
     const sluice_api *api;
     int form;
-    sluice_real air_background_pressure;
-    sluice_field pressure, density, mass, acceleration, phase;
+    sluice_field pressure, density, mass, acceleration;
 } pressure_state;
 
 static const sluice_param_spec params[] = {
@@ -47,12 +26,6 @@ static const sluice_param_spec params[] = {
      "symmetric: p_i/rho_i^2 + p_j/rho_j^2 (seeds 002, 004); density_product: "
      "(p_i + p_j)/(rho_i rho_j) (seed 000 eq. 17; two-phase flows, seed 001)",
      "symmetric|density_product", 0},
-    {"air_background_pressure", SLUICE_PARAM_REAL,
-     offsetof(pressure_config, air_background_pressure), "0", 0, 0, SLUICE_PARAM_HAS_MIN, "Pa",
-     "p_a added to every pressure an air particle feels (two_phase, whose own "
-     "background_pressure is then 0): keeps the air filling its box without a background "
-     "pressure acting on the water",
-     NULL, 0},
 };
 
 static const sluice_field_spec fields[] = {
@@ -77,7 +50,6 @@ static int pressure_create(const sluice_api *api, sluice_host *host, const void 
         return SLUICE_ERROR;
     s->api = api;
     s->form = c->form;
-    s->air_background_pressure = c->air_background_pressure;
     *state = s;
     return SLUICE_OK;
 }
@@ -93,24 +65,6 @@ static int pressure_bind(void *state, sluice_host *host)
     s->density = f[1];
     s->mass = f[2];
     s->acceleration = f[3];
-    if (s->air_background_pressure > 0) {
-        if (!sluice_util_optional_field(s->api, host, "phase", &s->phase) ||
-            s->phase.type != SLUICE_TYPE_UINT8 || s->phase.components != 1) {
-            s->api->error(host, "air_background_pressure needs the field 'phase' of the "
-                                "two_phase plugin; load two_phase or leave it at 0");
-            return SLUICE_ERROR;
-        }
-        sluice_real background = 0;
-        if (s->api->constant(host, "reference_pressure", &background, 1) == 1 &&
-            background != 0) {
-            s->api->error(host,
-                          "air_background_pressure = %g Pa with two_phase's background_pressure "
-                          "= %g Pa: the water would feel a background pressure again; set "
-                          "two_phase's to 0",
-                          (double)s->air_background_pressure, (double)background);
-            return SLUICE_ERROR;
-        }
-    }
     return SLUICE_OK;
 }
 
@@ -121,10 +75,8 @@ static void pressure_destroy(void *state)
 
 static inline void pressure_pairs(const pressure_state *s, const sluice_view *v,
                                   const sluice_pair_batch *b, const uint32_t dims,
-                                  const int product, const int phased)
+                                  const int product)
 {
-    const uint8_t *restrict phase = phased ? (const uint8_t *)v->columns[s->phase.column] : NULL;
-    const sluice_real pa = s->air_background_pressure;
     const sluice_real *restrict p = sluice_real_column(v, s->pressure, 0);
     const sluice_real *restrict rho = sluice_real_column(v, s->density, 0);
     const sluice_real *restrict pj = b->gathered[s->pressure.column];
@@ -138,17 +90,13 @@ static inline void pressure_pairs(const pressure_state *s, const sluice_view *v,
     sluice_real *restrict az = dims == 3 ? sluice_real_column(v, s->acceleration, 2) : ay;
     for (sluice_index t = 0; t < b->target_count; t++) {
         const sluice_index i = b->target[t];
-        /* p_a for an air target, on its own pressure and each neighbour's */
-        const sluice_real shift = phased && phase[i] ? pa : 0;
-        const sluice_real pi_term =
-            product ? p[i] + 2 * shift : (p[i] + shift) / (rho[i] * rho[i]);
+        const sluice_real pi_term = product ? p[i] : p[i] / (rho[i] * rho[i]);
         const sluice_real inverse_rhoi = 1 / rho[i];
         sluice_real sx = 0, sy = 0, sz = 0;
 
         for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
-            const sluice_real factor = product
-                                           ? (pi_term + pj[k]) * inverse_rhoi / rhoj[k]
-                                           : pi_term + (pj[k] + shift) / (rhoj[k] * rhoj[k]);
+            const sluice_real factor = product ? (pi_term + pj[k]) * inverse_rhoi / rhoj[k]
+                                               : pi_term + pj[k] / (rhoj[k] * rhoj[k]);
             sluice_real c = mj[k] * factor * F[k];
             sx += c * rx[k];
             sy += c * ry[k];
@@ -166,17 +114,10 @@ static void pressure_pair(void *state, const sluice_view *v, const sluice_pair_b
 {
     const pressure_state *s = state;
     const int product = s->form == FORM_DENSITY_PRODUCT;
-    if (s->air_background_pressure > 0) {
-        if (v->dimensions == 3)
-            product ? pressure_pairs(s, v, b, 3, 1, 1) : pressure_pairs(s, v, b, 3, 0, 1);
-        else
-            product ? pressure_pairs(s, v, b, 2, 1, 1) : pressure_pairs(s, v, b, 2, 0, 1);
-        return;
-    }
     if (v->dimensions == 3)
-        product ? pressure_pairs(s, v, b, 3, 1, 0) : pressure_pairs(s, v, b, 3, 0, 0);
+        product ? pressure_pairs(s, v, b, 3, 1) : pressure_pairs(s, v, b, 3, 0);
     else
-        product ? pressure_pairs(s, v, b, 2, 1, 0) : pressure_pairs(s, v, b, 2, 0, 0);
+        product ? pressure_pairs(s, v, b, 2, 1) : pressure_pairs(s, v, b, 2, 0);
 }
 
 static const sluice_component components[] = {{
@@ -198,5 +139,5 @@ static const sluice_component components[] = {{
     .pair = pressure_pair,
 }};
 
-SLUICE_DEFINE_LIBRARY("pressure_gradient", "1.2.0", "pressure gradient", SLUICE_DIMS_ALL,
+SLUICE_DEFINE_LIBRARY("pressure_gradient", "1.1.0", "pressure gradient", SLUICE_DIMS_ALL,
                       components)
