@@ -27,6 +27,14 @@
  * al. (2012) keep out of the continuity equation (on the abrupt drop's face
  * it compressed the fluid beside the wall; docs/validation.md). A batch
  * without wall neighbours takes the plain path.
+ * With transport_velocity (continuity 1.3.0) the velocities are those the
+ * particles move with, v + du (transport_velocity_correction: xsph,
+ * transport_velocity): the density then follows the particles' actual
+ * motion. Form mass is then exactly the time derivative of the summation
+ * density sum_j m_j W_ij along the particles' paths; without it a
+ * correction that moves particles apart or together (transport_velocity's
+ * shift does, by design) changes the space they fill but not their
+ * density. Not with renormalise.
  * Both forms vanish for a uniform velocity and are exact for the divergence
  * of a linear velocity field on a lattice (with renormalisation, on any
  * particle set). */
@@ -36,14 +44,15 @@ typedef struct continuity_config {
     int form;
     int renormalise;
     int wall_velocity;
+    int transport;
 } continuity_config;
 
 enum { FORM_MASS = 0, FORM_VOLUME = 1 };
 
 typedef struct continuity_state {
     const sluice_api *api;
-    int form, renormalise, rest_walls;
-    sluice_field velocity, mass, density, density_rate, correction;
+    int form, renormalise, rest_walls, transport;
+    sluice_field velocity, mass, density, density_rate, correction, shift;
 } continuity_state;
 
 static const sluice_param_spec params[] = {
@@ -60,6 +69,12 @@ static const sluice_param_spec params[] = {
      "particles' mirrored velocity); rest: with zero velocity, the fixed wall's own (Adami et "
      "al. 2012: no-slip ghost velocities belong in the viscous terms only)",
      "particle|rest", 0},
+    {"transport_velocity", SLUICE_PARAM_BOOL, offsetof(continuity_config, transport), "false", 0,
+     0, 0, NULL,
+     "use the velocity the particles move with, v + transport_velocity_correction (xsph, "
+     "transport_velocity), so that the density follows their actual motion; not with "
+     "renormalise",
+     NULL, 0},
 };
 
 static const sluice_field_spec fields[] = {
@@ -86,6 +101,23 @@ static int continuity_create(const sluice_api *api, sluice_host *host, const voi
     s->form = c->form;
     s->renormalise = c->renormalise;
     s->rest_walls = c->wall_velocity == 1;
+    s->transport = c->transport;
+    if (s->transport && s->renormalise) {
+        api->error(host, "transport_velocity and renormalise together are not implemented: "
+                         "choose one");
+        free(s);
+        return SLUICE_ERROR;
+    }
+    if (s->transport) {
+        const sluice_field_spec shift = {
+            "transport_velocity_correction", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
+            SLUICE_READ | SLUICE_READ_NEIGHBOUR, 0, NULL, 0,
+            "what the particles move with beyond their velocity"};
+        if (api->declare_field(host, &shift) != SLUICE_OK) {
+            free(s);
+            return SLUICE_ERROR;
+        }
+    }
     /* only what the chosen form reads is declared (and gathered) */
     if (s->form == FORM_VOLUME) {
         const sluice_field_spec density = {"density", SLUICE_TYPE_REAL, 1, "kg m^-3",
@@ -126,6 +158,9 @@ static int continuity_bind(void *state, sluice_host *host)
     s->density = f[2];
     s->density_rate = f[3];
     if (s->renormalise && s->api->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (s->transport && s->api->field(host, "transport_velocity_correction", &s->shift) !=
+                            SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;
 }
@@ -227,6 +262,23 @@ static inline void continuity_pairs(const continuity_state *s, const sluice_view
                 for (uint32_t c = 0; c < dims; c++)
                     sum += sluice_real_column(v, s->correction, a * dims + c)[i] * m[3 * a + c];
         }
+        if (s->transport) {
+            /* the shift's part of v_i - v_j (walls and open particles have
+             * none: the field is the fluid's) */
+            const sluice_real *du[3], *duj[3];
+            for (uint32_t d = 0; d < dims; d++) {
+                du[d] = sluice_real_column(v, s->shift, d);
+                duj[d] = b->gathered[s->shift.column + (int32_t)d];
+            }
+            const sluice_real dxi = du[0][i], dyi = du[1][i], dzi = dims == 3 ? du[2][i] : 0;
+            for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
+                const sluice_real weight = volume ? mj[k] / rhoj[k] * F[k] : mj[k] * F[k];
+                sluice_real dot = (dxi - duj[0][k]) * rx[k] + (dyi - duj[1][k]) * ry[k];
+                if (dims == 3)
+                    dot += (dzi - duj[2][k]) * rz[k];
+                sum += weight * dot;
+            }
+        }
         rate[i] += volume ? rho[i] * sum : sum;
     }
 #undef KEEP
@@ -269,4 +321,4 @@ static const sluice_component components[] = {{
     .pair = continuity_pair,
 }};
 
-SLUICE_DEFINE_LIBRARY("continuity", "1.2.0", "continuity equation", SLUICE_DIMS_ALL, components)
+SLUICE_DEFINE_LIBRARY("continuity", "1.3.0", "continuity equation", SLUICE_DIMS_ALL, components)
