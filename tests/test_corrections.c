@@ -438,18 +438,17 @@ END_TEST
 START_TEST(tv_sums_3d) { tv_sums(3); }
 END_TEST
 
-/* The spread of the Shepard sum sum_j V_j W_ij (1 on a regular lattice) */
-static double shepard_spread(sluice_sim *sim)
+/* sum_j w_j W_ij over every particle j of the periodic 0.8 m box, i
+ * included, by brute force: w = m (volume 0, the summation density) or
+ * V = m / rho (volume 1, the Shepard sum). */
+static void periodic_kernel_sums(sluice_sim *sim, int volume, double *out)
 {
     const sluice_view *v = sluice_sim_view(sim);
     const double box = 0.8, support = (double)sim->support;
     const sluice_real *mass = test_column(sim, "mass", 0), *rho = test_column(sim, "density", 0);
-    double sum = 0, sum2 = 0;
     for (sluice_index i = 0; i < v->count; i++) {
-        double s = (double)mass[i] / (double)rho[i] * kernel_wf(sim, 0, NULL);
+        double sum = 0;
         for (sluice_index j = 0; j < v->count; j++) {
-            if (j == i)
-                continue;
             double r2 = 0;
             for (uint32_t d = 0; d < 2; d++) {
                 double r = (double)v->position[d][i] - (double)v->position[d][j];
@@ -457,13 +456,33 @@ static double shepard_spread(sluice_sim *sim)
                 r2 += r * r;
             }
             if (r2 < support * support)
-                s += (double)mass[j] / (double)rho[j] * kernel_wf(sim, sqrt(r2), NULL);
+                sum += (double)mass[j] / (volume ? (double)rho[j] : 1) *
+                       kernel_wf(sim, sqrt(r2), NULL);
         }
-        sum += s;
-        sum2 += s * s;
+        out[i] = sum;
     }
-    const double mean = sum / v->count;
-    return sqrt(fmax(sum2 / v->count - mean * mean, 0));
+}
+
+static void summation_density(sluice_sim *sim, double *out)
+{
+    periodic_kernel_sums(sim, 0, out);
+}
+
+/* The spread of the Shepard sum sum_j V_j W_ij (1 on a regular lattice) */
+static double shepard_spread(sluice_sim *sim)
+{
+    const sluice_index n = sluice_sim_view(sim)->count;
+    double *shepard = malloc(n * sizeof *shepard);
+    ck_assert_ptr_nonnull(shepard);
+    periodic_kernel_sums(sim, 1, shepard);
+    double sum = 0, sum2 = 0;
+    for (sluice_index i = 0; i < n; i++) {
+        sum += shepard[i];
+        sum2 += shepard[i] * shepard[i];
+    }
+    free(shepard);
+    const double mean = sum / n;
+    return sqrt(fmax(sum2 / n - mean * mean, 0));
 }
 
 /* What the term is for: particles at rest on a disordered set (+-0.25 dx)
@@ -502,31 +521,6 @@ static void tv_relaxes(const char *integrator)
     for (sluice_index i = 0; i < v->count; i++)
         ck_assert(u[i] == 0 && w[i] == 0);
     sluice_sim_free(sim);
-}
-
-/* The summation density sum_j m_j W_ij (i included) of every particle of the
- * periodic 0.8 m box, by brute force. */
-static void summation_density(sluice_sim *sim, double *out)
-{
-    const sluice_view *v = sluice_sim_view(sim);
-    const double box = 0.8, support = (double)sim->support;
-    const sluice_real *mass = test_column(sim, "mass", 0);
-    for (sluice_index i = 0; i < v->count; i++) {
-        double sum = (double)mass[i] * kernel_wf(sim, 0, NULL);
-        for (sluice_index j = 0; j < v->count; j++) {
-            if (j == i)
-                continue;
-            double r2 = 0;
-            for (uint32_t d = 0; d < 2; d++) {
-                double r = (double)v->position[d][i] - (double)v->position[d][j];
-                r -= box * round(r / box);
-                r2 += r * r;
-            }
-            if (r2 < support * support)
-                sum += (double)mass[j] * kernel_wf(sim, sqrt(r2), NULL);
-        }
-        out[i] = sum;
-    }
 }
 
 /* continuity with transport_velocity: particles at rest moved by the

@@ -191,6 +191,13 @@ static inline void continuity_pairs(const continuity_state *s, const sluice_view
     sluice_real *restrict rate = sluice_real_column(v, s->density_rate, 0);
     const int open_pairs = (b->neighbour_kinds & SLUICE_KIND_MASK(SLUICE_KIND_OPEN)) != 0;
     const uint8_t *restrict kinds = b->neighbour_kind;
+    /* transport_velocity: the shift du at i and at the neighbours */
+    const sluice_real *du[3] = {NULL, NULL, NULL}, *duj[3] = {NULL, NULL, NULL};
+    if (s->transport)
+        for (uint32_t d = 0; d < dims; d++) {
+            du[d] = sluice_real_column(v, s->shift, d);
+            duj[d] = b->gathered[s->shift.column + (int32_t)d];
+        }
     /* rest_walls: a wall neighbour's velocity counts as zero (keep = 0) */
 #define KEEP(k) (rest_walls ? (sluice_real)(kinds[k] != SLUICE_KIND_WALL) : (sluice_real)1)
     for (sluice_index t = 0; t < b->target_count; t++) {
@@ -265,11 +272,6 @@ static inline void continuity_pairs(const continuity_state *s, const sluice_view
         if (s->transport) {
             /* the shift's part of v_i - v_j (walls and open particles have
              * none: the field is the fluid's) */
-            const sluice_real *du[3], *duj[3];
-            for (uint32_t d = 0; d < dims; d++) {
-                du[d] = sluice_real_column(v, s->shift, d);
-                duj[d] = b->gathered[s->shift.column + (int32_t)d];
-            }
             const sluice_real dxi = du[0][i], dyi = du[1][i], dzi = dims == 3 ? du[2][i] : 0;
             for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
                 const sluice_real weight = volume ? mj[k] / rhoj[k] * F[k] : mj[k] * F[k];
