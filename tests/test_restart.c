@@ -349,6 +349,34 @@ START_TEST(dam_break_restart_bit_identical)
                   "front.csv in a new directory: expected the header and the rows after t = %g s",
                   t_checkpoint);
     ck_assert_int_gt(test_count_lines(continued, ","), 3);
+    /* a directory that holds another run's front.csv (the same header,
+     * every digit of its rows changed, longer than the checkpointed table):
+     * it is started anew, not cut at the checkpoint's length in the middle
+     * of a row (the rows' bytes hash differently) */
+    {
+        char other_name[64];
+        snprintf(other_name, sizeof other_name, "restart-dam%d-other", _i);
+        char *other = test_scratch(other_name);
+        char *alien = strdup(whole);
+        ck_assert_ptr_nonnull(alien);
+        for (char *c = strchr(alien, '\n') + 1; *c; c++)
+            if (*c >= '0' && *c <= '8')
+                (*c)++;
+        test_write_file(other, "front.csv", alien);
+        sluice_sim *again = test_load(name[0], yaml, NULL, 0);
+        ck_assert_msg(sluice_sim_restart(again, checkpoint, error, sizeof error) == SLUICE_OK,
+                      "%s", error);
+        run_to_end(again, other);
+        char *third = read_or_fail(other, "front.csv");
+        ck_assert_msg(strcmp(expected, third) == 0,
+                      "front.csv over another run's: expected the header and the rows after "
+                      "t = %g s, got\n%s",
+                      t_checkpoint, third);
+        sluice_sim_free(again);
+        free(third);
+        free(alien);
+        free(other);
+    }
     /* the XDMF index of the new directory lists only its own snapshots */
     char *xdmf = read_or_fail(fresh, "particles.xdmf");
     ck_assert_int_eq(test_count_lines(xdmf, "particles_000000.h5"), 0);

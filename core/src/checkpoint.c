@@ -21,7 +21,9 @@
  *    from them, so the continuation rebuilds it exactly when the
  *    uninterrupted run does, and a checkpoint never perturbs the run;
  *    /core/table_bytes with attribute table_names: the length of every table
- *    (CSV) at the checkpoint;
+ *    (CSV) at the checkpoint; /core/table_hashes: the FNV-1a hash of those
+ *    bytes (a restart continues a table only if the file there starts with
+ *    them: another run's table in the directory is started anew);
  *  - /plugins/<component>/: the arrays a component stored with
  *    api->state_write in its save_state callback.
  *
@@ -385,7 +387,7 @@ static void write_state(sluice_sim *sim, hid_t file, ck_error *e)
         fail(e, "creating group 'core' failed");
     /* requests still ahead */
     double *ahead = malloc((sim->request_count + 1) * sizeof *ahead);
-    uint64_t *bytes = malloc((sim->table_count + 1) * sizeof *bytes);
+    uint64_t *bytes = malloc((2 * sim->table_count + 1) * sizeof *bytes);
     size_t names_size = 1;
     for (size_t t = 0; t < sim->table_count; t++)
         names_size += strlen(sim->tables[t]->path) + 1;
@@ -405,9 +407,12 @@ static void write_state(sluice_sim *sim, hid_t file, ck_error *e)
             const char *path = sim->tables[t]->path, *slash = strrchr(path, '/');
             p += sprintf(p, "%s\n", slash ? slash + 1 : path);
             bytes[t] = sim->tables[t]->bytes;
+            bytes[sim->table_count + t] = sim->tables[t]->hash;
         }
         row[0] = bytes;
         put_rows(group, "table_bytes", CK_UINT64, 1, 1, sim->table_count, row, e);
+        row[0] = bytes + sim->table_count;
+        put_rows(group, "table_hashes", CK_UINT64, 1, 1, sim->table_count, row, e);
         put_string(group, "table_names", names, e);
     }
     free(ahead);
@@ -1067,13 +1072,19 @@ static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
     if (requests < 0 || tables < 0)
         fail(e, "the requested times or the table lengths are missing");
     double *times = malloc(((size_t)(requests > 0 ? requests : 0) + 1) * sizeof *times);
-    uint64_t *bytes = malloc(((size_t)(tables > 0 ? tables : 0) + 1) * sizeof *bytes);
+    /* table_hashes (since the session-19 checkpoints) must match table_bytes */
+    int hashed = tables >= 0 && rows_length(group, "table_hashes", 1, 1) == tables;
+    uint64_t *bytes = malloc((2 * (size_t)(tables > 0 ? tables : 0) + 1) * sizeof *bytes);
     if (!e->text[0] && (!times || !bytes))
         fail(e, "out of memory");
     void *row[1] = {times};
     get_rows(group, "requests", CK_DOUBLE, 1, 1, (hsize_t)requests, row, e);
     row[0] = bytes;
     get_rows(group, "table_bytes", CK_UINT64, 1, 1, (hsize_t)tables, row, e);
+    if (hashed) {
+        row[0] = bytes + tables;
+        get_rows(group, "table_hashes", CK_UINT64, 1, 1, (hsize_t)tables, row, e);
+    }
     char *names = get_string(group, "table_names", e);
     if (!e->text[0]) {
         sim->request_count = 0;
@@ -1089,6 +1100,8 @@ static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
                     memcmp(table->path, p, len) == 0) {
                     table->resume = 1;
                     table->resume_bytes = bytes[t];
+                    table->resume_hashed = hashed;
+                    table->resume_hash = hashed ? bytes[tables + t] : 0;
                 }
             }
             p += len + (p[len] == '\n');

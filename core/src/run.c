@@ -81,24 +81,56 @@ static int write_all(int fd, const char *data, size_t size)
     return 0;
 }
 
+/* The FNV-1a hash of the file's first `bytes` bytes; 0 when it cannot be
+ * read. */
+static int file_hash(int fd, uint64_t bytes, uint64_t *hash)
+{
+    char buffer[65536];
+    uint64_t h = SLUICE_TABLE_HASH_START, offset = 0;
+    while (offset < bytes) {
+        size_t want = bytes - offset < sizeof buffer ? (size_t)(bytes - offset) : sizeof buffer;
+        ssize_t got = pread(fd, buffer, want, (off_t)offset);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got <= 0)
+            return 0;
+        h = sluice_table_hash_bytes(h, buffer, (size_t)got);
+        offset += (uint64_t)got;
+    }
+    *hash = h;
+    return 1;
+}
+
 /* A restarted run continues a table that is in the output directory (the
  * same directory as the checkpointed run) from its length at the checkpoint:
  * the rows written after the checkpoint (by the run that went on, or by
- * its finish) are cut off. Returns the open descriptor, or -1 when the file
- * is missing or shorter (then a new file with the header is started). */
+ * its finish) are cut off. The file must start with the checkpointed bytes
+ * (their hash, when the checkpoint has it): another run's table left in the
+ * directory is not cut in the middle of a row but started anew, with a
+ * note. Returns the open descriptor, or -1 when the file is missing, shorter
+ * or different (then a new file with the header is started). */
 static int resume_table(sluice_table *table)
 {
-    int fd = open(table->path, O_WRONLY | O_APPEND | O_CLOEXEC);
+    int fd = open(table->path, O_RDWR | O_APPEND | O_CLOEXEC);
     if (fd < 0)
         return -1;
     struct stat st;
-    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) ||
-        (uint64_t)st.st_size < table->resume_bytes ||
-        ftruncate(fd, (off_t)table->resume_bytes) != 0) {
+    uint64_t hash = 0;
+    int same = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) &&
+               (uint64_t)st.st_size >= table->resume_bytes &&
+               file_hash(fd, table->resume_bytes, &hash) &&
+               (!table->resume_hashed || hash == table->resume_hash);
+    if (!same || ftruncate(fd, (off_t)table->resume_bytes) != 0) {
+        if (!same && !table->sim->quiet)
+            fprintf(stderr,
+                    "sluice: note: '%s' is not the checkpointed run's table (its first %llu "
+                    "bytes differ or are missing): it is started anew\n",
+                    table->path, (unsigned long long)table->resume_bytes);
         close(fd);
         return -1;
     }
     table->bytes = table->resume_bytes;
+    table->hash = hash;
     return fd;
 }
 
@@ -125,6 +157,7 @@ int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t len
                 return SLUICE_ERROR;
             }
             table->bytes += length;
+            table->hash = sluice_table_hash_bytes(table->hash, line, length);
             return SLUICE_OK;
         }
         table->fd = open(table->path, O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
@@ -142,8 +175,9 @@ int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t len
         memcpy(header, table->header, hl);
         header[hl] = '\n';
         int rc = write_all(table->fd, header, hl + 1);
-        free(header);
         table->bytes = hl + 1;
+        table->hash = sluice_table_hash_bytes(SLUICE_TABLE_HASH_START, header, hl + 1);
+        free(header);
         if (rc != 0) {
             table->failed = 1;
             sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path, strerror(errno));
@@ -156,6 +190,7 @@ int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t len
         return SLUICE_ERROR;
     }
     table->bytes += length;
+    table->hash = sluice_table_hash_bytes(table->hash, line, length);
     return SLUICE_OK;
 }
 

@@ -77,9 +77,23 @@ struct sluice_table {
     int fd;
     int failed;
     uint64_t bytes;         /* written so far, header included (checkpoints record it) */
+    uint64_t hash;          /* FNV-1a of those bytes (checkpoints record it) */
     int resume;             /* restarted: continue the file at resume_bytes when it is there */
-    uint64_t resume_bytes;
+    int resume_hashed;      /* the checkpoint recorded resume_hash (older ones did not) */
+    uint64_t resume_bytes, resume_hash;
 };
+
+/* FNV-1a, 64 bits: the fingerprint of a table's bytes. Start from
+ * SLUICE_TABLE_HASH_START. */
+#define SLUICE_TABLE_HASH_START 14695981039346656037ull
+static inline uint64_t sluice_table_hash_bytes(uint64_t hash, const char *data, size_t size)
+{
+    for (size_t i = 0; i < size; i++) {
+        hash ^= (unsigned char)data[i];
+        hash *= 1099511628211ull;
+    }
+    return hash;
+}
 
 typedef enum sluice_phase {
     SLUICE_PHASE_CREATE = 0,
