@@ -362,7 +362,7 @@ START_TEST(dam_break_restart_bit_identical)
         for (char *c = strchr(alien, '\n') + 1; *c; c++)
             if (*c >= '0' && *c <= '8')
                 (*c)++;
-        test_write_file(other, "front.csv", alien);
+        free(test_write_file(other, "front.csv", alien));
         sluice_sim *again = test_load(name[0], yaml, NULL, 0);
         ck_assert_msg(sluice_sim_restart(again, checkpoint, error, sizeof error) == SLUICE_OK,
                       "%s", error);
