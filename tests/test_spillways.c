@@ -2,9 +2,12 @@
  * the full scenes (configs/stepped_chute_chanson.yaml,
  * configs/stepped_spillway_cheng.yaml), in their `reduced` variants run for
  * a few thousand steps (the CI's budget; the validations are long runs,
- * docs/validation.md):
- *  - the run completes: two phases with one Tait B, cohesion pairs reaching
- *    2H = 4h, an inlet under a gate, a drain that takes the water only;
+ * docs/validation.md), with the scenes' model (transport velocity) and with
+ * seed 001's as published (variant seed_model at the reduced spacing and
+ * length):
+ *  - the run completes: two phases with one Tait B, the transport velocity
+ *    or cohesion pairs reaching 2H = 4h, an inlet under a gate, a drain
+ *    that takes the water only;
  *  - the particles balance exactly, phase by phase: the air's box is closed
  *    but for the air vent, so the air count never grows and the air now +
  *    the air the vent let out (mass_total of air_vent.csv, in whole
@@ -90,12 +93,12 @@ static double last_value(const char *dir, const char *file, int column)
     return value;
 }
 
-/* Runs `config` --variant reduced with `sets`; checks the balances after
+/* Runs `config` --variant `variant` with `sets`; checks the balances after
  * every step; with `oxygen`, the concentration's bounds. */
-static void run_reduced(const char *config, const char *tag, const char *const *sets,
-                        size_t set_count, double dx, int oxygen)
+static void run_reduced(const char *config, const char *variant, const char *tag,
+                        const char *const *sets, size_t set_count, double dx, int oxygen)
 {
-    sluice_sim *sim = load_variant(config, "reduced", sets, set_count);
+    sluice_sim *sim = load_variant(config, variant, sets, set_count);
     char *dir = test_scratch(tag);
     ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
     const census start = count_phases(sim);
@@ -165,18 +168,32 @@ static void run_reduced(const char *config, const char *tag, const char *const *
 
 START_TEST(chanson_reduced)
 {
-    run_reduced("stepped_chute_chanson.yaml", "chanson-reduced", NULL, 0, 0.02, 0);
+    run_reduced("stepped_chute_chanson.yaml", "reduced", "chanson-reduced", NULL, 0, 0.02, 0);
 }
 END_TEST
 
 START_TEST(cheng_reduced)
 {
-    run_reduced("stepped_spillway_cheng.yaml", "cheng-reduced", NULL, 0, 0.0125, 1);
+    run_reduced("stepped_spillway_cheng.yaml", "reduced", "cheng-reduced", NULL, 0, 0.0125, 1);
 }
 END_TEST
 
-/* The single-phase variant: the same file without two_phase and
- * air_cohesion: no field phase, the water region only, and it runs. */
+/* Seed 001's model as published (background pressure in the momentum
+ * equation, the air's cohesion): the same balances at the reduced spacing
+ * and length. */
+START_TEST(seed_model_reduced)
+{
+    const char *const chanson[] = {"particles.spacing=0.02", "time.end=0.02"};
+    run_reduced("stepped_chute_chanson.yaml", "seed_model", "chanson-seed-model", chanson, 2,
+                0.02, 0);
+    const char *const cheng[] = {"particles.spacing=0.0125", "time.end=0.008"};
+    run_reduced("stepped_spillway_cheng.yaml", "seed_model", "cheng-seed-model", cheng, 2, 0.0125,
+                1);
+}
+END_TEST
+
+/* The single-phase variant: the same file without two_phase and the
+ * transport velocity: no field phase, the water region only, and it runs. */
 static void single_phase(const char *config, const char *spacing)
 {
     const char *const sets[] = {spacing, "time.end=0.01"};
@@ -308,6 +325,7 @@ static Suite *spillway_suite(void)
     tcase_set_timeout(c, 600);
     tcase_add_test(c, chanson_reduced);
     tcase_add_test(c, cheng_reduced);
+    tcase_add_test(c, seed_model_reduced);
     tcase_add_test(c, single_phase_variants);
     suite_add_tcase(s, c);
     TCase *source = tcase_create("reaeration_source");

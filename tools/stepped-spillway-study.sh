@@ -15,7 +15,7 @@
 #   tools/stepped-spillway-study.sh [BUILD_DIR] [SCENES]
 #     defaults: build, "chanson cheng"
 #   DX_CHANSON=0.008 DX_CHENG=0.004 (the seed's) END_CHANSON=8 END_CHENG=3
-#   FROM_CHANSON=4 FROM_CHENG=2 VARIANT= (e.g. no_cohesion, single_phase)
+#   FROM_CHANSON=4 FROM_CHENG=2 VARIANT= (e.g. seed_model, no_cohesion, single_phase)
 #   OUT=runs/stepped-spillway-study THREADS= CHECKPOINT=0.5
 #   SETS="key=value ..." (extra --set overrides for both scenes)
 #   SPINUP=T: start the two-phase run from a single-phase spin-up instead
