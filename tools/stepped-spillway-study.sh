@@ -14,7 +14,7 @@
 #
 #   tools/stepped-spillway-study.sh [BUILD_DIR] [SCENES]
 #     defaults: build, "chanson cheng"
-#   DX_CHANSON=0.008 DX_CHENG=0.004 (the seed's) END_CHANSON=8 END_CHENG=3
+#   DX_CHANSON=0.008 DX_CHENG=0.008 (the scenes'; seed 001 ran Cheng at 0.004) END_CHANSON=8 END_CHENG=3
 #   FROM_CHANSON=4 FROM_CHENG=2 VARIANT= (e.g. seed_model, no_cohesion, single_phase)
 #   OUT=runs/stepped-spillway-study THREADS= CHECKPOINT=0.5
 #   SETS="key=value ..." (extra --set overrides for both scenes)
@@ -44,7 +44,7 @@ for scene in $scenes; do
         dx=${DX_CHANSON:-0.008} end=${END_CHANSON:-8} from=${FROM_CHANSON:-4} ;;
     cheng)
         config=configs/stepped_spillway_cheng.yaml
-        dx=${DX_CHENG:-0.004} end=${END_CHENG:-3} from=${FROM_CHENG:-2} ;;
+        dx=${DX_CHENG:-0.008} end=${END_CHENG:-3} from=${FROM_CHENG:-2} ;;
     *)
         echo "stepped-spillway-study.sh: unknown scene '$scene' (chanson or cheng)" >&2
         exit 2 ;;
