@@ -15,6 +15,7 @@
 
 #include "geometry.h"
 #include "scene.h"
+#include "wall_distance.h"
 #include "wall_watch.h"
 
 #define EPS 1e-12
@@ -1434,6 +1435,98 @@ START_TEST(wall_watch_matches_full_query)
 }
 END_TEST
 
+/* The nearest-wall distance of the index (api->wall_distance) against every
+ * element of every wall: the same number, bit for bit, for points in the
+ * walls' cells, near their vertices and corners, and far outside them
+ * (where the shells grow from the nearest cell), with the cell size of a
+ * kernel support and with one so small that the budget enlarges it. */
+static void check_wall_distance(const sluice_wall_distance_index *index,
+                                const sluice_wall_geometry *const *walls, size_t count,
+                                const sluice_real p[3])
+{
+    double brute = HUGE_VAL;
+    for (size_t w = 0; w < count; w++) {
+        const double d = fabs((double)sluice_wall_signed_distance(walls[w], p, NULL, NULL));
+        brute = d < brute ? d : brute;
+    }
+    const double fast = sluice_wall_distance(index, p);
+    ck_assert_msg(fast == brute, "(%g, %g, %g): index %.17g, every element %.17g", (double)p[0],
+                  (double)p[1], (double)p[2], fast, brute);
+    ck_assert(sluice_wall_distance_full(index, p) == brute);
+}
+
+START_TEST(wall_distance_matches_every_element)
+{
+    uint64_t rng = 2027;
+    /* 2D: a tank, a chute of 40 steps (80 segments) and a closed obstacle */
+    sluice_real chute[2 * 81];
+    for (int k = 0; k <= 80; k++) {
+        const int step = k / 2;
+        chute[2 * k] = (sluice_real)(0.1 * (step + (k % 2)));
+        chute[2 * k + 1] = (sluice_real)(2.0 - 0.05 * step);
+    }
+    const sluice_real obstacle[] = {2.2, 0.4, 2.2, 0.6, 2.5, 0.6, 2.5, 0.4};
+    sluice_wall_geometry g[3];
+    ck_assert_int_eq(sluice_wall_build_tank(&g[0], 2, (sluice_real[3]){-1, -0.2, 0},
+                                            (sluice_real[3]){4.5, 2.5, 0}, NULL),
+                     0);
+    ck_assert_int_eq(sluice_wall_build_polyline(&g[1], chute, 81, 0, NULL), 0);
+    ck_assert_int_eq(sluice_wall_build_polyline(&g[2], obstacle, 4, 1, NULL), 0);
+    const sluice_wall_geometry *walls[3] = {&g[0], &g[1], &g[2]};
+    for (int size_case = 0; size_case < 2; size_case++) {
+        sluice_wall_distance_index index;
+        ck_assert_int_eq(
+            sluice_wall_distance_init(&index, 2, walls, 3, size_case ? 1e-4 : 0.045), 0);
+        /* the cells save work: far fewer entries per cell than elements */
+        ck_assert_uint_gt(index.cell_count, 100);
+        ck_assert_double_le((double)index.entry_count / (double)index.cell_count, 4.0);
+        for (int trial = 0; trial < 100000; trial++) {
+            sluice_real p[3] = {uniform(&rng, -3, 6.5), uniform(&rng, -2, 4.5), 0};
+            if (trial % 3 == 0) { /* close to a step's corner */
+                const sluice_real *v = chute + 2 * (trial / 3 % 81);
+                p[0] = v[0] + uniform(&rng, -0.06, 0.06);
+                p[1] = v[1] + uniform(&rng, -0.06, 0.06);
+            } else if (trial % 3 == 1 && trial % 7 == 0) { /* far outside */
+                p[0] = uniform(&rng, -40, 40);
+                p[1] = uniform(&rng, -40, 40);
+            }
+            check_wall_distance(&index, walls, 3, p);
+        }
+        sluice_wall_distance_free(&index);
+    }
+    for (int k = 0; k < 3; k++)
+        sluice_wall_geometry_free(&g[k]);
+    /* no walls: no distance */
+    sluice_wall_distance_index none;
+    ck_assert_int_eq(sluice_wall_distance_init(&none, 2, NULL, 0, 0.05), 0);
+    ck_assert(sluice_wall_distance(&none, (sluice_real[3]){0, 0, 0}) == HUGE_VAL);
+    sluice_wall_distance_free(&none);
+    /* 3D: a tank and a box obstacle on its floor */
+    sluice_wall_geometry tank, box;
+    ck_assert_int_eq(sluice_wall_build_tank(&tank, 3, (sluice_real[3]){0, 0, 0},
+                                            (sluice_real[3]){2, 1, 1}, NULL),
+                     0);
+    ck_assert_int_eq(sluice_wall_build_box(&box, 3, (sluice_real[3]){1.2, 0.3, 0},
+                                           (sluice_real[3]){1.5, 0.6, 0.3}, NULL),
+                     0);
+    const sluice_wall_geometry *walls3[2] = {&tank, &box};
+    sluice_wall_distance_index index;
+    ck_assert_int_eq(sluice_wall_distance_init(&index, 3, walls3, 2, 0.1), 0);
+    for (int trial = 0; trial < 100000; trial++) {
+        sluice_real p[3] = {uniform(&rng, -1, 3), uniform(&rng, -1, 2), uniform(&rng, -1, 2)};
+        if (trial % 2 == 0) { /* near the obstacle's corners and edges */
+            p[0] = (trial % 4 ? 1.2 : 1.5) + uniform(&rng, -0.06, 0.06);
+            p[1] = (trial % 8 < 4 ? 0.3 : 0.6) + uniform(&rng, -0.06, 0.06);
+            p[2] = uniform(&rng, -0.05, 0.35);
+        }
+        check_wall_distance(&index, walls3, 2, p);
+    }
+    sluice_wall_distance_free(&index);
+    sluice_wall_geometry_free(&tank);
+    sluice_wall_geometry_free(&box);
+}
+END_TEST
+
 /* ------------------------------------------------------------- profiles -- */
 
 /* Builds a profile (test helper: refusal is a failure). */
@@ -2415,6 +2508,7 @@ int main(void)
     tcase_add_test(walls, layer_slanted_2d);
     tcase_add_test(walls, layer_box_obstacles);
     tcase_add_test(walls, wall_watch_matches_full_query);
+    tcase_add_test(walls, wall_distance_matches_every_element);
     suite_add_tcase(s, walls);
     TCase *profiles = tcase_create("profiles");
     tcase_set_timeout(profiles, 120);

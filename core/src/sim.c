@@ -1030,26 +1030,7 @@ static int api_write_file_atomic(sluice_host *host, const char *path, const void
 
 static sluice_real api_wall_distance(sluice_host *host, const sluice_real *point)
 {
-    const sluice_sim *sim = host->sim;
-    double best = INFINITY;
-    for (size_t w = 0; w < sim->scene.wall_count; w++) {
-        /* a lower bound from the wall's bounding box first */
-        const sluice_real *b = sim->wall_bounds + 6 * w;
-        double lower = 0;
-        for (uint32_t d = 0; d < sim->scene.dimensions; d++) {
-            double below = (double)b[d] - (double)point[d], above = (double)point[d] - (double)b[3 + d];
-            double gap = below > 0 ? below : above > 0 ? above : 0;
-            lower += gap * gap;
-        }
-        if (lower >= best * best)
-            continue;
-        int beyond = 0;
-        double dist = fabs((double)sluice_wall_signed_distance(&sim->scene.walls[w].geometry, point,
-                                                               &beyond, NULL));
-        if (dist < best)
-            best = dist;
-    }
-    return (sluice_real)best;
+    return (sluice_real)sluice_wall_distance(&host->sim->wall_distance, point);
 }
 
 /* Across ranks: the other ranks' particles in the halo as they are now
@@ -2406,6 +2387,10 @@ static int load(sluice_sim *sim, const char *scene_path, const char *variant,
     sim->spacing = scene->particles.spacing;
     sim->smoothing_length = scene->particles.smoothing_length_ratio * scene->particles.spacing;
     sim->rest_density = scene->particles.rest_density;
+    /* api->wall_distance's cells, about a kernel support (2h) wide */
+    if (sluice_wall_distance_init(&sim->wall_distance, scene->dimensions, sim->wall_geometries,
+                                  scene->wall_count, 2.0 * (double)sim->smoothing_length) != 0)
+        return errors + 1;
     sim->end = scene->time.end;
     static const sluice_field_spec core_fields[] = {
         {"position", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m", SLUICE_WRITE,
@@ -2734,6 +2719,7 @@ void sluice_sim_free(sluice_sim *sim)
     sluice_particles_free(&sim->particles);
     sluice_grid_free(&sim->grid);
     sluice_wall_watch_free(&sim->wall_watch);
+    sluice_wall_distance_free(&sim->wall_distance);
     free(sim->wall_geometries);
     sluice_pair_engine_free(&sim->engine);
     sluice_ranks_free(&sim->halo);

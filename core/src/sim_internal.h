@@ -14,6 +14,7 @@
 #include "registry.h"
 #include "scene.h"
 #include "sim.h"
+#include "wall_distance.h"
 #include "wall_watch.h"
 
 #define SLUICE_CORE_INSTANCE UINT32_MAX
@@ -124,7 +125,8 @@ struct sluice_sim {
     sluice_rate *rates;
     uint32_t rate_count;
     sluice_wall *walls;
-    sluice_real *wall_bounds; /* 6 per wall: min xyz, max xyz (wall_distance) */
+    sluice_real *wall_bounds; /* 6 per wall: min xyz, max xyz (wall_nearest) */
+    sluice_wall_distance_index wall_distance; /* api->wall_distance's cells */
     const sluice_wall_geometry **wall_geometries; /* wall_count: for the watch */
     sluice_wall_watch wall_watch; /* the watchdog's wall check, built by begin */
 
