@@ -1437,9 +1437,9 @@ END_TEST
 
 /* The nearest-wall distance of the index (api->wall_distance) against every
  * element of every wall: the same number, bit for bit, for points in the
- * walls' cells, near their vertices and corners, and far outside them
- * (where the shells grow from the nearest cell), with the cell size of a
- * kernel support and with one so small that the budget enlarges it. */
+ * index's box, near the walls' vertices and corners, and far outside the
+ * box (where every element is asked), with the cell size of a kernel
+ * support and with one so small that the budget enlarges it. */
 static void check_wall_distance(const sluice_wall_distance_index *index,
                                 const sluice_wall_geometry *const *walls, size_t count,
                                 const sluice_real p[3])
@@ -1475,11 +1475,12 @@ START_TEST(wall_distance_matches_every_element)
     const sluice_wall_geometry *walls[3] = {&g[0], &g[1], &g[2]};
     for (int size_case = 0; size_case < 2; size_case++) {
         sluice_wall_distance_index index;
+        const double lo[3] = {-1.5, -0.5, 0}, hi[3] = {5, 3, 0};
         ck_assert_int_eq(
-            sluice_wall_distance_init(&index, 2, walls, 3, size_case ? 1e-4 : 0.045), 0);
-        /* the cells save work: far fewer entries per cell than elements */
-        ck_assert_uint_gt(index.cell_count, 100);
-        ck_assert_double_le((double)index.entry_count / (double)index.cell_count, 4.0);
+            sluice_wall_distance_init(&index, 2, walls, 3, lo, hi, size_case ? 1e-4 : 0.045), 0);
+        /* the cells save work: a cell's list is a few of the 87 elements */
+        ck_assert_uint_gt(index.cell_count, 1000);
+        ck_assert_double_le((double)index.candidate_count / (double)index.cell_count, 8.0);
         for (int trial = 0; trial < 100000; trial++) {
             sluice_real p[3] = {uniform(&rng, -3, 6.5), uniform(&rng, -2, 4.5), 0};
             if (trial % 3 == 0) { /* close to a step's corner */
@@ -1498,7 +1499,9 @@ START_TEST(wall_distance_matches_every_element)
         sluice_wall_geometry_free(&g[k]);
     /* no walls: no distance */
     sluice_wall_distance_index none;
-    ck_assert_int_eq(sluice_wall_distance_init(&none, 2, NULL, 0, 0.05), 0);
+    ck_assert_int_eq(sluice_wall_distance_init(&none, 2, NULL, 0, (double[3]){0, 0, 0},
+                                               (double[3]){1, 1, 0}, 0.05),
+                     0);
     ck_assert(sluice_wall_distance(&none, (sluice_real[3]){0, 0, 0}) == HUGE_VAL);
     sluice_wall_distance_free(&none);
     /* 3D: a tank and a box obstacle on its floor */
@@ -1511,7 +1514,9 @@ START_TEST(wall_distance_matches_every_element)
                      0);
     const sluice_wall_geometry *walls3[2] = {&tank, &box};
     sluice_wall_distance_index index;
-    ck_assert_int_eq(sluice_wall_distance_init(&index, 3, walls3, 2, 0.1), 0);
+    ck_assert_int_eq(sluice_wall_distance_init(&index, 3, walls3, 2, (double[3]){-0.2, -0.2, -0.2},
+                                               (double[3]){2.2, 1.2, 1.5}, 0.1),
+                     0);
     for (int trial = 0; trial < 100000; trial++) {
         sluice_real p[3] = {uniform(&rng, -1, 3), uniform(&rng, -1, 2), uniform(&rng, -1, 2)};
         if (trial % 2 == 0) { /* near the obstacle's corners and edges */

@@ -2387,10 +2387,19 @@ static int load(sluice_sim *sim, const char *scene_path, const char *variant,
     sim->spacing = scene->particles.spacing;
     sim->smoothing_length = scene->particles.smoothing_length_ratio * scene->particles.spacing;
     sim->rest_density = scene->particles.rest_density;
-    /* api->wall_distance's cells, about a kernel support (2h) wide */
-    if (sluice_wall_distance_init(&sim->wall_distance, scene->dimensions, sim->wall_geometries,
-                                  scene->wall_count, 2.0 * (double)sim->smoothing_length) != 0)
-        return errors + 1;
+    /* api->wall_distance's cells over the domain, about a kernel support
+     * (2h) wide */
+    {
+        double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+        for (uint32_t d = 0; d < scene->dimensions; d++) {
+            lo[d] = (double)scene->domain.min[d];
+            hi[d] = (double)scene->domain.max[d];
+        }
+        if (sluice_wall_distance_init(&sim->wall_distance, scene->dimensions,
+                                      sim->wall_geometries, scene->wall_count, lo, hi,
+                                      2.0 * (double)sim->smoothing_length) != 0)
+            return errors + 1;
+    }
     sim->end = scene->time.end;
     static const sluice_field_spec core_fields[] = {
         {"position", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m", SLUICE_WRITE,

@@ -4,14 +4,17 @@
  *
  * Asking every element of every wall costs as many segment (triangle)
  * distances as the scene has elements: hundreds on a stepped chute. The
- * index registers each element in the cells of a uniform grid that its
- * bounding box meets, and a query looks at the cells in square (cube) shells
- * of growing Chebyshev radius r around the point's cell: once the nearest
- * element found so far is no farther than r cell sizes, no element in a cell
- * outside the shells searched can be nearer (its nearest point lies in a
- * cell it is registered in, at least r cell sizes away). The answer is the
- * minimum of the same element distances as asking every element, so it is
- * the same number, bit for bit.
+ * index cuts the box of the domain and the walls into cells (about a
+ * kernel support wide) and keeps, per cell, the elements that can be
+ * nearest to some point of it: those within dmin + 2 r of the cell's centre,
+ * dmin the centre's distance to the nearest element and r the cell's
+ * half-diagonal (the nearest element e* of a point p of the cell has
+ * d(c, e*) <= d(p, e*) + r <= d(p, e_c) + r <= dmin + 2 r). A query looks
+ * at its cell's list only. The lists are built with the elements registered
+ * in the cells their bounding boxes meet, searched in square (cube) shells
+ * around the centre's cell. The answer is the minimum of the same element
+ * distances as asking every element, so it is the same number, bit for
+ * bit; points outside the box ask every element.
  *
  * Pure data built from the fixed wall geometry; read-only during the run
  * (thread-safe). */
@@ -30,26 +33,28 @@ typedef struct sluice_wall_distance_index {
     double lo[3], cell_size, inverse_cell_size;
     int64_t cells[3];
     size_t cell_count;
-    uint32_t *entry_begin;   /* per cell + 1: range in the entries */
-    uint32_t *entry_wall;    /* entries: wall index ... */
-    uint32_t *entry_element; /* ... and element */
-    size_t entry_count;
+    uint32_t *candidate_begin;   /* per cell + 1: range in the candidates */
+    uint32_t *candidate_wall;    /* candidates: wall index ... */
+    uint32_t *candidate_element; /* ... and element, sorted by wall then element */
+    size_t candidate_count;
+    uint32_t largest_list; /* most candidates of one cell */
 } sluice_wall_distance_index;
 
-/* Builds the index for the walls with cells of about `cell_size` (m, > 0;
- * enlarged when the walls' extent would need more than about 16 cells per
- * element or 4 M cells). walls[w] must outlive the index. Returns 0, or -1
- * (out of memory). */
+/* Builds the index over the box [lo, hi] (the domain; widened to hold the
+ * walls) with cells of about `cell_size` (m, > 0; enlarged when the box
+ * would need more than 4 M cells or the build too much work). walls[w]
+ * must outlive the index. Returns 0, or -1 (out of memory). */
 int sluice_wall_distance_init(sluice_wall_distance_index *index, uint32_t dimensions,
                               const sluice_wall_geometry *const *walls, size_t wall_count,
-                              double cell_size);
+                              const double lo[3], const double hi[3], double cell_size);
 void sluice_wall_distance_free(sluice_wall_distance_index *index);
 
 /* The unsigned distance from p to the nearest element of any wall (m);
  * HUGE_VAL without walls. */
 double sluice_wall_distance(const sluice_wall_distance_index *index, const sluice_real p[3]);
 
-/* The same by asking every element of every wall (for tests). */
+/* The same by asking every element of every wall (for tests, and for points
+ * outside the index's box). */
 double sluice_wall_distance_full(const sluice_wall_distance_index *index, const sluice_real p[3]);
 
 #endif
