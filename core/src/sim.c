@@ -1028,9 +1028,40 @@ static int api_write_file_atomic(sluice_host *host, const char *path, const void
     return SLUICE_OK;
 }
 
+/* api->wall_distance's cells over the domain, about a kernel support (2h)
+ * wide, built at the first call: from a component's init, or from within a
+ * pass, where the first thread to arrive builds them (with the threads of a
+ * nested team: one) and the others wait. When the build runs out of memory
+ * the index is left empty and every query asks every element: the same
+ * numbers, slower. */
+static const sluice_wall_distance_index *wall_distance_index(sluice_sim *sim)
+{
+    if (!atomic_load_explicit(&sim->wall_distance_built, memory_order_acquire)) {
+#pragma omp critical(sluice_wall_distance_build)
+        if (!atomic_load_explicit(&sim->wall_distance_built, memory_order_relaxed)) {
+            const sluice_scene *scene = &sim->scene;
+            double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+            for (uint32_t d = 0; d < scene->dimensions; d++) {
+                lo[d] = (double)scene->domain.min[d];
+                hi[d] = (double)scene->domain.max[d];
+            }
+            if (sluice_wall_distance_init(&sim->wall_distance, scene->dimensions,
+                                          sim->wall_geometries, scene->wall_count, lo, hi,
+                                          2.0 * (double)sim->smoothing_length) != 0) {
+                sluice_wall_distance_free(&sim->wall_distance);
+                sim->wall_distance.dimensions = scene->dimensions;
+                sim->wall_distance.walls = sim->wall_geometries;
+                sim->wall_distance.wall_count = scene->wall_count;
+            }
+            atomic_store_explicit(&sim->wall_distance_built, 1, memory_order_release);
+        }
+    }
+    return &sim->wall_distance;
+}
+
 static sluice_real api_wall_distance(sluice_host *host, const sluice_real *point)
 {
-    return (sluice_real)sluice_wall_distance(&host->sim->wall_distance, point);
+    return (sluice_real)sluice_wall_distance(wall_distance_index(host->sim), point);
 }
 
 /* Across ranks: the other ranks' particles in the halo as they are now
@@ -2387,19 +2418,6 @@ static int load(sluice_sim *sim, const char *scene_path, const char *variant,
     sim->spacing = scene->particles.spacing;
     sim->smoothing_length = scene->particles.smoothing_length_ratio * scene->particles.spacing;
     sim->rest_density = scene->particles.rest_density;
-    /* api->wall_distance's cells over the domain, about a kernel support
-     * (2h) wide */
-    {
-        double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-        for (uint32_t d = 0; d < scene->dimensions; d++) {
-            lo[d] = (double)scene->domain.min[d];
-            hi[d] = (double)scene->domain.max[d];
-        }
-        if (sluice_wall_distance_init(&sim->wall_distance, scene->dimensions,
-                                      sim->wall_geometries, scene->wall_count, lo, hi,
-                                      2.0 * (double)sim->smoothing_length) != 0)
-            return errors + 1;
-    }
     sim->end = scene->time.end;
     static const sluice_field_spec core_fields[] = {
         {"position", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m", SLUICE_WRITE,
@@ -2639,6 +2657,7 @@ sluice_sim *sluice_sim_load_variant(const char *scene_path, const char *variant,
         sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, scene_path, 0, 0, "out of memory");
         return NULL;
     }
+    atomic_init(&sim->wall_distance_built, 0);
     sim->diag = diag;
     omp_init_lock(&sim->message_lock);
     sim->creating = -1;

@@ -14,6 +14,8 @@
 #include "registry.h"
 #include "scene.h"
 #include "sim.h"
+#include <stdatomic.h>
+
 #include "wall_distance.h"
 #include "wall_watch.h"
 
@@ -126,7 +128,12 @@ struct sluice_sim {
     uint32_t rate_count;
     sluice_wall *walls;
     sluice_real *wall_bounds; /* 6 per wall: min xyz, max xyz (wall_nearest) */
-    sluice_wall_distance_index wall_distance; /* api->wall_distance's cells */
+    /* api->wall_distance's cells, built at its first call (a scene whose
+     * plugins never ask pays nothing); wall_distance_built is set once
+     * they are (or once their build failed: the queries then ask every
+     * element, the same numbers) */
+    sluice_wall_distance_index wall_distance;
+    atomic_int wall_distance_built;
     const sluice_wall_geometry **wall_geometries; /* wall_count: for the watch */
     sluice_wall_watch wall_watch; /* the watchdog's wall check, built by begin */
 
