@@ -1166,6 +1166,36 @@ sluice_real sluice_wall_element_distance(const sluice_wall_geometry *wall, uint3
     return (sluice_real)element_closest(wall, e, p, c, &f);
 }
 
+double sluice_walls_nearest_distance(const sluice_wall_geometry *const *walls, size_t wall_count,
+                                     const sluice_real p[3])
+{
+    double best = HUGE_VAL;
+    for (size_t w = 0; w < wall_count; w++)
+        for (uint32_t e = 0; e < walls[w]->element_count; e++) {
+            const double d = (double)sluice_wall_element_distance(walls[w], e, p);
+            if (d < best)
+                best = d;
+        }
+    return best;
+}
+
+uint32_t sluice_walls_elements_within(const sluice_wall_geometry *const *walls, size_t wall_count,
+                                      const sluice_real p[3], double limit, uint32_t *wall_out,
+                                      uint32_t *element_out)
+{
+    uint32_t count = 0;
+    for (size_t w = 0; w < wall_count; w++)
+        for (uint32_t e = 0; e < walls[w]->element_count; e++)
+            if ((double)sluice_wall_element_distance(walls[w], e, p) <= limit) {
+                if (wall_out) {
+                    wall_out[count] = (uint32_t)w;
+                    element_out[count] = e;
+                }
+                count++;
+            }
+    return count;
+}
+
 void sluice_wall_nearest(const sluice_wall_geometry *wall, const sluice_real p[3],
                          sluice_wall_point *out)
 {

@@ -118,6 +118,17 @@ sluice_real sluice_wall_signed_distance_among(const sluice_wall_geometry *wall,
                                               const sluice_real p[3], const uint32_t *subset,
                                               size_t n, int *beyond_end, uint32_t *element);
 
+/* Over several walls: the unsigned distance from p to the nearest element
+ * (HUGE_VAL without elements), and the elements within `limit` of p (their
+ * count; when wall_out is not NULL also the elements, by wall then element).
+ * The watchdog's cells (wall_watch.c) and api->wall_distance's
+ * (wall_distance.c) build their candidate lists with them. */
+double sluice_walls_nearest_distance(const sluice_wall_geometry *const *walls, size_t wall_count,
+                                     const sluice_real p[3]);
+uint32_t sluice_walls_elements_within(const sluice_wall_geometry *const *walls, size_t wall_count,
+                                      const sluice_real p[3], double limit, uint32_t *wall_out,
+                                      uint32_t *element_out);
+
 /* Unsigned distance from p to element e of the wall. */
 sluice_real sluice_wall_element_distance(const sluice_wall_geometry *wall, uint32_t e,
                                          const sluice_real p[3]);

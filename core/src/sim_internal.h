@@ -4,6 +4,7 @@
 #define SLUICE_SIM_INTERNAL_H
 
 #include <omp.h>
+#include <stdatomic.h>
 
 #include "comm.h"
 #include "diag.h"
@@ -14,8 +15,6 @@
 #include "registry.h"
 #include "scene.h"
 #include "sim.h"
-#include <stdatomic.h>
-
 #include "wall_distance.h"
 #include "wall_watch.h"
 

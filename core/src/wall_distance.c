@@ -11,14 +11,7 @@
 
 double sluice_wall_distance_full(const sluice_wall_distance_index *index, const sluice_real p[3])
 {
-    double best = HUGE_VAL;
-    for (size_t w = 0; w < index->wall_count; w++)
-        for (uint32_t e = 0; e < index->walls[w]->element_count; e++) {
-            const double d = (double)sluice_wall_element_distance(index->walls[w], e, p);
-            if (d < best)
-                best = d;
-        }
-    return best;
+    return sluice_walls_nearest_distance(index->walls, index->wall_count, p);
 }
 
 void sluice_wall_distance_free(sluice_wall_distance_index *index)
@@ -70,17 +63,8 @@ static uint32_t cell_candidates(const sluice_wall_distance_index *index, size_t 
     const double scale = fabs((double)centre[0]) + fabs((double)centre[1]) +
                          fabs((double)centre[2]) + dmin + r;
     const double limit = dmin + 2 * r + 1e-9 * scale;
-    uint32_t count = 0;
-    for (size_t w = 0; w < index->wall_count; w++)
-        for (uint32_t e = 0; e < index->walls[w]->element_count; e++)
-            if ((double)sluice_wall_element_distance(index->walls[w], e, centre) <= limit) {
-                if (wall_out) {
-                    wall_out[count] = (uint32_t)w;
-                    element_out[count] = e;
-                }
-                count++;
-            }
-    return count;
+    return sluice_walls_elements_within(index->walls, index->wall_count, centre, limit, wall_out,
+                                        element_out);
 }
 
 int sluice_wall_distance_init(sluice_wall_distance_index *index, uint32_t dimensions,
@@ -144,10 +128,7 @@ int sluice_wall_distance_init(sluice_wall_distance_index *index, uint32_t dimens
     index->candidate_begin[0] = 0;
     uint64_t total = 0;
     for (size_t c = 0; c < n; c++) {
-        const uint32_t k = index->candidate_begin[c + 1];
-        if (k > index->largest_list)
-            index->largest_list = k;
-        total += k;
+        total += index->candidate_begin[c + 1];
         if (total > UINT32_MAX) {
             sluice_wall_distance_free(index);
             return -1;

@@ -10,9 +10,9 @@
  * dmin the centre's distance to the nearest element and r the cell's
  * half-diagonal (the nearest element e* of a point p of the cell has
  * d(c, e*) <= d(p, e*) + r <= d(p, e_c) + r <= dmin + 2 r). A query looks
- * at its cell's list only. The lists are built with the elements registered
- * in the cells their bounding boxes meet, searched in square (cube) shells
- * around the centre's cell. The answer is the minimum of the same element
+ * at its cell's list only (the lists are built as the watchdog's near
+ * cells' are, wall_watch.h, but for every cell). The answer is the minimum
+ * of the same element
  * distances as asking every element, so it is the same number, bit for
  * bit; points outside the box ask every element.
  *
@@ -37,7 +37,6 @@ typedef struct sluice_wall_distance_index {
     uint32_t *candidate_wall;    /* candidates: wall index ... */
     uint32_t *candidate_element; /* ... and element, sorted by wall then element */
     size_t candidate_count;
-    uint32_t largest_list; /* most candidates of one cell */
 } sluice_wall_distance_index;
 
 /* Builds the index over the box [lo, hi] (the domain; widened to hold the

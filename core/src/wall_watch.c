@@ -123,13 +123,7 @@ static uint32_t class_cell(const sluice_wall_watch *watch, size_t cell, double d
         centre[d] = (sluice_real)(watch->lo[d] + ((double)k + 0.5) * watch->cell_size);
     }
     const double r = 0.5 * watch->cell_size * sqrt((double)dims);
-    double dmin = HUGE_VAL;
-    for (size_t w = 0; w < watch->wall_count; w++)
-        for (uint32_t e = 0; e < watch->walls[w]->element_count; e++) {
-            double d = (double)sluice_wall_element_distance(watch->walls[w], e, centre);
-            if (d < dmin)
-                dmin = d;
-        }
+    const double dmin = sluice_walls_nearest_distance(watch->walls, watch->wall_count, centre);
     if (dmin > r + depth) {
         /* far from every wall: one side, if the centre and the corners agree
          * (a sign that flips without crossing a wall only happens past an open
@@ -155,17 +149,8 @@ static uint32_t class_cell(const sluice_wall_watch *watch, size_t cell, double d
     const double scale = fabs((double)centre[0]) + fabs((double)centre[1]) +
                          fabs((double)centre[2]) + dmin + r;
     const double limit = dmin + 2 * r + 1e-9 * scale;
-    uint32_t count = 0;
-    for (size_t w = 0; w < watch->wall_count; w++)
-        for (uint32_t e = 0; e < watch->walls[w]->element_count; e++)
-            if ((double)sluice_wall_element_distance(watch->walls[w], e, centre) <= limit) {
-                if (wall_out) {
-                    wall_out[count] = (uint32_t)w;
-                    element_out[count] = e;
-                }
-                count++;
-            }
-    return count;
+    return sluice_walls_elements_within(watch->walls, watch->wall_count, centre, limit, wall_out,
+                                        element_out);
 }
 
 int sluice_wall_watch_init(sluice_wall_watch *watch, uint32_t dimensions,
