@@ -1385,7 +1385,7 @@ START_TEST(wall_watch_matches_full_query)
         sluice_wall_watch watch;
         ck_assert_int_eq(sluice_wall_watch_init(&watch, 2, walls, 3, lo, hi, 0.04, depth), 0);
         size_t front = 0, near = 0, behind = 0;
-        for (size_t c = 0; c < watch.cell_count; c++) {
+        for (size_t c = 0; c < watch.cells.cell_count; c++) {
             front += watch.state[c] == SLUICE_WALL_CELL_FRONT;
             near += watch.state[c] == SLUICE_WALL_CELL_NEAR;
             behind += watch.state[c] == SLUICE_WALL_CELL_BEHIND;
@@ -1480,8 +1480,8 @@ START_TEST(wall_distance_matches_every_element)
             sluice_wall_distance_init(&index, 2, walls, 3, lo, hi, size_case ? 1e-4 : 0.045), 0);
         /* the cells must save work: a cell's list holds on average at most a
          * tenth of the 87 elements that a query would otherwise ask */
-        ck_assert_uint_gt(index.cell_count, 1000);
-        ck_assert_double_le((double)index.candidate_count / (double)index.cell_count, 87 / 10.0);
+        ck_assert_uint_gt(index.cells.cell_count, 1000);
+        ck_assert_double_le((double)index.cells.candidate_count / (double)index.cells.cell_count, 87 / 10.0);
         for (int trial = 0; trial < 100000; trial++) {
             sluice_real p[3] = {uniform(&rng, -3, 6.5), uniform(&rng, -2, 4.5), 0};
             if (trial % 3 == 0) { /* close to a step's corner */

@@ -366,7 +366,7 @@ static int watchdog(sluice_sim *sim)
      * behind the nearest wall (wall_watch.h) */
     double wall_depth = 0;
     uint32_t bad_wall = UINT32_MAX, bad_element = UINT32_MAX;
-    if (!what && sim->wall_watch.wall_count > 0) {
+    if (!what && sim->wall_watch.cells.wall_count > 0) {
         const double allowed = (double)scene->watchdog.wall_penetration * (double)sim->spacing;
         const uint8_t *kind = v->kind;
         sluice_index found = n;
@@ -526,7 +526,7 @@ int sluice_sim_begin(sluice_sim *sim, const char *output_directory)
     sim->time_at_start = sim->time;
     sim->particle_steps_at_start = sim->particle_steps;
     /* the watchdog's wall check: cells about a kernel support wide */
-    if (sim->scene.wall_count > 0 && sim->wall_watch.wall_count == 0) {
+    if (sim->scene.wall_count > 0 && sim->wall_watch.cells.wall_count == 0) {
         double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
         for (uint32_t d = 0; d < sim->scene.dimensions; d++) {
             lo[d] = (double)sim->scene.domain.min[d];

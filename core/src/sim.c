@@ -1045,14 +1045,11 @@ static const sluice_wall_distance_index *wall_distance_index(sluice_sim *sim)
                 lo[d] = (double)scene->domain.min[d];
                 hi[d] = (double)scene->domain.max[d];
             }
-            if (sluice_wall_distance_init(&sim->wall_distance, scene->dimensions,
-                                          sim->wall_geometries, scene->wall_count, lo, hi,
-                                          2.0 * (double)sim->smoothing_length) != 0) {
-                sluice_wall_distance_free(&sim->wall_distance);
-                sim->wall_distance.dimensions = scene->dimensions;
-                sim->wall_distance.walls = sim->wall_geometries;
-                sim->wall_distance.wall_count = scene->wall_count;
-            }
+            /* out of memory leaves the index without cells: every query
+             * then asks every element */
+            (void)sluice_wall_distance_init(&sim->wall_distance, scene->dimensions,
+                                            sim->wall_geometries, scene->wall_count, lo, hi,
+                                            2.0 * (double)sim->smoothing_length);
             atomic_store_explicit(&sim->wall_distance_built, 1, memory_order_release);
         }
     }

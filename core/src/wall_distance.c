@@ -2,7 +2,6 @@
 #include "wall_distance.h"
 
 #include <math.h>
-#include <stdlib.h>
 #include <string.h>
 
 /* Cells at most, and element-distance evaluations the build may take. */
@@ -11,70 +10,50 @@
 
 double sluice_wall_distance_full(const sluice_wall_distance_index *index, const sluice_real p[3])
 {
-    return sluice_walls_nearest_distance(index->walls, index->wall_count, p);
+    return sluice_walls_nearest_distance(index->cells.walls, index->cells.wall_count, p);
 }
 
 void sluice_wall_distance_free(sluice_wall_distance_index *index)
 {
-    free(index->candidate_begin);
-    free(index->candidate_wall);
-    free(index->candidate_element);
-    memset(index, 0, sizeof *index);
+    sluice_wall_cells_free(&index->cells);
 }
 
 double sluice_wall_distance(const sluice_wall_distance_index *index, const sluice_real p[3])
 {
-    if (index->cell_count == 0)
+    const sluice_wall_cells *grid = &index->cells;
+    const size_t cell = sluice_wall_cells_locate(grid, p);
+    if (cell == SIZE_MAX) /* no cells, or outside the box */
         return sluice_wall_distance_full(index, p);
-    size_t cell = 0, stride = 1;
-    for (uint32_t d = 0; d < index->dimensions; d++) {
-        const double u = floor(((double)p[d] - index->lo[d]) * index->inverse_cell_size);
-        if (!(u >= 0 && u < (double)index->cells[d])) /* outside the box (or NaN) */
-            return sluice_wall_distance_full(index, p);
-        cell += (size_t)u * stride;
-        stride *= (size_t)index->cells[d];
-    }
     double best = HUGE_VAL;
-    for (uint32_t k = index->candidate_begin[cell]; k < index->candidate_begin[cell + 1]; k++) {
+    for (uint32_t k = grid->candidate_begin[cell]; k < grid->candidate_begin[cell + 1]; k++) {
         const double d = (double)sluice_wall_element_distance(
-            index->walls[index->candidate_wall[k]], index->candidate_element[k], p);
+            grid->walls[grid->candidate_wall[k]], grid->candidate_element[k], p);
         if (d < best)
             best = d;
     }
     return best;
 }
 
-/* The candidates of one cell: their count, and when wall_out is not NULL the
- * candidates themselves (by wall, then element). */
-static uint32_t cell_candidates(const sluice_wall_distance_index *index, size_t cell,
+/* A cell's list: every element that can be nearest to a point of it. */
+static uint32_t cell_candidates(const sluice_wall_cells *grid, size_t cell, void *context,
                                 uint32_t *wall_out, uint32_t *element_out)
 {
-    const uint32_t dims = index->dimensions;
-    sluice_real centre[3] = {0, 0, 0};
-    size_t rest = cell;
-    for (uint32_t d = 0; d < dims; d++) {
-        const size_t k = rest % (size_t)index->cells[d];
-        rest /= (size_t)index->cells[d];
-        centre[d] = (sluice_real)(index->lo[d] + ((double)k + 0.5) * index->cell_size);
-    }
-    const double r = 0.5 * index->cell_size * sqrt((double)dims);
-    const double dmin = sluice_wall_distance_full(index, centre);
-    /* a rounding margin: the element distances are computed in sluice_real */
-    const double scale = fabs((double)centre[0]) + fabs((double)centre[1]) +
-                         fabs((double)centre[2]) + dmin + r;
-    const double limit = dmin + 2 * r + 1e-9 * scale;
-    return sluice_walls_elements_within(index->walls, index->wall_count, centre, limit, wall_out,
-                                        element_out);
+    (void)context;
+    sluice_real centre[3];
+    sluice_wall_cells_centre(grid, cell, centre);
+    const double nearest = sluice_walls_nearest_distance(grid->walls, grid->wall_count, centre);
+    return sluice_wall_cells_near_elements(grid, centre, nearest, wall_out, element_out);
 }
 
 int sluice_wall_distance_init(sluice_wall_distance_index *index, uint32_t dimensions,
                               const sluice_wall_geometry *const *walls, size_t wall_count,
                               const double lo[3], const double hi[3], double cell_size)
 {
-    memset(index, 0, sizeof *index);
-    index->dimensions = dimensions;
-    index->walls = walls;
-    index->wall_count = wall_count;
+    sluice_wall_cells *grid = &index->cells;
+    memset(grid, 0, sizeof *grid);
+    grid->dimensions = dimensions;
+    grid->walls = walls;
+    grid->wall_count = wall_count;
     /* the box: the domain's, widened to hold every wall element */
     double box_lo[3], box_hi[3], elements = 0;
     for (int d = 0; d < 3; d++) {
@@ -96,57 +75,8 @@ int sluice_wall_distance_init(sluice_wall_distance_index *index, uint32_t dimens
     for (uint32_t d = 0; d < dimensions; d++)
         if (!isfinite(box_lo[d]) || !isfinite(box_hi[d]) || !(box_hi[d] >= box_lo[d]))
             return 0;
-    /* each cell asks every element twice (its nearest, its list): keep
-     * cells x elements within the budget */
-    for (;;) {
-        double count = 1;
-        for (uint32_t d = 0; d < dimensions; d++)
-            count *= floor((box_hi[d] - box_lo[d]) / cell_size) + 1;
-        if (count <= (double)INDEX_MAX_CELLS && count * 2 * elements <= INDEX_MAX_WORK)
-            break;
-        cell_size *= 1.25;
-    }
-    index->cell_size = cell_size;
-    index->inverse_cell_size = 1.0 / cell_size;
-    index->cell_count = 1;
-    for (uint32_t d = 0; d < 3; d++) {
-        index->lo[d] = d < dimensions ? box_lo[d] : 0;
-        index->cells[d] =
-            d < dimensions ? (int64_t)floor((box_hi[d] - box_lo[d]) / cell_size) + 1 : 1;
-        index->cell_count *= (size_t)index->cells[d];
-    }
-    const size_t n = index->cell_count;
-    index->candidate_begin = malloc((n + 1) * sizeof *index->candidate_begin);
-    if (!index->candidate_begin) {
-        sluice_wall_distance_free(index);
-        return -1;
-    }
-    /* first pass: the count per cell */
-#pragma omp parallel for schedule(dynamic, 64)
-    for (size_t c = 0; c < n; c++)
-        index->candidate_begin[c + 1] = cell_candidates(index, c, NULL, NULL);
-    index->candidate_begin[0] = 0;
-    uint64_t total = 0;
-    for (size_t c = 0; c < n; c++) {
-        total += index->candidate_begin[c + 1];
-        if (total > UINT32_MAX) {
-            sluice_wall_distance_free(index);
-            return -1;
-        }
-        index->candidate_begin[c + 1] = (uint32_t)total;
-    }
-    index->candidate_count = (size_t)total;
-    index->candidate_wall = malloc((size_t)(total ? total : 1) * sizeof *index->candidate_wall);
-    index->candidate_element =
-        malloc((size_t)(total ? total : 1) * sizeof *index->candidate_element);
-    if (!index->candidate_wall || !index->candidate_element) {
-        sluice_wall_distance_free(index);
-        return -1;
-    }
-    /* second pass: the candidates */
-#pragma omp parallel for schedule(dynamic, 64)
-    for (size_t c = 0; c < n; c++)
-        cell_candidates(index, c, index->candidate_wall + index->candidate_begin[c],
-                        index->candidate_element + index->candidate_begin[c]);
-    return 0;
+    /* each cell asks every element twice (its nearest, its list) */
+    sluice_wall_cells_layout(grid, dimensions, walls, wall_count, box_lo, box_hi, cell_size,
+                             2 * elements, INDEX_MAX_CELLS, INDEX_MAX_WORK);
+    return sluice_wall_cells_fill(grid, cell_candidates, NULL);
 }

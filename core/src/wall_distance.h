@@ -6,15 +6,11 @@
  * distances as the scene has elements: hundreds on a stepped chute. The
  * index cuts the box of the domain and the walls into cells (about a
  * kernel support wide) and keeps, per cell, the elements that can be
- * nearest to some point of it: those within dmin + 2 r of the cell's centre,
- * dmin the centre's distance to the nearest element and r the cell's
- * half-diagonal (the nearest element e* of a point p of the cell has
- * d(c, e*) <= d(p, e*) + r <= d(p, e_c) + r <= dmin + 2 r). A query looks
- * at its cell's list only (the lists are built as the watchdog's near
- * cells' are, wall_watch.h, but for every cell). The answer is the minimum
- * of the same element
- * distances as asking every element, so it is the same number, bit for
- * bit; points outside the box ask every element.
+ * nearest to some point of it (wall_cells.h: the watchdog's near cells
+ * have the same lists, wall_watch.h). A query looks at its cell's list
+ * only. The answer is the minimum of the same element distances as asking
+ * every element, so it is the same number, bit for bit; points outside the
+ * box ask every element.
  *
  * Pure data built from the fixed wall geometry; read-only during the run
  * (thread-safe). */
@@ -24,25 +20,17 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "geometry.h"
+#include "wall_cells.h"
 
 typedef struct sluice_wall_distance_index {
-    uint32_t dimensions;
-    size_t wall_count;
-    const sluice_wall_geometry *const *walls; /* not owned */
-    double lo[3], cell_size, inverse_cell_size;
-    int64_t cells[3];
-    size_t cell_count;
-    uint32_t *candidate_begin;   /* per cell + 1: range in the candidates */
-    uint32_t *candidate_wall;    /* candidates: wall index ... */
-    uint32_t *candidate_element; /* ... and element, sorted by wall then element */
-    size_t candidate_count;
+    sluice_wall_cells cells; /* a list for every cell of the box */
 } sluice_wall_distance_index;
 
 /* Builds the index over the box [lo, hi] (the domain; widened to hold the
  * walls) with cells of about `cell_size` (m, > 0; enlarged when the box
  * would need more than 4 M cells or the build too much work). walls[w]
- * must outlive the index. Returns 0, or -1 (out of memory). */
+ * must outlive the index. Returns 0, or -1 (out of memory: the index is
+ * then without cells, and every query asks every element). */
 int sluice_wall_distance_init(sluice_wall_distance_index *index, uint32_t dimensions,
                               const sluice_wall_geometry *const *walls, size_t wall_count,
                               const double lo[3], const double hi[3], double cell_size);

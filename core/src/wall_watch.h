@@ -12,10 +12,8 @@
  *   behind:   every point of the cell is behind a wall, deeper than the
  *             allowed depth: any fluid particle there has gone through;
  *   near:     the rest, each with the list of elements that can be nearest
- *             to some point of the cell (those within dmin + 2 r of its
- *             centre, dmin the centre's distance to the nearest element and
- *             r the cell's half-diagonal): the query over this list gives the
- *             full query's result exactly.
+ *             to some point of the cell (wall_cells.h): the query over this
+ *             list gives the full query's result exactly.
  * Pure data built from the scene; read-only during the run (thread-safe). */
 #ifndef SLUICE_WALL_WATCH_H
 #define SLUICE_WALL_WATCH_H
@@ -23,21 +21,11 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "geometry.h"
+#include "wall_cells.h"
 
 typedef struct sluice_wall_watch {
-    uint32_t dimensions;
-    size_t wall_count;
-    const sluice_wall_geometry *const *walls; /* not owned */
-    double lo[3], cell_size, inverse_cell_size;
-    int64_t cells[3];
-    size_t cell_count;
-    uint8_t *state;            /* per cell: SLUICE_WALL_CELL_* */
-    uint32_t *candidate_begin; /* per cell + 1: range in candidates (near cells) */
-    uint32_t *candidate_wall;    /* candidates: wall index ... */
-    uint32_t *candidate_element; /* ... and element, sorted by wall then element */
-    size_t candidate_count;
-    uint32_t largest_list; /* most candidates of one cell */
+    sluice_wall_cells cells; /* the near cells' lists (the others' are empty) */
+    uint8_t *state;          /* per cell: SLUICE_WALL_CELL_* */
 } sluice_wall_watch;
 
 enum { SLUICE_WALL_CELL_FRONT = 0, SLUICE_WALL_CELL_NEAR = 1, SLUICE_WALL_CELL_BEHIND = 2 };
