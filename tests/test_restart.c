@@ -1,4 +1,4 @@
-/* Checkpoints and restart (core/src/checkpoint.c, docs/reliability.md): a run
+/* Checkpoints and restart (core/checkpoint/checkpoint.c, docs/reliability.md): a run
  * continued from a checkpoint is bit-identical to the uninterrupted run
  * (every field of every particle, ids included, compared with memcmp), with
  * open boundaries that add and remove particles and with a dam break on dbc
