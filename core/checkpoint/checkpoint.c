@@ -47,6 +47,7 @@
 #include "build_config.h"
 #include "ranks.h"
 #include "schema.h"
+#include "decomposition.h"
 #include "sim_internal.h"
 #include "yaml_tree.h"
 
@@ -74,6 +75,15 @@ typedef struct ck_error {
     MPI_Comm comm;
 #endif
 } ck_error;
+
+/* api->state_* while a component saves or loads its state: the store lent
+ * to the engine around each save_state or load_state call (end of file). */
+static int state_write(sluice_host *host, const char *name, sluice_state_type state_type,
+                       uint64_t count, const void *data);
+static int state_read(sluice_host *host, const char *name, sluice_state_type state_type,
+                      uint64_t count, void *data);
+static int64_t state_length(sluice_host *host, const char *name);
+static const sluice_state_store checkpoint_store = {state_write, state_read, state_length};
 
 static ck_error ck_clear(void)
 {
@@ -440,7 +450,9 @@ static void write_state(sluice_sim *sim, hid_t file, ck_error *e)
         sim->state_instance = k;
         sim->state_writing = 1;
         sim->state_context = e;
+        sim->state_store = &checkpoint_store;
         int rc = in->component->save_state(in->state, &in->host);
+        sim->state_store = NULL;
         sim->state_group = -1;
         sim->state_writing = 0;
         sim->state_context = NULL;
@@ -668,7 +680,7 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
         double sums[2] = {(double)sim->removed, (double)sim->particle_steps};
         /* the ids of every rank are below the largest next id */
         double next_id = (double)sim->next_id;
-        if (sluice_ranks_gather(sim, &all) != 0 ||
+        if (sluice_ranks_gather(&sim->ranks_run, &all) != 0 ||
             sluice_comm_reduce(&sim->comm, sums, 2, SLUICE_REDUCE_SUM) != 0 ||
             sluice_comm_reduce(&sim->comm, &next_id, 1, SLUICE_REDUCE_MAX) != 0) {
             sim->state_file = NULL;
@@ -928,13 +940,22 @@ static double checkpoint_spacing(const char *scene_text)
     return spacing;
 }
 
-static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
+/* The checkpoint's figures a restart needs past reading the particles. */
+typedef struct restored_run {
+    uint64_t count;    /* particles in the checkpoint */
+    uint64_t rebuilds; /* neighbour-list rebuilds so far */
+    int grid_valid;    /* the neighbour list was valid (its build positions are stored) */
+} restored_run;
+
+/* The format, its version, the reals' size, the dimensions, the plugins,
+ * the field layout and the spacing match the scene's. */
+static void check_matches_scene(sluice_sim *sim, hid_t file, ck_error *e)
 {
     char *format = get_string(file, "format", e);
     if (format && strcmp(format, CHECKPOINT_FORMAT) != 0)
         fail(e, "it is not a Sluice checkpoint (format '%s')", format);
     free(format);
-    int version = 0, real_size = 0, dimensions = 0, grid_valid = 0;
+    int version = 0, real_size = 0, dimensions = 0;
     get_attr(file, "format_version", H5T_NATIVE_INT, &version, e);
     if (!e->text[0] && version != CHECKPOINT_VERSION)
         fail(e, "it has checkpoint format version %d; this sluice reads version %d", version,
@@ -978,8 +999,14 @@ static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
                     "or start a new run)",
                  spacing, (double)sim->spacing, spacing);
     }
+}
 
+/* The run's counters and every particle field; across ranks, the split of
+ * the particles into the ranks' boxes. */
+static void read_particles(sluice_sim *sim, hid_t file, ck_error *e, restored_run *run)
+{
     uint64_t count = 0, next_id = 0, removed = 0, initial = 0, steps = 0, rebuilds = 0;
+    int grid_valid = 0;
     int64_t step = 0;
     double time = 0, dt = 0, dt_limit = 0, deviation = 0;
     get_attr(file, "particle_count", H5T_NATIVE_UINT64, &count, e);
@@ -994,6 +1021,7 @@ static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
     get_attr(file, "max_density_deviation", H5T_NATIVE_DOUBLE, &deviation, e);
     get_attr(file, "neighbour_list_rebuilds", H5T_NATIVE_UINT64, &rebuilds, e);
     get_attr(file, "grid_valid", H5T_NATIVE_INT, &grid_valid, e);
+    *run = (restored_run){count, rebuilds, grid_valid};
     if (e->text[0])
         return;
     if (count == 0 || count > UINT32_MAX - 1 || !isfinite(time) || step < 0 ||
@@ -1049,20 +1077,25 @@ static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
      * from another rank count): split them into slabs anew, before the
      * plugins load their state. The run's sums are rank 0's to carry on. */
     if (sim->comm.size > 1) {
-        grid_valid = 0;
+        run->grid_valid = 0;
         if (sim->comm.rank != 0) {
             sim->removed = 0;
             sim->particle_steps = 0;
         }
-        if (sluice_ranks_split(sim) != 0) {
+        if (sluice_sim_split_ranks(sim) != 0) {
             fail(e, "%s", sim->failure);
             return;
         }
     }
 #endif
+}
 
+/* The core's group: requested times, the tables' lengths and hashes, the
+ * neighbour list's build positions. */
+static void read_core_group(sluice_sim *sim, hid_t file, ck_error *e, const restored_run *run)
+{
     /* core: requests, tables, neighbour list */
-    group = H5Gopen2(file, "core", H5P_DEFAULT);
+    hid_t group = H5Gopen2(file, "core", H5P_DEFAULT);
     if (group < 0) {
         fail(e, "group 'core' is missing");
         return;
@@ -1110,8 +1143,9 @@ static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
     free(names);
     free(times);
     free(bytes);
-    if (!e->text[0] && grid_valid) {
+    if (!e->text[0] && run->grid_valid) {
         const uint32_t dims = sim->scene.dimensions;
+        const uint64_t count = run->count;
         sluice_real *built = malloc((size_t)dims * count * sizeof *built + 1);
         void *rows[3] = {NULL, NULL, NULL};
         sluice_real *columns[3] = {NULL, NULL, NULL};
@@ -1125,13 +1159,17 @@ static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
     } else {
         sim->grid.valid = 0;
     }
-    sim->grid.rebuilds = rebuilds;
+    sim->grid.rebuilds = run->rebuilds;
     close_id(&group, H5Gclose);
     if (e->text[0])
         return;
+}
 
+/* Every plugin's saved state, through its load_state. */
+static void read_plugin_states(sluice_sim *sim, hid_t file, ck_error *e)
+{
     /* plugins */
-    group = H5Gopen2(file, "plugins", H5P_DEFAULT);
+    hid_t group = H5Gopen2(file, "plugins", H5P_DEFAULT);
     if (group < 0) {
         fail(e, "group 'plugins' is missing");
         return;
@@ -1154,7 +1192,9 @@ static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
         sim->state_instance = k;
         sim->state_writing = 0;
         sluice_sim_refresh_view(sim);
+        sim->state_store = &checkpoint_store;
         int rc = in->component->load_state(in->state, &in->host);
+        sim->state_store = NULL;
         sim->state_group = -1;
         sim->state_absent = 0;
         if (own >= 0)
@@ -1164,6 +1204,18 @@ static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
                  sim->failure[0] ? ": " : "", sim->failure);
     }
     close_id(&group, H5Gclose);
+}
+
+static void read_state(sluice_sim *sim, hid_t file, ck_error *e)
+{
+    restored_run run = {0, 0, 0};
+    check_matches_scene(sim, file, e);
+    if (!e->text[0])
+        read_particles(sim, file, e, &run);
+    if (!e->text[0])
+        read_core_group(sim, file, e, &run);
+    if (!e->text[0])
+        read_plugin_states(sim, file, e);
 }
 
 int sluice_sim_restart(sluice_sim *sim, const char *path, char *error, size_t error_size)
@@ -1228,7 +1280,7 @@ static int state_access(sluice_host *host, const char *name, int type, int writi
     return SLUICE_OK;
 }
 
-int sluice_api_state_write(sluice_host *host, const char *name, sluice_state_type state_type,
+static int state_write(sluice_host *host, const char *name, sluice_state_type state_type,
                            uint64_t count, const void *data)
 {
     sluice_sim *sim = host->sim;
@@ -1258,7 +1310,7 @@ int sluice_api_state_write(sluice_host *host, const char *name, sluice_state_typ
     return SLUICE_OK;
 }
 
-int sluice_api_state_read(sluice_host *host, const char *name, sluice_state_type state_type,
+static int state_read(sluice_host *host, const char *name, sluice_state_type state_type,
                           uint64_t count, void *data)
 {
     sluice_sim *sim = host->sim;
@@ -1283,7 +1335,7 @@ int sluice_api_state_read(sluice_host *host, const char *name, sluice_state_type
     return SLUICE_OK;
 }
 
-int64_t sluice_api_state_length(sluice_host *host, const char *name)
+static int64_t state_length(sluice_host *host, const char *name)
 {
     sluice_sim *sim = host->sim;
     if (state_access(host, name, CK_DOUBLE, 0) != SLUICE_OK || sim->state_absent)

@@ -1,5 +1,6 @@
-/* Running a simulation: the time loop, the stability watchdog, outputs that
- * are never left half-written, run.json and the progress line. */
+/* Running a simulation: the time loop (begin, step, end), hooks before and
+ * after each step, periodic checkpoints through the checkpoint service,
+ * SIGINT/SIGTERM, run.json and the progress line. */
 #define _GNU_SOURCE
 #include <errno.h>
 #include <fcntl.h>
@@ -15,184 +16,6 @@
 
 #include "build_config.h"
 #include "sim_internal.h"
-
-/* ------------------------------------------------------------------ I/O -- */
-
-int sluice_write_file_atomic(const char *path, const void *data, size_t size, char *error,
-                             size_t error_size)
-{
-    size_t n = strlen(path) + 32;
-    char *tmp = malloc(n);
-    if (!tmp) {
-        snprintf(error, error_size, "out of memory writing '%s'", path);
-        return -1;
-    }
-    snprintf(tmp, n, "%s.tmp.%ld", path, (long)getpid());
-    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0) {
-        snprintf(error, error_size, "cannot write '%s': %s", path, strerror(errno));
-        free(tmp);
-        return -1;
-    }
-    const char *p = data;
-    size_t left = size;
-    while (left > 0) {
-        ssize_t w = write(fd, p, left);
-        if (w < 0) {
-            if (errno == EINTR)
-                continue;
-            snprintf(error, error_size, "cannot write '%s': %s", path, strerror(errno));
-            close(fd);
-            unlink(tmp);
-            free(tmp);
-            return -1;
-        }
-        p += w;
-        left -= (size_t)w;
-    }
-    if (close(fd) != 0) {
-        snprintf(error, error_size, "cannot write '%s': %s", path, strerror(errno));
-        unlink(tmp);
-        free(tmp);
-        return -1;
-    }
-    if (rename(tmp, path) != 0) {
-        snprintf(error, error_size, "cannot write '%s': %s", path, strerror(errno));
-        unlink(tmp);
-        free(tmp);
-        return -1;
-    }
-    free(tmp);
-    return 0;
-}
-
-static int write_all(int fd, const char *data, size_t size)
-{
-    while (size > 0) {
-        ssize_t w = write(fd, data, size);
-        if (w < 0) {
-            if (errno == EINTR)
-                continue;
-            return -1;
-        }
-        data += w;
-        size -= (size_t)w;
-    }
-    return 0;
-}
-
-/* The FNV-1a hash of the file's first `bytes` bytes; 0 when it cannot be
- * read. */
-static int file_hash(int fd, uint64_t bytes, uint64_t *hash)
-{
-    char buffer[65536];
-    uint64_t h = SLUICE_TABLE_HASH_START, offset = 0;
-    while (offset < bytes) {
-        size_t want = bytes - offset < sizeof buffer ? (size_t)(bytes - offset) : sizeof buffer;
-        ssize_t got = pread(fd, buffer, want, (off_t)offset);
-        if (got < 0 && errno == EINTR)
-            continue;
-        if (got <= 0)
-            return 0;
-        h = sluice_table_hash_bytes(h, buffer, (size_t)got);
-        offset += (uint64_t)got;
-    }
-    *hash = h;
-    return 1;
-}
-
-/* A restarted run continues a table that is in the output directory (the
- * same directory as the checkpointed run) from its length at the checkpoint:
- * the rows written after the checkpoint (by the run that went on, or by
- * its finish) are cut off. The file must start with the checkpointed bytes
- * (their hash, when the checkpoint has it): another run's table left in the
- * directory is not cut in the middle of a row but started anew, with a
- * note. Returns the open descriptor, or -1 when the file is missing, shorter
- * or different (then a new file with the header is started). */
-static int resume_table(sluice_table *table)
-{
-    int fd = open(table->path, O_RDWR | O_APPEND | O_CLOEXEC);
-    if (fd < 0)
-        return -1;
-    struct stat st;
-    uint64_t hash = 0;
-    int same = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) &&
-               (uint64_t)st.st_size >= table->resume_bytes &&
-               file_hash(fd, table->resume_bytes, &hash) &&
-               (!table->resume_hashed || hash == table->resume_hash);
-    if (!same || ftruncate(fd, (off_t)table->resume_bytes) != 0) {
-        if (!same && !table->sim->quiet)
-            fprintf(stderr,
-                    "sluice: note: '%s' is not the checkpointed run's table (its first %llu "
-                    "bytes differ or are missing): it is started anew\n",
-                    table->path, (unsigned long long)table->resume_bytes);
-        close(fd);
-        return -1;
-    }
-    table->bytes = table->resume_bytes;
-    table->hash = hash;
-    return fd;
-}
-
-/* Appends one complete line (one write call) to a table, creating the file
- * with its header first. */
-int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t length)
-{
-    if (table->fd < 0) {
-        size_t n = strlen(table->sim->output_directory) + strlen(table->path) + 2;
-        char *full = malloc(n);
-        if (!full) {
-            table->failed = 1;
-            return SLUICE_ERROR;
-        }
-        snprintf(full, n, "%s/%s", table->sim->output_directory, table->path);
-        free(table->path);
-        table->path = full;
-        if (table->resume && table->resume_bytes > 0 &&
-            (table->fd = resume_table(table)) >= 0) {
-            if (write_all(table->fd, line, length) != 0) {
-                table->failed = 1;
-                sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path,
-                                strerror(errno));
-                return SLUICE_ERROR;
-            }
-            table->bytes += length;
-            table->hash = sluice_table_hash_bytes(table->hash, line, length);
-            return SLUICE_OK;
-        }
-        table->fd = open(table->path, O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
-        if (table->fd < 0) {
-            table->failed = 1;
-            sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path, strerror(errno));
-            return SLUICE_ERROR;
-        }
-        size_t hl = strlen(table->header);
-        char *header = malloc(hl + 2);
-        if (!header) {
-            table->failed = 1;
-            return SLUICE_ERROR;
-        }
-        memcpy(header, table->header, hl);
-        header[hl] = '\n';
-        int rc = write_all(table->fd, header, hl + 1);
-        table->bytes = hl + 1;
-        table->hash = sluice_table_hash_bytes(SLUICE_TABLE_HASH_START, header, hl + 1);
-        free(header);
-        if (rc != 0) {
-            table->failed = 1;
-            sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path, strerror(errno));
-            return SLUICE_ERROR;
-        }
-    }
-    if (write_all(table->fd, line, length) != 0) {
-        table->failed = 1;
-        sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path, strerror(errno));
-        return SLUICE_ERROR;
-    }
-    table->bytes += length;
-    table->hash = sluice_table_hash_bytes(table->hash, line, length);
-    return SLUICE_OK;
-}
 
 /* ------------------------------------------------------------- signals -- */
 
@@ -223,237 +46,6 @@ int sluice_install_stop_handlers(void)
 int sluice_stop_requested(void)
 {
     return stop_signal != 0;
-}
-
-static int make_directory(const char *path, char *error, size_t size)
-{
-    char *copy = strdup(path);
-    if (!copy) {
-        snprintf(error, size, "out of memory");
-        return -1;
-    }
-    for (char *p = copy + 1; *p; p++) {
-        if (*p != '/')
-            continue;
-        *p = '\0';
-        if (mkdir(copy, 0755) != 0 && errno != EEXIST) {
-            snprintf(error, size, "cannot create output directory '%s': %s", copy,
-                     strerror(errno));
-            free(copy);
-            return -1;
-        }
-        *p = '/';
-    }
-    if (mkdir(copy, 0755) != 0 && errno != EEXIST) {
-        snprintf(error, size, "cannot create output directory '%s': %s", copy, strerror(errno));
-        free(copy);
-        return -1;
-    }
-    free(copy);
-    struct stat st;
-    if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode)) {
-        snprintf(error, size, "output path '%s' is not a directory", path);
-        return -1;
-    }
-    if (access(path, W_OK) != 0) {
-        snprintf(error, size, "cannot write to output directory '%s': %s", path, strerror(errno));
-        return -1;
-    }
-    return 0;
-}
-
-/* ------------------------------------------------------------- watchdog -- */
-
-/* Checks the state after a step: non-finite values in integrated fields,
- * density outside the band, particles outside the domain, collapsed time
- * step. Returns 0 when healthy, else fills sim->failure. */
-static int watchdog(sluice_sim *sim)
-{
-    const sluice_view *v = &sim->view;
-    const sluice_scene *scene = &sim->scene;
-    const sluice_index n = v->count;
-    if (sim->dt_limit < scene->watchdog.min_time_step || !(sim->dt_limit > 0)) {
-        sluice_sim_fail(sim,
-                        "step %lld, t = %.9g s: the time step collapsed to %.3g s, below "
-                        "watchdog.min_time_step = %.3g s (the flow has gone unstable: velocities "
-                        "or accelerations have grown without bound)",
-                        (long long)sim->step, sim->time, sim->dt_limit,
-                        (double)scene->watchdog.min_time_step);
-        return -1;
-    }
-    /* state fields: position and every integrated field */
-    uint32_t fields = 0;
-    const sluice_field_entry *checked[64];
-    for (uint32_t f = 0; f < sim->field_count && fields < 64; f++) {
-        const sluice_field_entry *e = &sim->fields[f];
-        if (e->type != SLUICE_TYPE_REAL)
-            continue;
-        int state = strcmp(e->name, "position") == 0;
-        for (uint32_t r = 0; r < sim->rate_count; r++)
-            state |= strcmp(sim->rates[r].state_name, e->name) == 0 ||
-                     strcmp(sim->rates[r].rate_name, e->name) == 0;
-        if (state)
-            checked[fields++] = e;
-    }
-    const double rho0 = (double)sim->rest_density, band = (double)scene->watchdog.density_band;
-    const sluice_real *density =
-        sim->density.column >= 0 ? (const sluice_real *)v->columns[sim->density.column] : NULL;
-    /* each particle's own rest density, m_i / dx^d: the core gives every
-     * particle rest_density dx^d, a two-phase plugin the air rho0_a dx^d */
-    const sluice_real *mass =
-        sim->mass.column >= 0 ? (const sluice_real *)v->columns[sim->mass.column] : NULL;
-    const double inverse_volume = 1.0 / pow((double)sim->spacing, (double)v->dimensions);
-    sluice_index first = n;
-    int what = 0; /* 1 non-finite, 2 density band, 3 outside domain */
-    const sluice_field_entry *bad_field = NULL;
-    uint32_t bad_component = 0;
-    for (uint32_t k = 0; k < fields; k++) {
-        const sluice_field_entry *e = checked[k];
-        for (uint32_t c = 0; c < e->components; c++) {
-            const sluice_real *x = v->columns[e->column + (int32_t)c];
-            sluice_index found = n;
-#pragma omp parallel for schedule(static) reduction(min : found)
-            for (sluice_index i = 0; i < n; i++)
-                if (!isfinite(x[i]) && i < found)
-                    found = i;
-            if (found < first) {
-                first = found;
-                what = 1;
-                bad_field = e;
-                bad_component = c;
-            }
-        }
-    }
-    if (!what && density) {
-        sluice_index found = n;
-        double deviation = 0; /* fluid only: wall particles' densities are a wall model's */
-        const uint8_t *kind = v->kind;
-#pragma omp parallel for schedule(static) reduction(min : found) reduction(max : deviation)
-        for (sluice_index i = 0; i < n; i++) {
-            const double rest = mass ? (double)mass[i] * inverse_volume : rho0;
-            double r = (double)density[i] / rest - 1.0;
-            if (!(fabs(r) <= band) && i < found)
-                found = i;
-            if (kind[i] == SLUICE_KIND_FLUID && fabs(r) > deviation)
-                deviation = fabs(r);
-        }
-        if (deviation > sim->max_density_deviation)
-            sim->max_density_deviation = deviation;
-        if (found < n) {
-            first = found;
-            what = 2;
-        }
-    }
-    if (!what) {
-        for (uint32_t d = 0; d < v->dimensions; d++) {
-            if (scene->domain.periodic[d])
-                continue;
-            const sluice_real *x = v->position[d];
-            const double lo = (double)scene->domain.min[d], hi = (double)scene->domain.max[d];
-            sluice_index found = n;
-#pragma omp parallel for schedule(static) reduction(min : found)
-            for (sluice_index i = 0; i < n; i++)
-                if (!((double)x[i] >= lo && (double)x[i] < hi) && i < found)
-                    found = i;
-            if (found < first) {
-                first = found;
-                what = 3;
-                bad_component = d;
-            }
-        }
-    }
-    /* through a wall: fluid particles deeper than wall_penetration spacings
-     * behind the nearest wall (wall_watch.h) */
-    double wall_depth = 0;
-    uint32_t bad_wall = UINT32_MAX, bad_element = UINT32_MAX;
-    if (!what && sim->wall_watch.cells.wall_count > 0) {
-        const double allowed = (double)scene->watchdog.wall_penetration * (double)sim->spacing;
-        const uint8_t *kind = v->kind;
-        sluice_index found = n;
-#pragma omp parallel for schedule(static) reduction(min : found)
-        for (sluice_index i = 0; i < n; i++) {
-            if (kind[i] != SLUICE_KIND_FLUID || i >= found)
-                continue;
-            sluice_real p[3] = {v->position[0][i], v->position[1][i],
-                                v->dimensions == 3 ? v->position[2][i] : 0};
-            int beyond;
-            uint32_t w, e;
-            double d = sluice_wall_watch_distance(&sim->wall_watch, p, &beyond, &w, &e);
-            if (d < -allowed)
-                found = i;
-        }
-        if (found < n) {
-            first = found;
-            what = 4;
-            sluice_real p[3] = {v->position[0][found], v->position[1][found],
-                                v->dimensions == 3 ? v->position[2][found] : 0};
-            int beyond;
-            wall_depth = -sluice_wall_watch_distance(&sim->wall_watch, p, &beyond, &bad_wall,
-                                                     &bad_element);
-        }
-    }
-    if (!what)
-        return 0;
-    char who[256], writers[512];
-    const sluice_index i = first;
-    if (v->dimensions == 3)
-        snprintf(who, sizeof who, "particle id %llu (%s, index %u) at (%.6g, %.6g, %.6g) m",
-                 (unsigned long long)v->id[i], sluice_kind_name(v->kind[i]),
-                 i, (double)v->position[0][i], (double)v->position[1][i], (double)v->position[2][i]);
-    else
-        snprintf(who, sizeof who, "particle id %llu (%s, index %u) at (%.6g, %.6g) m",
-                 (unsigned long long)v->id[i], sluice_kind_name(v->kind[i]),
-                 i, (double)v->position[0][i], (double)v->position[1][i]);
-    if (what == 1) {
-        const sluice_real *x = v->columns[bad_field->column + (int32_t)bad_component];
-        char comp[16] = "";
-        if (bad_field->components > 1)
-            snprintf(comp, sizeof comp, "[%u]", bad_component);
-        sluice_sim_fail(sim,
-                        "step %lld, t = %.9g s: %s: field '%s'%s = %g is not finite (written by "
-                        "%s; integrated by '%s')",
-                        (long long)sim->step, sim->time, who, bad_field->name, comp, (double)x[i],
-                        sluice_field_writers(sim, bad_field, writers, sizeof writers),
-                        sim->instances[sim->integrator].name);
-    } else if (what == 2) {
-        const sluice_field_entry *e = sluice_sim_find_field(sim, "density");
-        const double rest = mass ? (double)mass[i] * inverse_volume : rho0;
-        sluice_sim_fail(sim,
-                        "step %lld, t = %.9g s: %s: field 'density' = %.6g kg m^-3 is outside the "
-                        "band [%.6g, %.6g] = its rest density (mass / spacing^d) x (1 -/+ "
-                        "watchdog.density_band) (written by %s; integrated by '%s')",
-                        (long long)sim->step, sim->time, who, (double)density[i],
-                        rest * (1 - band), rest * (1 + band),
-                        e ? sluice_field_writers(sim, e, writers, sizeof writers) : "?",
-                        sim->instances[sim->integrator].name);
-    } else if (what == 4) {
-        const sluice_scene_wall *wall = &scene->walls[bad_wall];
-        const sluice_field_entry *e = sluice_sim_find_field(sim, "position");
-        char name[160] = "";
-        if (wall->name && wall->name[0])
-            snprintf(name, sizeof name, " ('%s')", wall->name);
-        sluice_sim_fail(sim,
-                        "step %lld, t = %.9g s: %s has gone through wall %u%s (handled by '%s'): "
-                        "it is %.4g m = %.3g spacings behind its %s %u, deeper than "
-                        "watchdog.wall_penetration = %g spacings (field 'position', written by "
-                        "%s; integrated by '%s')",
-                        (long long)sim->step, sim->time, who, bad_wall, name,
-                        sim->walls[bad_wall].scheme ? sim->walls[bad_wall].scheme : "?",
-                        wall_depth, wall_depth / (double)sim->spacing,
-                        v->dimensions == 3 ? "triangle" : "segment", bad_element,
-                        (double)scene->watchdog.wall_penetration,
-                        e ? sluice_field_writers(sim, e, writers, sizeof writers) : "?",
-                        sim->instances[sim->integrator].name);
-    } else {
-        sluice_sim_fail(sim,
-                        "step %lld, t = %.9g s: %s left the domain along %c (domain.min/max = "
-                        "%g/%g m; field 'position', integrated by '%s')",
-                        (long long)sim->step, sim->time, who, "xyz"[bad_component],
-                        (double)scene->domain.min[bad_component],
-                        (double)scene->domain.max[bad_component],
-                        sim->instances[sim->integrator].name);
-    }
-    return -1;
 }
 
 /* ------------------------------------------------------------ the loop -- */
@@ -498,7 +90,7 @@ int sluice_sim_begin(sluice_sim *sim, const char *output_directory)
         char error[1024] = "";
         int failed = 0;
         if (sim->comm.rank == 0) {
-            if (make_directory(output_directory, error, sizeof error) != 0) {
+            if (sluice_sim_make_directory(output_directory, error, sizeof error) != 0) {
                 failed = 1;
             } else {
                 char path[4096];
@@ -545,6 +137,11 @@ int sluice_sim_begin(sluice_sim *sim, const char *output_directory)
     /* periodic checkpoints: the first scheduled after the current time (a
      * restart requested it already, in its saved requests) */
     if (sim->scene.checkpoint.interval > 0) {
+        if (!sim->services.checkpoint) {
+            sluice_sim_fail(sim, "checkpoint.interval asks for checkpoints, and this program "
+                                 "was built without the checkpoint library");
+            return SLUICE_RUN_FAILED;
+        }
         sim->checkpoint_next = 1;
         schedule_next_checkpoint(sim);
     }
@@ -564,7 +161,7 @@ static int periodic_checkpoint(sluice_sim *sim)
     if (sim->time + 1e-9 * interval < (double)sim->checkpoint_next * interval)
         return SLUICE_OK;
     if (sim->output_directory && sim->checkpoint_step != sim->step &&
-        sluice_sim_checkpoint(sim, NULL) != SLUICE_OK)
+        sim->services.checkpoint(sim, NULL) != SLUICE_OK)
         return SLUICE_ERROR;
     schedule_next_checkpoint(sim);
     return SLUICE_OK;
@@ -611,10 +208,10 @@ static int step(sluice_sim *sim)
     if (!(sim->dt > 0)) {
         /* a time-step limit that is not a number (or not positive) comes from
          * a particle's state: name the particle and the field when the
-         * watchdog's scan finds it */
+         * sluice_sim_watchdog's scan finds it */
         const double limit = sim->dt_limit;
         sim->dt_limit = INFINITY;
-        const int found = watchdog(sim) != 0;
+        const int found = sluice_sim_watchdog(sim) != 0;
         sim->dt_limit = limit;
         if (!found)
             sluice_sim_fail(sim,
@@ -629,7 +226,7 @@ static int step(sluice_sim *sim)
     sluice_grid_wrap(&sim->grid, (sluice_real **)sim->view.position, sim->particles.count);
     sluice_sim_refresh_view(sim);
     sim->particle_steps += sim->particles.count;
-    if (sim->step % sim->scene.watchdog.every == 0 && watchdog(sim) != 0)
+    if (sim->step % sim->scene.watchdog.every == 0 && sluice_sim_watchdog(sim) != 0)
         return SLUICE_RUN_UNSTABLE;
     if (call_hooks(sim, 1) != 0)
         return SLUICE_RUN_FAILED;
@@ -824,7 +421,7 @@ int sluice_sim_run(sluice_sim *sim, const sluice_run_options *options)
             /* SIGINT/SIGTERM: the last step is whole; keep it */
             status = SLUICE_RUN_INTERRUPTED;
             if (sim->output_directory && sim->checkpoint_step != sim->step &&
-                sluice_sim_checkpoint(sim, NULL) != SLUICE_OK)
+                sim->services.checkpoint && sim->services.checkpoint(sim, NULL) != SLUICE_OK)
                 status = SLUICE_RUN_FAILED;
             break;
         }

@@ -58,18 +58,8 @@ int sluice_sim_begin(sluice_sim *sim, const char *output_directory);
 int sluice_sim_step(sluice_sim *sim);
 int sluice_sim_end(sluice_sim *sim, int status);
 
-/* Checkpoints and restart (docs/reliability.md). sluice_sim_checkpoint
- * writes the complete state after the last whole step to `path` (HDF5,
- * atomically); with path NULL to DIR/checkpoint_<step>.h5 of the output
- * directory (and deletes the oldest beyond checkpoint.keep). Returns
- * SLUICE_OK or SLUICE_ERROR with the reason in sluice_sim_failure().
- * sluice_sim_restart replaces the freshly loaded state of `sim` (before
- * sluice_sim_begin/run) with the checkpoint's; it refuses a missing,
- * truncated or malformed file and one that does not match the scene
- * (dimensions, plugins, field layout) with one message naming the file in
- * `error`, and leaves `sim` unusable then. */
-int sluice_sim_checkpoint(sluice_sim *sim, const char *path);
-int sluice_sim_restart(sluice_sim *sim, const char *checkpoint, char *error, size_t error_size);
+/* Checkpoints and restart: core/checkpoint/checkpoint.h (included at the
+ * end: the embedding API is this header). */
 
 /* SIGINT and SIGTERM set a flag (the only global mutable state of Sluice):
  * sluice_sim_run then stops after the current step, writes a checkpoint and
@@ -110,5 +100,7 @@ const char *sluice_sim_failure(const sluice_sim *sim);
 
 /* Lists every plugin on the search path (sluice inspect). */
 int sluice_inspect(FILE *out, const char *component, int markdown);
+
+#include "checkpoint.h"
 
 #endif

@@ -97,6 +97,24 @@ static inline uint64_t sluice_table_hash_bytes(uint64_t hash, const char *data, 
     return hash;
 }
 
+/* Where api->state_write / state_read / state_length go: the checkpoint
+ * library (core/checkpoint/) sets it around a component's save_state or
+ * load_state call; NULL otherwise. The engine itself writes no files. */
+typedef struct sluice_state_store {
+    int (*write)(sluice_host *host, const char *name, sluice_state_type type, uint64_t count,
+                 const void *data);
+    int (*read)(sluice_host *host, const char *name, sluice_state_type type, uint64_t count,
+                void *data);
+    int64_t (*length)(sluice_host *host, const char *name);
+} sluice_state_store;
+
+/* What the libraries above the engine lend it (core/sim/ fills them). */
+typedef struct sluice_sim_services {
+    /* Writes a checkpoint of the state after the last whole step (path NULL:
+     * DIR/checkpoint_<step>.h5); NULL: this program has no checkpoints. */
+    int (*checkpoint)(sluice_sim *sim, const char *path);
+} sluice_sim_services;
+
 typedef enum sluice_phase {
     SLUICE_PHASE_CREATE = 0,
     SLUICE_PHASE_BIND = 1,
@@ -146,6 +164,7 @@ struct sluice_sim {
     sluice_pair_engine engine;
     sluice_comm comm;         /* the ranks of a distributed run (one by default) */
     sluice_halo_lists halo;   /* this rank's slab and halo (ranks.h) */
+    sluice_ranks_run ranks_run; /* the decomposition's view of the run (decomposition.c) */
     sluice_real point_margin; /* 1.9: the largest api->request_point_margin, m */
     sluice_pass *passes;
     uint32_t pass_count;
@@ -184,7 +203,9 @@ struct sluice_sim {
     int evaluating;   /* inside an evaluation or a pass: particles may not come or go */
     uint64_t removed; /* particles removed since the start (api->remove_particles) */
 
-    /* checkpoints (checkpoint.c) */
+    /* checkpoints (core/checkpoint/) */
+    sluice_sim_services services;
+    const sluice_state_store *state_store; /* set around save_state / load_state */
     int64_t checkpoint_next;      /* the next scheduled one is at checkpoint_next * interval */
     int64_t checkpoint_step;      /* step of the last checkpoint written, or -1 */
     char **checkpoint_files;      /* written by this run, oldest first (checkpoint.keep) */
@@ -215,7 +236,7 @@ static inline const char *sluice_kind_name(uint8_t kind)
                                       : "unknown";
 }
 
-/* sim.c */
+/* host.c */
 void sluice_sim_refresh_view(sluice_sim *sim);
 void sluice_sim_fail(sluice_sim *sim, const char *format, ...) SLUICE_PRINTF(2, 3);
 int sluice_sim_evaluate(sluice_sim *sim);
@@ -228,11 +249,56 @@ void sluice_sim_request_time(sluice_sim *sim, double t);
 int sluice_write_file_atomic(const char *path, const void *data, size_t size, char *error,
                              size_t error_size);
 
-/* checkpoint.c */
-int sluice_api_state_write(sluice_host *host, const char *name, sluice_state_type type,
-                           uint64_t count, const void *data);
-int sluice_api_state_read(sluice_host *host, const char *name, sluice_state_type type,
-                          uint64_t count, void *data);
-int64_t sluice_api_state_length(sluice_host *host, const char *name);
+/* The engine's files, lowest first: host.c, fields.c, evaluate.c, api.c,
+ * schedule.c, fill.c, load.c; files.c, watchdog.c, run.c (the time loop);
+ * accessors.c. Each calls only files before it (tools/core-graph.sh). */
+/* api.c */
+int sluice_sim_add_particles(sluice_sim *sim, uint8_t kind, const sluice_real *positions, const sluice_real *velocity, const sluice_real *density, sluice_index count, sluice_index *first);
+const sluice_instance *sluice_sim_equation_of_state(const sluice_sim *sim);
+
+/* host.c */
+char *sluice_sim_copy_string(const char *s);
+const char *sluice_sim_instance_name(const sluice_sim *sim, uint32_t instance);
+
+/* fields.c */
+int sluice_sim_publish(sluice_sim *sim, uint32_t instance, const char *name, const sluice_real *values, uint32_t count, const char *unit);
+int sluice_sim_declare(sluice_sim *sim, uint32_t instance, const sluice_field_spec *spec);
+uint32_t sluice_sim_get_constant(const sluice_sim *sim, const char *name, sluice_real *values, uint32_t max_count);
+int sluice_sim_handle_of(const sluice_sim *sim, const char *name, sluice_field *out);
+void sluice_sim_report(sluice_sim *sim, uint32_t instance, const char *format, ...) SLUICE_PRINTF(3, 4);
+uint8_t sluice_sim_type_size(sluice_type t);
+
+/* evaluate.c */
+int sluice_sim_run_point_pass(sluice_sim *sim, const sluice_host *host, const sluice_real *points, sluice_index count, uint32_t kinds, int with_halo, sluice_point_fn fn, void *context);
+int sluice_sim_refresh_halo(sluice_sim *sim);
+double sluice_sim_next_request(const sluice_sim *sim);
+int sluice_sim_update_neighbours(sluice_sim *sim);
+
+/* schedule.c */
+int sluice_sim_build_schedule(sluice_sim *sim);
+uint32_t *sluice_sim_initialise_order(const sluice_sim *sim);
+void sluice_sim_free_pair_pass(sluice_pair_pass *p);
+int sluice_sim_evaluation_pair(const sluice_component *c);
+int sluice_sim_build_rates(sluice_sim *sim);
+
+/* fill.c */
+int sluice_sim_fill_fluid(sluice_sim *sim);
+
+/* api.c */
+extern const sluice_api sluice_sim_api_table;
+
+/* files.c */
+int sluice_sim_make_directory(const char *path, char *error, size_t size);
+/* Appends one row to a table's file (api->table_row). */
+int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t length);
+
+/* watchdog.c */
+int sluice_sim_watchdog(sluice_sim *sim);
+
+/* load.c: the engine's loader; sluice_sim_load (core/sim/) calls it with
+ * the services of the libraries above the engine. */
+sluice_sim *sluice_engine_load(const char *scene_path, const char *variant,
+                               const sluice_load_options *options,
+                               const sluice_sim_services *services, sluice_diag *diag);
 
 #endif

@@ -7,7 +7,20 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "sim_internal.h"
+#include <stdarg.h>
+#include <stdio.h>
+
+/* Keeps the first cause of a failure in the run's message buffer. */
+static void fail(sluice_ranks_run *run, const char *format, ...) SLUICE_PRINTF(2, 3);
+static void fail(sluice_ranks_run *run, const char *format, ...)
+{
+    if (run->failure[0])
+        return;
+    va_list ap;
+    va_start(ap, format);
+    vsnprintf(run->failure, run->failure_size, format, ap);
+    va_end(ap);
+}
 
 void sluice_ranks_free(sluice_halo_lists *h)
 {
@@ -28,10 +41,10 @@ void sluice_ranks_free(sluice_halo_lists *h)
     memset(h, 0, sizeof *h);
 }
 
-int sluice_ranks_gather(sluice_sim *sim, sluice_particles *all)
+int sluice_ranks_gather(sluice_ranks_run *run, sluice_particles *all)
 {
-    const sluice_comm *c = &sim->comm;
-    const sluice_particles *p = &sim->particles;
+    const sluice_comm *c = run->comm;
+    const sluice_particles *p = run->particles;
     memset(all, 0, sizeof *all);
     int *counts = c->rank == 0 ? calloc((size_t)c->size, sizeof *counts) : NULL;
     int *bytes = c->rank == 0 ? calloc((size_t)c->size, sizeof *bytes) : NULL;
@@ -126,9 +139,9 @@ static int grow(void **block, size_t *capacity, size_t bytes)
 
 /* ------------------------------------------------------------- geometry -- */
 
-static uint32_t dims_of(const sluice_sim *sim)
+static uint32_t dims_of(const sluice_ranks_run *run)
 {
-    return sim->grid.dimensions;
+    return run->grid->dimensions;
 }
 
 /* x along axis d, wrapped into the domain on a periodic axis */
@@ -156,10 +169,10 @@ static double interval_gap(const sluice_grid *g, uint32_t d, double a0, double a
     return best;
 }
 
-static int box_holds(const sluice_sim *sim, const double *box, const double *x)
+static int box_holds(const sluice_ranks_run *run, const double *box, const double *x)
 {
-    for (uint32_t d = 0; d < dims_of(sim); d++) {
-        const double v = wrap_axis(&sim->grid, d, x[d]);
+    for (uint32_t d = 0; d < dims_of(run); d++) {
+        const double v = wrap_axis(run->grid, d, x[d]);
         if (!(v >= box[d] && v < box[3 + d]))
             return 0;
     }
@@ -167,39 +180,39 @@ static int box_holds(const sluice_sim *sim, const double *box, const double *x)
 }
 
 /* 1 when x lies within `width` of the box along every axis */
-static int near_box(const sluice_sim *sim, const double *box, const double *x, double width)
+static int near_box(const sluice_ranks_run *run, const double *box, const double *x, double width)
 {
-    for (uint32_t d = 0; d < dims_of(sim); d++)
-        if (!(interval_gap(&sim->grid, d, x[d], x[d], box[d], box[3 + d]) < width))
+    for (uint32_t d = 0; d < dims_of(run); d++)
+        if (!(interval_gap(run->grid, d, x[d], x[d], box[d], box[3 + d]) < width))
             return 0;
     return 1;
 }
 
-int sluice_ranks_owns(const sluice_sim *sim, const double point[3])
+int sluice_ranks_owns(const sluice_ranks_run *run, const double point[3])
 {
-    const sluice_halo_lists *h = &sim->halo;
+    const sluice_halo_lists *h = run->halo;
     const double box[6] = {h->lo[0], h->lo[1], h->lo[2], h->hi[0], h->hi[1], h->hi[2]};
-    return box_holds(sim, box, point);
+    return box_holds(run, box, point);
 }
 
-double sluice_ranks_outside(const sluice_sim *sim, const double point[3])
+double sluice_ranks_outside(const sluice_ranks_run *run, const double point[3])
 {
-    const sluice_halo_lists *h = &sim->halo;
+    const sluice_halo_lists *h = run->halo;
     double worst = 0;
-    for (uint32_t d = 0; d < dims_of(sim); d++) {
-        const double v = wrap_axis(&sim->grid, d, point[d]);
-        const double gap = interval_gap(&sim->grid, d, v, v, h->lo[d], h->hi[d]);
+    for (uint32_t d = 0; d < dims_of(run); d++) {
+        const double v = wrap_axis(run->grid, d, point[d]);
+        const double gap = interval_gap(run->grid, d, v, v, h->lo[d], h->hi[d]);
         worst = gap > worst || gap != gap ? gap : worst;
     }
     return worst;
 }
 
-static void position_of(const sluice_sim *sim, const sluice_particles *p, sluice_index i,
+static void position_of(const sluice_ranks_run *run, const sluice_particles *p, sluice_index i,
                         double x[3])
 {
     x[0] = x[1] = x[2] = 0;
-    for (uint32_t d = 0; d < dims_of(sim); d++)
-        x[d] = (double)((const sluice_real *)p->columns[sim->position.column + d])[i];
+    for (uint32_t d = 0; d < dims_of(run); d++)
+        x[d] = (double)((const sluice_real *)p->columns[run->position_column + d])[i];
 }
 
 /* ----------------------------------------------------------------- cuts -- */
@@ -225,12 +238,12 @@ static size_t cut_total(const int *s)
 
 /* The outer ends of every level: the domain on a periodic axis, +-inf on a
  * closed one (particles outside the domain are reported by the grid). */
-static void outer_cuts(const sluice_sim *sim, const int *s, double *cuts)
+static void outer_cuts(const sluice_ranks_run *run, const int *s, double *cuts)
 {
-    const sluice_grid *g = &sim->grid;
+    const sluice_grid *g = run->grid;
     double lo[3], hi[3];
     for (int d = 0; d < 3; d++) {
-        const int periodic = (uint32_t)d < dims_of(sim) && g->periodic[d];
+        const int periodic = (uint32_t)d < dims_of(run) && g->periodic[d];
         lo[d] = periodic ? g->lo[d] : -INFINITY;
         hi[d] = periodic ? g->hi[d] : INFINITY;
     }
@@ -248,27 +261,27 @@ static void outer_cuts(const sluice_sim *sim, const int *s, double *cuts)
 
 /* The group of level `level` of the point x: its x slab (level 1) or its
  * (x, y) column (level 2); 0 at level 0. */
-static int group_of(const sluice_sim *sim, const double *cuts, int level, const double *x)
+static int group_of(const sluice_ranks_run *run, const double *cuts, int level, const double *x)
 {
-    const int *s = sim->halo.split;
+    const int *s = run->halo->split;
     if (level == 0)
         return 0;
-    const double vx = wrap_axis(&sim->grid, 0, x[0]);
+    const double vx = wrap_axis(run->grid, 0, x[0]);
     int i = 0;
     while (i + 1 < s[0] && !(vx < cuts[cut_index(s, 0, i + 1, 0, 0)]))
         i++;
     if (level == 1)
         return i;
-    const double vy = wrap_axis(&sim->grid, 1, x[1]);
+    const double vy = wrap_axis(run->grid, 1, x[1]);
     int j = 0;
     while (j + 1 < s[1] && !(vy < cuts[cut_index(s, 1, i, j + 1, 0)]))
         j++;
     return i * s[1] + j;
 }
 
-static double *cut_at(const sluice_sim *sim, double *cuts, int level, int group, int k)
+static double *cut_at(const sluice_ranks_run *run, double *cuts, int level, int group, int k)
 {
-    const int *s = sim->halo.split;
+    const int *s = run->halo->split;
     if (level == 0)
         return &cuts[cut_index(s, 0, k, 0, 0)];
     if (level == 1)
@@ -283,10 +296,10 @@ static int groups_of_level(const int *s, int level)
 
 /* Sets the boxes from the cuts, this rank's box, and its neighbours (the
  * ranks whose box meets this box widened by the halo width). */
-static int boxes_from_cuts(sluice_sim *sim)
+static int boxes_from_cuts(sluice_ranks_run *run)
 {
-    sluice_halo_lists *h = &sim->halo;
-    const int *s = h->split, size = sim->comm.size;
+    sluice_halo_lists *h = run->halo;
+    const int *s = h->split, size = run->comm->size;
     for (int i = 0; i < s[0]; i++)
         for (int j = 0; j < s[1]; j++)
             for (int k = 0; k < s[2]; k++) {
@@ -298,19 +311,19 @@ static int boxes_from_cuts(sluice_sim *sim)
                 b[2] = h->cuts[cut_index(s, 2, i, j, k)];
                 b[5] = h->cuts[cut_index(s, 2, i, j, k + 1)];
             }
-    const double *own = h->boxes + 6 * (size_t)sim->comm.rank;
+    const double *own = h->boxes + 6 * (size_t)run->comm->rank;
     for (int d = 0; d < 3; d++) {
         h->lo[d] = own[d];
         h->hi[d] = own[3 + d];
     }
     int count = 0;
     for (int r = 0; r < size; r++) {
-        if (r == sim->comm.rank)
+        if (r == run->comm->rank)
             continue;
         const double *b = h->boxes + 6 * (size_t)r;
         int meets = 1;
-        for (uint32_t d = 0; d < dims_of(sim) && meets; d++)
-            meets = interval_gap(&sim->grid, d, own[d], own[3 + d], b[d], b[3 + d]) < h->width;
+        for (uint32_t d = 0; d < dims_of(run) && meets; d++)
+            meets = interval_gap(run->grid, d, own[d], own[3 + d], b[d], b[3 + d]) < h->width;
         if (meets)
             h->neighbour[count++] = r;
     }
@@ -321,10 +334,10 @@ static int boxes_from_cuts(sluice_sim *sim)
 /* The split of the rank count over the axes of `mask` (bit d: axis d) that
  * gives the boxes the least surface for the particles' extent (ties: more
  * cuts along x, then y). */
-static int choose_split(const sluice_sim *sim, int mask, const double *extent, int *split)
+static int choose_split(const sluice_ranks_run *run, int mask, const double *extent, int *split)
 {
-    const int size = sim->comm.size;
-    const uint32_t dims = dims_of(sim);
+    const int size = run->comm->size;
+    const uint32_t dims = dims_of(run);
     double best = INFINITY;
     split[0] = split[1] = split[2] = 0;
     for (int px = 1; px <= size; px++) {
@@ -351,10 +364,10 @@ static int choose_split(const sluice_sim *sim, int mask, const double *extent, i
  * all of them: the same cuts on every rank without a message), level by
  * level: the cut between the m-th and (m+1)-th coordinate of the group,
  * m = k n / parts. */
-static int cuts_of_equal_counts(sluice_sim *sim)
+static int cuts_of_equal_counts(sluice_ranks_run *run)
 {
-    sluice_halo_lists *h = &sim->halo;
-    const sluice_particles *p = &sim->particles;
+    sluice_halo_lists *h = run->halo;
+    const sluice_particles *p = run->particles;
     const sluice_index n = p->count;
     const int *s = h->split;
     double *values = malloc(((size_t)n + 1) * sizeof *values);
@@ -364,38 +377,38 @@ static int cuts_of_equal_counts(sluice_sim *sim)
         free(group);
         return -1;
     }
-    outer_cuts(sim, s, h->cuts);
+    outer_cuts(run, s, h->cuts);
     for (int level = 0; level < 3; level++) {
         const int parts = s[level], groups = groups_of_level(s, level);
         if (parts == 1)
             continue;
         for (sluice_index i = 0; i < n; i++) {
             double x[3];
-            position_of(sim, p, i, x);
-            group[i] = group_of(sim, h->cuts, level, x);
+            position_of(run, p, i, x);
+            group[i] = group_of(run, h->cuts, level, x);
         }
         for (int gr = 0; gr < groups; gr++) {
             size_t m = 0;
             for (sluice_index i = 0; i < n; i++)
                 if (group[i] == gr) {
                     double x[3];
-                    position_of(sim, p, i, x);
-                    values[m++] = wrap_axis(&sim->grid, (uint32_t)level, x[level]);
+                    position_of(run, p, i, x);
+                    values[m++] = wrap_axis(run->grid, (uint32_t)level, x[level]);
                 }
             qsort(values, m, sizeof *values, compare_double);
             for (int k = 1; k < parts; k++) {
                 const size_t at = (size_t)((uint64_t)k * m / (uint64_t)parts);
                 double cut;
                 if (m == 0) /* an empty group: even cuts of the domain */
-                    cut = sim->grid.lo[level] +
-                          (sim->grid.hi[level] - sim->grid.lo[level]) * k / parts;
+                    cut = run->grid->lo[level] +
+                          (run->grid->hi[level] - run->grid->lo[level]) * k / parts;
                 else if (at == 0)
                     cut = values[0];
                 else if (at >= m)
                     cut = values[m - 1];
                 else
                     cut = 0.5 * (values[at - 1] + values[at]);
-                *cut_at(sim, h->cuts, level, gr, k) = cut;
+                *cut_at(run, h->cuts, level, gr, k) = cut;
             }
         }
     }
@@ -413,10 +426,10 @@ static int cuts_of_equal_counts(sluice_sim *sim)
  * weight keeps its cuts. Collective. */
 enum { COARSE_BINS = 512, FINE_BINS = 256 };
 
-static int weighted_cuts(sluice_sim *sim, int level, double weight, double *cuts)
+static int weighted_cuts(sluice_ranks_run *run, int level, double weight, double *cuts)
 {
-    const sluice_halo_lists *h = &sim->halo;
-    const sluice_particles *p = &sim->particles;
+    const sluice_halo_lists *h = run->halo;
+    const sluice_particles *p = run->particles;
     const sluice_index n = p->count;
     const int parts = h->split[level], groups = groups_of_level(h->split, level);
     const size_t targets = (size_t)groups * (size_t)(parts - 1);
@@ -428,7 +441,7 @@ static int weighted_cuts(sluice_sim *sim, int level, double weight, double *cuts
     int *group = malloc(((size_t)n + 1) * sizeof *group);
     double *value = malloc(((size_t)n + 1) * sizeof *value);
     int failed = !range || !coarse || !fine || !bin || !below || !group || !value;
-    if (sluice_comm_any(&sim->comm, failed)) {
+    if (sluice_comm_any(run->comm, failed)) {
         free(range), free(coarse), free(fine), free(bin), free(below), free(group), free(value);
         return -1;
     }
@@ -436,15 +449,15 @@ static int weighted_cuts(sluice_sim *sim, int level, double weight, double *cuts
         range[gr] = range[groups + gr] = INFINITY; /* min, -max */
     for (sluice_index i = 0; i < n; i++) {
         double x[3];
-        position_of(sim, p, i, x);
-        group[i] = group_of(sim, cuts, level, x);
-        value[i] = wrap_axis(&sim->grid, (uint32_t)level, x[level]);
+        position_of(run, p, i, x);
+        group[i] = group_of(run, cuts, level, x);
+        value[i] = wrap_axis(run->grid, (uint32_t)level, x[level]);
         if (value[i] == value[i]) {
             range[group[i]] = fmin(range[group[i]], value[i]);
             range[groups + group[i]] = fmin(range[groups + group[i]], -value[i]);
         }
     }
-    sluice_comm_reduce(&sim->comm, range, 2 * (uint32_t)groups, SLUICE_REDUCE_MIN);
+    sluice_comm_reduce(run->comm, range, 2 * (uint32_t)groups, SLUICE_REDUCE_MIN);
     for (sluice_index i = 0; i < n; i++) {
         const int gr = group[i];
         const double lo = range[gr], width = -range[groups + gr] - lo;
@@ -454,7 +467,7 @@ static int weighted_cuts(sluice_sim *sim, int level, double weight, double *cuts
         b = b < 0 ? 0 : b >= COARSE_BINS ? COARSE_BINS - 1 : b;
         coarse[(size_t)gr * COARSE_BINS + (size_t)b] += weight;
     }
-    sluice_comm_reduce(&sim->comm, coarse, (uint32_t)groups * COARSE_BINS, SLUICE_REDUCE_SUM);
+    sluice_comm_reduce(run->comm, coarse, (uint32_t)groups * COARSE_BINS, SLUICE_REDUCE_SUM);
     /* the coarse bin of every target, and the weight below it */
     for (int gr = 0; gr < groups; gr++) {
         const double *c = coarse + (size_t)gr * COARSE_BINS;
@@ -492,7 +505,7 @@ static int weighted_cuts(sluice_sim *sim, int level, double weight, double *cuts
             fine[t * FINE_BINS + (size_t)f] += weight;
         }
     }
-    sluice_comm_reduce(&sim->comm, fine, (uint32_t)(targets * FINE_BINS), SLUICE_REDUCE_SUM);
+    sluice_comm_reduce(run->comm, fine, (uint32_t)(targets * FINE_BINS), SLUICE_REDUCE_SUM);
     for (int gr = 0; gr < groups; gr++) {
         const double *c = coarse + (size_t)gr * COARSE_BINS;
         double total = 0;
@@ -510,7 +523,7 @@ static int weighted_cuts(sluice_sim *sim, int level, double weight, double *cuts
             while (f + 1 < FINE_BINS && sum + fb[f] < goal)
                 sum += fb[f++];
             const double fraction = fb[f] > 0 ? (goal - sum) / fb[f] : 0.5;
-            *cut_at(sim, cuts, level, gr, k) =
+            *cut_at(run, cuts, level, gr, k) =
                 at + step * (f + (fraction < 0 ? 0 : fraction > 1 ? 1 : fraction));
         }
     }
@@ -522,9 +535,9 @@ static int weighted_cuts(sluice_sim *sim, int level, double weight, double *cuts
 
 /* Packs, neighbour by neighbour, the rows send[send_begin[k] ..) column by
  * column (the columns of `set`) into buffer[0]. */
-static int pack(sluice_sim *sim, sluice_halo_lists *h, column_set set)
+static int pack(sluice_ranks_run *run, sluice_halo_lists *h, column_set set)
 {
-    const sluice_particles *p = &sim->particles;
+    const sluice_particles *p = run->particles;
     const size_t row = row_bytes(p, set);
     const size_t total = (size_t)h->send_begin[h->neighbour_count] * row;
     if (grow((void **)&h->buffer[0], &h->buffer_capacity[0], total + 1) != 0)
@@ -544,11 +557,11 @@ static int pack(sluice_sim *sim, sluice_halo_lists *h, column_set set)
 /* Sends each neighbour its block of buffer[0] and receives its block into
  * buffer[1] (in neighbour order); receive_begin gets the offsets. Collective
  * over the neighbours. */
-static int exchange(sluice_sim *sim, sluice_halo_lists *h, column_set set)
+static int exchange(sluice_ranks_run *run, sluice_halo_lists *h, column_set set)
 {
-    const sluice_comm *c = &sim->comm;
+    const sluice_comm *c = run->comm;
     const int count = h->neighbour_count;
-    const size_t row = row_bytes(&sim->particles, set);
+    const size_t row = row_bytes(run->particles, set);
     MPI_Request *request = h->requests;
     for (int k = 0; k < count; k++) {
         h->sent[k] = h->send_begin[k + 1] - h->send_begin[k];
@@ -567,11 +580,11 @@ static int exchange(sluice_sim *sim, sluice_halo_lists *h, column_set set)
         h->receive_begin[k + 1] = (sluice_index)total;
     }
     if (too_large || total > UINT32_MAX / 2) {
-        sluice_sim_fail(sim, "rank %d: a halo message exceeds 2 GB", c->rank);
+        fail(run, "rank %d: a halo message exceeds 2 GB", c->rank);
         return -1;
     }
     if (grow((void **)&h->buffer[1], &h->buffer_capacity[1], (size_t)total * row + 1) != 0) {
-        sluice_sim_fail(sim, "out of memory for the halo of rank %d", c->rank);
+        fail(run, "out of memory for the halo of rank %d", c->rank);
         return -1;
     }
     for (int k = 0; k < count; k++) {
@@ -605,10 +618,10 @@ static void unpack(sluice_particles *p, const char *in, const sluice_index *bloc
 }
 
 /* Room for the neighbour lists of up to `size` ranks. */
-static int neighbour_arrays(sluice_sim *sim)
+static int neighbour_arrays(sluice_ranks_run *run)
 {
-    sluice_halo_lists *h = &sim->halo;
-    const size_t size = (size_t)sim->comm.size;
+    sluice_halo_lists *h = run->halo;
+    const size_t size = (size_t)run->comm->size;
     /* a restart splits again */
     free(h->cuts), free(h->boxes), free(h->neighbour), free(h->send_begin);
     free(h->receive_begin), free(h->sent), free(h->got), free(h->requests);
@@ -629,126 +642,64 @@ static int neighbour_arrays(sluice_sim *sim)
 
 /* ---------------------------------------------------------------- split -- */
 
-/* The columns a halo refresh sends (sluice_halo_lists.columns). */
-static int halo_columns(sluice_sim *sim)
+int sluice_ranks_split(sluice_ranks_run *run)
 {
-    sluice_halo_lists *h = &sim->halo;
-    const uint32_t columns = sim->column_count;
-    free(h->real_column), free(h->columns); /* a restart splits again */
-    uint8_t *wanted = calloc((size_t)columns + 1, 1);
-    h->real_column = calloc((size_t)columns + 1, 1);
-    h->columns = malloc(((size_t)columns + 1) * sizeof *h->columns);
-    if (!wanted || !h->real_column || !h->columns) {
-        free(wanted);
-        return -1;
-    }
-    for (uint32_t c = 0; c < columns; c++)
-        wanted[c] = 1; /* columns of no field: sent */
-    for (uint32_t f = 0; f < sim->field_count; f++)
-        for (uint32_t c = 0; c < sim->fields[f].components && sim->fields[f].column >= 0; c++)
-            wanted[(uint32_t)sim->fields[f].column + c] = 0;
-    for (uint32_t d = 0; d < dims_of(sim); d++)
-        wanted[sim->position.column + (int32_t)d] = 1;
-    wanted[sim->kind.column] = 1;
-    for (uint32_t f = 0; f < sim->field_count; f++) {
-        const sluice_field_entry *field = &sim->fields[f];
-        if (field->column < 0)
-            continue;
-        int read = 0;
-        for (uint32_t k = 0; k < field->declarer_count; k++) {
-            const sluice_declarer *dec = &field->declarers[k];
-            const sluice_instance *in =
-                dec->instance < sim->instance_count ? &sim->instances[dec->instance] : NULL;
-            read |= (dec->access & SLUICE_READ_NEIGHBOUR) != 0;
-            read |= in && in->local_points && (dec->access & (SLUICE_READ | SLUICE_WRITE)) != 0;
-            read |= in && in->reach_field[0] && strcmp(in->reach_field, field->name) == 0;
-        }
-        /* columns of other types (kind, id, phase: a byte or eight each)
-         * are always sent: they cannot hold NaN to catch an undeclared read */
-        const int real = field->type == SLUICE_TYPE_REAL;
-        for (uint32_t c = 0; c < field->components; c++) {
-            const uint32_t column = (uint32_t)field->column + c;
-            h->real_column[column] = (uint8_t)real;
-            wanted[column] |= (uint8_t)(read || !real);
-        }
-    }
-    h->column_count = 0;
-    for (uint32_t c = 0; c < columns; c++)
-        if (wanted[c])
-            h->columns[h->column_count++] = c;
-    free(wanted);
-    return 0;
-}
-
-int sluice_ranks_split(sluice_sim *sim)
-{
-    const sluice_comm *c = &sim->comm;
-    sluice_halo_lists *h = &sim->halo;
-    sluice_particles *p = &sim->particles;
-    /* the halo holds every particle a pass of this rank's particles may
-     * reach: the support, or the longest reach of a term beyond it
-     * (api->request_reach), from points up to the largest point margin
-     * outside the box (api->point_pass_local), plus the neighbour skin */
-    double reach = (double)sim->grid.support;
-    for (uint32_t k = 0; k < sim->instance_count; k++)
-        if ((double)sim->instances[k].reach > reach)
-            reach = (double)sim->instances[k].reach;
-    h->width = reach + (double)sim->point_margin + (double)sim->grid.skin;
+    const sluice_comm *c = run->comm;
+    sluice_halo_lists *h = run->halo;
+    sluice_particles *p = run->particles;
     /* the split: the scene's axes, the counts from the particles' extent */
     const sluice_index n = p->count;
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (sluice_index i = 0; i < n; i++) {
         double x[3];
-        position_of(sim, p, i, x);
-        for (uint32_t d = 0; d < dims_of(sim); d++) {
+        position_of(run, p, i, x);
+        for (uint32_t d = 0; d < dims_of(run); d++) {
             lo[d] = fmin(lo[d], x[d]);
             hi[d] = fmax(hi[d], x[d]);
         }
     }
     double extent[3] = {1, 1, 1};
-    for (uint32_t d = 0; d < dims_of(sim); d++)
-        extent[d] = hi[d] > lo[d] ? hi[d] - lo[d] : (double)sim->spacing;
-    if (choose_split(sim, sim->scene.ranks.split, extent, h->split) != 0) {
-        sluice_sim_fail(sim, "%d ranks cannot be split along the axes of ranks.split", c->size);
+    for (uint32_t d = 0; d < dims_of(run); d++)
+        extent[d] = hi[d] > lo[d] ? hi[d] - lo[d] : (double)run->spacing;
+    if (choose_split(run, run->split_axes, extent, h->split) != 0) {
+        fail(run, "%d ranks cannot be split along the axes of ranks.split", c->size);
         return -1;
     }
     uint8_t *away = calloc((size_t)n + 1, 1);
-    if (!away || neighbour_arrays(sim) != 0 || halo_columns(sim) != 0 ||
-        cuts_of_equal_counts(sim) != 0) {
+    if (!away || neighbour_arrays(run) != 0 || cuts_of_equal_counts(run) != 0) {
         free(away);
-        sluice_sim_fail(sim, "out of memory splitting %u particles across %d ranks", n, c->size);
+        fail(run, "out of memory splitting %u particles across %d ranks", n, c->size);
         return -1;
     }
-    boxes_from_cuts(sim);
+    boxes_from_cuts(run);
     for (sluice_index i = 0; i < n; i++) {
         double x[3];
-        position_of(sim, p, i, x);
+        position_of(run, p, i, x);
         const double box[6] = {h->lo[0], h->lo[1], h->lo[2], h->hi[0], h->hi[1], h->hi[2]};
-        away[i] = !box_holds(sim, box, x);
+        away[i] = !box_holds(run, box, x);
     }
     sluice_particles_compact(p, away);
     free(away);
-    sluice_sim_refresh_view(sim);
     return 0;
 }
 
 /* -------------------------------------------------------------- balance -- */
 
-int sluice_ranks_balance(sluice_sim *sim)
+int sluice_ranks_balance(sluice_ranks_run *run, int64_t step)
 {
-    const sluice_comm *c = &sim->comm;
-    sluice_halo_lists *h = &sim->halo;
-    const int balance = sim->scene.ranks.balance;
+    const sluice_comm *c = run->comm;
+    sluice_halo_lists *h = run->halo;
+    const int balance = run->balance;
     if (balance == SLUICE_BALANCE_NONE ||
-        sim->step < h->balance_step + sim->scene.ranks.every)
+        step < h->balance_step + run->balance_every)
         return 0;
-    h->balance_step = sim->step;
-    const double count = (double)sim->particles.count;
+    h->balance_step = step;
+    const double count = (double)run->particles->count;
     const double work = balance == SLUICE_BALANCE_TIME ? h->busy_seconds : count;
     h->busy_seconds = 0;
     const double total = sluice_comm_sum(c, work), largest = sluice_comm_max(c, work);
     const double mean = total / c->size;
-    if (!(mean > 0 && largest > (1 + (double)sim->scene.ranks.tolerance) * mean))
+    if (!(mean > 0 && largest > (1 + (double)run->balance_tolerance) * mean))
         return 0;
     /* every particle weighs its rank's work per particle; the new cuts, level
      * by level (each level's groups under the moved cuts of the levels
@@ -757,7 +708,7 @@ int sluice_ranks_balance(sluice_sim *sim)
     double *target = malloc(h->cut_count * sizeof *target);
     if (sluice_comm_any(c, target == NULL)) {
         free(target);
-        sluice_sim_fail(sim, "out of memory balancing the ranks");
+        fail(run, "out of memory balancing the ranks");
         return -1;
     }
     memcpy(target, h->cuts, h->cut_count * sizeof *target);
@@ -768,17 +719,17 @@ int sluice_ranks_balance(sluice_sim *sim)
         double *before = malloc(h->cut_count * sizeof *before);
         if (sluice_comm_any(c, before == NULL) ||
             (memcpy(before, target, h->cut_count * sizeof *before),
-             weighted_cuts(sim, level, weight, target) != 0)) {
+             weighted_cuts(run, level, weight, target) != 0)) {
             free(before);
             free(target);
-            sluice_sim_fail(sim, "out of memory balancing the ranks");
+            fail(run, "out of memory balancing the ranks");
             return -1;
         }
         const int groups = groups_of_level(h->split, level);
         for (int gr = 0; gr < groups; gr++)
             for (int k = 1; k < h->split[level]; k++) {
-                double *t = cut_at(sim, target, level, gr, k);
-                const double old = *cut_at(sim, before, level, gr, k);
+                double *t = cut_at(run, target, level, gr, k);
+                const double old = *cut_at(run, before, level, gr, k);
                 const double next = old + 0.5 * (*t - old);
                 moved |= next != old;
                 *t = next;
@@ -787,7 +738,7 @@ int sluice_ranks_balance(sluice_sim *sim)
     }
     if (moved) {
         memcpy(h->cuts, target, h->cut_count * sizeof *target);
-        boxes_from_cuts(sim);
+        boxes_from_cuts(run);
         h->balances++;
     }
     free(target);
@@ -799,23 +750,23 @@ int sluice_ranks_balance(sluice_sim *sim)
 /* The rank whose box holds x: a neighbour, else any (a balance moves the
  * cuts by more than a neighbour's width); -1 for a position that is not a
  * number (the grid build reports it). */
-static int owner_of(const sluice_sim *sim, const double *x)
+static int owner_of(const sluice_ranks_run *run, const double *x)
 {
-    const sluice_halo_lists *h = &sim->halo;
+    const sluice_halo_lists *h = run->halo;
     for (int k = 0; k < h->neighbour_count; k++)
-        if (box_holds(sim, h->boxes + 6 * (size_t)h->neighbour[k], x))
+        if (box_holds(run, h->boxes + 6 * (size_t)h->neighbour[k], x))
             return h->neighbour[k];
-    for (int r = 0; r < sim->comm.size; r++)
-        if (box_holds(sim, h->boxes + 6 * (size_t)r, x))
+    for (int r = 0; r < run->comm->size; r++)
+        if (box_holds(run, h->boxes + 6 * (size_t)r, x))
             return r;
     return -1;
 }
 
-int sluice_ranks_migrate(sluice_sim *sim)
+int sluice_ranks_migrate(sluice_ranks_run *run)
 {
-    const sluice_comm *c = &sim->comm;
-    sluice_halo_lists *h = &sim->halo;
-    sluice_particles *p = &sim->particles;
+    const sluice_comm *c = run->comm;
+    sluice_halo_lists *h = run->halo;
+    sluice_particles *p = run->particles;
     const sluice_index n = p->count;
     const int size = c->size;
     const double box[6] = {h->lo[0], h->lo[1], h->lo[2], h->hi[0], h->hi[1], h->hi[2]};
@@ -826,11 +777,11 @@ int sluice_ranks_migrate(sluice_sim *sim)
     sluice_index leaving = 0;
     for (sluice_index i = 0; i < n && !failed; i++) {
         double x[3];
-        position_of(sim, p, i, x);
+        position_of(run, p, i, x);
         destination[i] = -1;
-        if (box_holds(sim, box, x))
+        if (box_holds(run, box, x))
             continue;
-        const int r = owner_of(sim, x);
+        const int r = owner_of(run, x);
         if (r < 0 || r == c->rank)
             continue;
         destination[i] = r;
@@ -840,7 +791,7 @@ int sluice_ranks_migrate(sluice_sim *sim)
     }
     if (sluice_comm_any(c, failed)) {
         free(destination), free(counts), free(away);
-        sluice_sim_fail(sim, "out of memory migrating particles on rank %d", c->rank);
+        fail(run, "out of memory migrating particles on rank %d", c->rank);
         return -1;
     }
     /* counts[0 .. size): sent to each rank; [size, 2 size): received from
@@ -857,7 +808,7 @@ int sluice_ranks_migrate(sluice_sim *sim)
     failed = out_total * row > INT_MAX || in_total * row > INT_MAX;
     if (sluice_comm_any(c, failed)) {
         free(destination), free(counts), free(away);
-        sluice_sim_fail(sim, "rank %d: a migration message exceeds 2 GB", c->rank);
+        fail(run, "rank %d: a migration message exceeds 2 GB", c->rank);
         return -1;
     }
     /* pack by destination, each block column by column */
@@ -868,7 +819,7 @@ int sluice_ranks_migrate(sluice_sim *sim)
     if (sluice_comm_any(c, failed)) {
         free(destination), free(counts), free(away), free(send_block), free(receive_block),
             free(blocks);
-        sluice_sim_fail(sim, "out of memory migrating particles on rank %d", c->rank);
+        fail(run, "out of memory migrating particles on rank %d", c->rank);
         return -1;
     }
     char *out = send_block;
@@ -899,7 +850,7 @@ int sluice_ranks_migrate(sluice_sim *sim)
     if (sluice_comm_any(c, sbytes == NULL)) {
         free(destination), free(counts), free(away), free(send_block), free(receive_block),
             free(blocks), free(sbytes);
-        sluice_sim_fail(sim, "out of memory migrating particles on rank %d", c->rank);
+        fail(run, "out of memory migrating particles on rank %d", c->rank);
         return -1;
     }
     int *rbytes = sbytes + size;
@@ -918,7 +869,7 @@ int sluice_ranks_migrate(sluice_sim *sim)
         if (sluice_particles_append(p, arriving, &first) != 0) {
             free(destination), free(counts), free(away), free(send_block), free(receive_block),
                 free(blocks);
-            sluice_sim_fail(sim, "out of memory migrating particles on rank %d", c->rank);
+            fail(run, "out of memory migrating particles on rank %d", c->rank);
             return -1;
         }
         unpack(p, receive_block, blocks, size, first, NULL, every_column);
@@ -926,7 +877,6 @@ int sluice_ranks_migrate(sluice_sim *sim)
     }
     free(destination), free(counts), free(away), free(send_block), free(receive_block),
         free(blocks);
-    sluice_sim_refresh_view(sim);
     return 0;
 }
 
@@ -934,11 +884,11 @@ int sluice_ranks_migrate(sluice_sim *sim)
 
 int sluice_ranks_collect_halo(void *context, sluice_particles *p, sluice_index *halo_count)
 {
-    sluice_sim *sim = context;
-    sluice_halo_lists *h = &sim->halo;
+    sluice_ranks_run *run = context;
+    sluice_halo_lists *h = run->halo;
     const sluice_index n = p->count;
     const double width = h->width;
-    const uint32_t dims = dims_of(sim);
+    const uint32_t dims = dims_of(run);
     /* the particles within the halo width of this box's sides (the others
      * go to no neighbour), then the lists, neighbour by neighbour: those
      * within the halo width of its box */
@@ -946,10 +896,10 @@ int sluice_ranks_collect_halo(void *context, sluice_particles *p, sluice_index *
     int failed = near == NULL;
     for (sluice_index i = 0; i < n && !failed; i++) {
         double x[3];
-        position_of(sim, p, i, x);
+        position_of(run, p, i, x);
         int interior = 1;
         for (uint32_t d = 0; d < dims && interior; d++) {
-            const double v = wrap_axis(&sim->grid, d, x[d]);
+            const double v = wrap_axis(run->grid, d, x[d]);
             interior = v - h->lo[d] >= width && h->hi[d] - v >= width;
         }
         if (!interior)
@@ -961,8 +911,8 @@ int sluice_ranks_collect_halo(void *context, sluice_particles *p, sluice_index *
         const double *box = h->boxes + 6 * (size_t)h->neighbour[k];
         for (sluice_index m = 0; m < near_count; m++) {
             double x[3];
-            position_of(sim, p, near[m], x);
-            if (!near_box(sim, box, x, width))
+            position_of(run, p, near[m], x);
+            if (!near_box(run, box, x, width))
                 continue;
             if (listed == h->send_capacity) {
                 sluice_index cap = h->send_capacity ? 2 * h->send_capacity : 1024;
@@ -979,15 +929,15 @@ int sluice_ranks_collect_halo(void *context, sluice_particles *p, sluice_index *
     }
     free(near);
     h->send_begin[h->neighbour_count] = listed;
-    if (failed || pack(sim, h, every_column) != 0) {
-        sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
+    if (failed || pack(run, h, every_column) != 0) {
+        fail(run, "out of memory for the halo of rank %d", run->comm->rank);
         return -1;
     }
-    if (exchange(sim, h, every_column) != 0)
+    if (exchange(run, h, every_column) != 0)
         return -1;
     const sluice_index got = h->receive_begin[h->neighbour_count];
     if (sluice_particles_reserve(p, n + got) != 0) {
-        sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
+        fail(run, "out of memory for the halo of rank %d", run->comm->rank);
         return -1;
     }
     unpack(p, h->buffer[1], h->receive_begin, h->neighbour_count, n, NULL, every_column);
@@ -1011,10 +961,10 @@ int sluice_ranks_collect_halo(void *context, sluice_particles *p, sluice_index *
 }
 
 /* After the grid sorted the halo: the slot of each received entry. */
-static int halo_slots(sluice_sim *sim)
+static int halo_slots(sluice_ranks_run *run)
 {
-    sluice_halo_lists *h = &sim->halo;
-    const sluice_index got = sim->grid.halo_count;
+    sluice_halo_lists *h = run->halo;
+    const sluice_index got = run->grid->halo_count;
     if (got > h->slot_capacity) {
         sluice_index cap = got + got / 4 + 64;
         sluice_index *s = realloc(h->slot, (size_t)cap * sizeof *s);
@@ -1024,34 +974,34 @@ static int halo_slots(sluice_sim *sim)
         h->slot_capacity = cap;
     }
     for (sluice_index s = 0; s < got; s++)
-        h->slot[sim->grid.halo_order[s]] = s;
+        h->slot[run->grid->halo_order[s]] = s;
     return 0;
 }
 
-int sluice_ranks_refresh_halo(sluice_sim *sim)
+int sluice_ranks_refresh_halo(sluice_ranks_run *run)
 {
-    sluice_halo_lists *h = &sim->halo;
-    if (h->slot_valid_at != sim->grid.rebuilds) {
-        if (halo_slots(sim) != 0) {
-            sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
+    sluice_halo_lists *h = run->halo;
+    if (h->slot_valid_at != run->grid->rebuilds) {
+        if (halo_slots(run) != 0) {
+            fail(run, "out of memory for the halo of rank %d", run->comm->rank);
             return -1;
         }
-        h->slot_valid_at = sim->grid.rebuilds;
+        h->slot_valid_at = run->grid->rebuilds;
     }
     const column_set refreshed = {h->columns, h->column_count};
-    if (pack(sim, h, refreshed) != 0) {
-        sluice_sim_fail(sim, "out of memory for the halo of rank %d", sim->comm.rank);
+    if (pack(run, h, refreshed) != 0) {
+        fail(run, "out of memory for the halo of rank %d", run->comm->rank);
         return -1;
     }
     const sluice_index expected = h->receive_begin[h->neighbour_count];
-    if (exchange(sim, h, refreshed) != 0)
+    if (exchange(run, h, refreshed) != 0)
         return -1;
     if (h->receive_begin[h->neighbour_count] != expected) {
-        sluice_sim_fail(sim, "rank %d: the halo changed size between rebuilds", sim->comm.rank);
+        fail(run, "rank %d: the halo changed size between rebuilds", run->comm->rank);
         return -1;
     }
-    unpack(&sim->particles, h->buffer[1], h->receive_begin, h->neighbour_count,
-           sim->particles.count, h->slot, refreshed);
+    unpack(run->particles, h->buffer[1], h->receive_begin, h->neighbour_count,
+           run->particles->count, h->slot, refreshed);
     return 0;
 }
 

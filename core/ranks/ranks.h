@@ -16,9 +16,9 @@
 #define SLUICE_RANKS_H
 
 #include "comm.h"
+#include "neighbours.h"
 #include "particles.h"
-
-typedef struct sluice_sim sluice_sim;
+#include "scene.h"
 
 typedef struct sluice_halo_lists {
     int split[3];            /* ranks along x, y, z (their product: the rank count) */
@@ -53,12 +53,34 @@ typedef struct sluice_halo_lists {
     size_t buffer_capacity[2];
 } sluice_halo_lists;
 
+/* What the decomposition sees of a run: this rank's particle store and
+ * cells, the lists above, the scene's ranks settings and where a failure's
+ * message goes (the first cause is kept). The engine fills it once; the
+ * pointers stay valid for the run. Before sluice_ranks_split the engine
+ * sets the halo's width and the columns a refresh sends (halo->width,
+ * columns, real_column): what other ranks' particles are read for is the
+ * engine's knowledge, not this library's. */
+typedef struct sluice_ranks_run {
+    sluice_comm *comm;
+    sluice_particles *particles;
+    sluice_grid *grid;
+    sluice_halo_lists *halo;
+    int32_t position_column, kind_column;
+    double spacing;            /* lattice spacing, m: the extent of a flat axis */
+    int split_axes;            /* ranks.split: bit d for axis d */
+    int balance;               /* ranks.balance: SLUICE_BALANCE_TIME, _COUNT or _NONE */
+    int64_t balance_every;     /* ranks.every, steps */
+    double balance_tolerance;  /* ranks.tolerance */
+    char *failure;             /* message of the first failure */
+    size_t failure_size;
+} sluice_ranks_run;
+
 #ifdef SLUICE_MPI
 /* Splits the initial particles (every rank built all of them, or read them
  * all from a checkpoint) into boxes of equal counts along the scene's
  * ranks.split axes and keeps this rank's. Fails (message in sim) when the
  * split cannot be made. Collective. */
-int sluice_ranks_split(sluice_sim *sim);
+int sluice_ranks_split(sluice_ranks_run *run);
 /* Every ranks.every steps (scene), before the neighbour search: when the
  * ranks' work since the last balance (their measured time in the passes,
  * or their particle counts: ranks.balance) differs by more than
@@ -66,26 +88,26 @@ int sluice_ranks_split(sluice_sim *sim);
  * shares (weighted quantiles of the particles, axis by axis). Returns 1
  * when they moved (the caller rebuilds: the migration moves the
  * particles), 0 when not, -1 on failure. Collective. */
-int sluice_ranks_balance(sluice_sim *sim);
+int sluice_ranks_balance(sluice_ranks_run *run, int64_t step);
 /* Before a rebuild: sends the particles that left the box to the rank that
  * owns their place now. Collective. */
-int sluice_ranks_migrate(sluice_sim *sim);
+int sluice_ranks_migrate(sluice_ranks_run *run);
 /* The grid's halo function (sluice_grid_halo_fn): sends copies of the
  * particles within the halo width of each neighbour's box, receives the
  * neighbours' after the sorted particles. Collective. */
-int sluice_ranks_collect_halo(void *sim, sluice_particles *particles, sluice_index *halo_count);
+int sluice_ranks_collect_halo(void *run, sluice_particles *particles, sluice_index *halo_count);
 /* Refreshes every field of the halo from its owners. Collective. */
-int sluice_ranks_refresh_halo(sluice_sim *sim);
+int sluice_ranks_refresh_halo(sluice_ranks_run *run);
 void sluice_ranks_free(sluice_halo_lists *lists);
 /* Every rank's own particles, in rank order, into `all` on rank 0 (a store
  * of the same columns, initialised here; left empty on the other ranks).
  * Collective. 0, or -1 (out of memory or MPI; on any rank, every rank). */
-int sluice_ranks_gather(sluice_sim *sim, sluice_particles *all);
+int sluice_ranks_gather(sluice_ranks_run *run, sluice_particles *all);
 /* 1 when this rank's box holds the point (3 reals; periodic axes wrapped). */
-int sluice_ranks_owns(const sluice_sim *sim, const double point[3]);
+int sluice_ranks_owns(const sluice_ranks_run *run, const double point[3]);
 /* How far the point lies outside this rank's box: the largest gap along an
  * axis (periodic images included), 0 inside. */
-double sluice_ranks_outside(const sluice_sim *sim, const double point[3]);
+double sluice_ranks_outside(const sluice_ranks_run *run, const double point[3]);
 #else
 static inline void sluice_ranks_free(sluice_halo_lists *lists) { (void)lists; }
 #endif

@@ -1444,55 +1444,11 @@ int sluice_scene_load(sluice_scene *scene, const char *path, const char *const *
     return sluice_scene_load_variant(scene, path, NULL, overrides, override_count, diag);
 }
 
-int sluice_scene_load_variant(sluice_scene *scene, const char *path, const char *variant,
-                              const char *const *overrides, size_t override_count,
-                              sluice_diag *diag)
+/* Top-level keys the scene format knows (with a suggestion for a near
+ * miss), and the title, description and recorded variant as strings. */
+static int check_top_level(sluice_scene *scene, sluice_diag *diag)
 {
-    memset(scene, 0, sizeof *scene);
-    scene->arena = sluice_arena_create();
-    scene->path = strdup(path);
-    if (!scene->arena || !scene->path) {
-        sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, path, 0, 0, "out of memory");
-        return 1;
-    }
-    char resolved[PATH_MAX];
-    char *dir = strdup(path);
-    if (!dir)
-        return 1;
-    char *slash = strrchr(dir, '/');
-    const char *d = slash ? (slash == dir ? "/" : (*slash = '\0', dir)) : ".";
-    scene->directory = strdup(realpath(d, resolved) ? resolved : d);
-    free(dir);
-    if (!scene->directory)
-        return 1;
-
-    scene->root = sluice_yaml_parse_file(path, diag);
-    if (!scene->root)
-        return (int)(sluice_diag_error_count(diag) ? sluice_diag_error_count(diag) : 1);
-    if (scene->root->kind != SLUICE_NODE_MAPPING) {
-        error_at(diag, scene, scene->root, "a scene must be a mapping of sections");
-        return 1;
-    }
-    /* the variant first, then the overrides */
-    int errors = apply_variant(scene, variant, diag);
-    if (errors)
-        return errors;
-    for (size_t i = 0; i < override_count; i++) {
-        char origin[32];
-        snprintf(origin, sizeof origin, "--set #%zu", i + 1);
-        if (sluice_yaml_override(scene->root, overrides[i], origin, diag) != 0)
-            errors++;
-    }
-    if (errors)
-        return errors;
-    const sluice_node *late = sluice_node_get_key(scene->root, "variants");
-    if (late) {
-        error_at(diag, scene, late,
-                 "'variants' can only be written in the scene file: it is taken out before a "
-                 "variant and the --set overrides are applied");
-        return 1;
-    }
-
+    int errors = 0;
     /* unknown top-level sections */
     for (size_t i = 0; i < scene->root->count; i++) {
         const char *key = scene->root->keys[i]->value;
@@ -1535,22 +1491,14 @@ int sluice_scene_load_variant(sluice_scene *scene, const char *path, const char 
                  "from)");
         errors++;
     }
+    return errors;
+}
 
-    /* dimensions first: vectors depend on it */
-    sluice_node *dims = sluice_node_get(scene->root, "dimensions");
-    long long dimensions = 0;
-    if (!dims) {
-        error_at(diag, scene, scene->root, "missing required key 'dimensions' (2 or 3)");
-        return errors + 1;
-    }
-    if (dims->kind != SLUICE_NODE_SCALAR || !dims->plain ||
-        sluice_parse_int(dims->value, &dimensions) != 0 || (dimensions != 2 && dimensions != 3)) {
-        error_at(diag, scene, dims, "dimensions must be 2 or 3, got '%s'",
-                 dims->kind == SLUICE_NODE_SCALAR ? dims->value : "a collection");
-        return errors + 1;
-    }
-    scene->dimensions = (uint32_t)dimensions;
-
+/* The sections bound through their schemas: particles, time, domain,
+ * initial, neighbour_search, watchdog, checkpoint, ranks. */
+static int bind_sections(sluice_scene *scene, sluice_diag *diag)
+{
+    int errors = 0;
     particles_config pc;
     memset(&pc, 0, sizeof pc);
     errors += bind_section(scene, "particles", particles_specs, SLUICE_COUNT(particles_specs), &pc,
@@ -1629,7 +1577,13 @@ int sluice_scene_load_variant(sluice_scene *scene, const char *path, const char 
     scene->ranks.balance = rc.balance;
     scene->ranks.every = rc.every;
     scene->ranks.tolerance = rc.tolerance;
+    return errors;
+}
 
+/* The geometry section: its fluid regions and walls. */
+static int load_geometry(sluice_scene *scene, sluice_diag *diag)
+{
+    int errors = 0;
     sluice_node **geometry_slot = section_slot(scene->root, "geometry", 0);
     if (geometry_slot) {
         sluice_node *geometry = *geometry_slot;
@@ -1656,6 +1610,77 @@ int sluice_scene_load_variant(sluice_scene *scene, const char *path, const char 
             errors += load_walls(scene, geometry, diag);
         }
     }
+    return errors;
+}
+
+int sluice_scene_load_variant(sluice_scene *scene, const char *path, const char *variant,
+                              const char *const *overrides, size_t override_count,
+                              sluice_diag *diag)
+{
+    memset(scene, 0, sizeof *scene);
+    scene->arena = sluice_arena_create();
+    scene->path = strdup(path);
+    if (!scene->arena || !scene->path) {
+        sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, path, 0, 0, "out of memory");
+        return 1;
+    }
+    char resolved[PATH_MAX];
+    char *dir = strdup(path);
+    if (!dir)
+        return 1;
+    char *slash = strrchr(dir, '/');
+    const char *d = slash ? (slash == dir ? "/" : (*slash = '\0', dir)) : ".";
+    scene->directory = strdup(realpath(d, resolved) ? resolved : d);
+    free(dir);
+    if (!scene->directory)
+        return 1;
+
+    scene->root = sluice_yaml_parse_file(path, diag);
+    if (!scene->root)
+        return (int)(sluice_diag_error_count(diag) ? sluice_diag_error_count(diag) : 1);
+    if (scene->root->kind != SLUICE_NODE_MAPPING) {
+        error_at(diag, scene, scene->root, "a scene must be a mapping of sections");
+        return 1;
+    }
+    /* the variant first, then the overrides */
+    int errors = apply_variant(scene, variant, diag);
+    if (errors)
+        return errors;
+    for (size_t i = 0; i < override_count; i++) {
+        char origin[32];
+        snprintf(origin, sizeof origin, "--set #%zu", i + 1);
+        if (sluice_yaml_override(scene->root, overrides[i], origin, diag) != 0)
+            errors++;
+    }
+    if (errors)
+        return errors;
+    const sluice_node *late = sluice_node_get_key(scene->root, "variants");
+    if (late) {
+        error_at(diag, scene, late,
+                 "'variants' can only be written in the scene file: it is taken out before a "
+                 "variant and the --set overrides are applied");
+        return 1;
+    }
+
+    errors += check_top_level(scene, diag);
+
+    /* dimensions first: vectors depend on it */
+    sluice_node *dims = sluice_node_get(scene->root, "dimensions");
+    long long dimensions = 0;
+    if (!dims) {
+        error_at(diag, scene, scene->root, "missing required key 'dimensions' (2 or 3)");
+        return errors + 1;
+    }
+    if (dims->kind != SLUICE_NODE_SCALAR || !dims->plain ||
+        sluice_parse_int(dims->value, &dimensions) != 0 || (dimensions != 2 && dimensions != 3)) {
+        error_at(diag, scene, dims, "dimensions must be 2 or 3, got '%s'",
+                 dims->kind == SLUICE_NODE_SCALAR ? dims->value : "a collection");
+        return errors + 1;
+    }
+    scene->dimensions = (uint32_t)dimensions;
+
+    errors += bind_sections(scene, diag);
+    errors += load_geometry(scene, diag);
     if (!errors && scene->fluid_count == 0)
         sluice_diag_add(diag, SLUICE_SEVERITY_WARNING, scene->path, 0, 0,
                         "the scene has no fluid regions");

@@ -1,0 +1,233 @@
+/* Files that are never left half-written: whole files replaced atomically,
+ * CSV tables appended row by row and continued after a restart only when
+ * they start with the checkpointed bytes; the output directory. */
+#define _GNU_SOURCE
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "build_config.h"
+#include "sim_internal.h"
+
+/* ------------------------------------------------------------------ I/O -- */
+
+int sluice_write_file_atomic(const char *path, const void *data, size_t size, char *error,
+                             size_t error_size)
+{
+    size_t n = strlen(path) + 32;
+    char *tmp = malloc(n);
+    if (!tmp) {
+        snprintf(error, error_size, "out of memory writing '%s'", path);
+        return -1;
+    }
+    snprintf(tmp, n, "%s.tmp.%ld", path, (long)getpid());
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) {
+        snprintf(error, error_size, "cannot write '%s': %s", path, strerror(errno));
+        free(tmp);
+        return -1;
+    }
+    const char *p = data;
+    size_t left = size;
+    while (left > 0) {
+        ssize_t w = write(fd, p, left);
+        if (w < 0) {
+            if (errno == EINTR)
+                continue;
+            snprintf(error, error_size, "cannot write '%s': %s", path, strerror(errno));
+            close(fd);
+            unlink(tmp);
+            free(tmp);
+            return -1;
+        }
+        p += w;
+        left -= (size_t)w;
+    }
+    if (close(fd) != 0) {
+        snprintf(error, error_size, "cannot write '%s': %s", path, strerror(errno));
+        unlink(tmp);
+        free(tmp);
+        return -1;
+    }
+    if (rename(tmp, path) != 0) {
+        snprintf(error, error_size, "cannot write '%s': %s", path, strerror(errno));
+        unlink(tmp);
+        free(tmp);
+        return -1;
+    }
+    free(tmp);
+    return 0;
+}
+
+static int write_all(int fd, const char *data, size_t size)
+{
+    while (size > 0) {
+        ssize_t w = write(fd, data, size);
+        if (w < 0) {
+            if (errno == EINTR)
+                continue;
+            return -1;
+        }
+        data += w;
+        size -= (size_t)w;
+    }
+    return 0;
+}
+
+/* The FNV-1a hash of the file's first `bytes` bytes; 0 when it cannot be
+ * read. */
+static int file_hash(int fd, uint64_t bytes, uint64_t *hash)
+{
+    char buffer[65536];
+    uint64_t h = SLUICE_TABLE_HASH_START, offset = 0;
+    while (offset < bytes) {
+        size_t want = bytes - offset < sizeof buffer ? (size_t)(bytes - offset) : sizeof buffer;
+        ssize_t got = pread(fd, buffer, want, (off_t)offset);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got <= 0)
+            return 0;
+        h = sluice_table_hash_bytes(h, buffer, (size_t)got);
+        offset += (uint64_t)got;
+    }
+    *hash = h;
+    return 1;
+}
+
+/* A restarted run continues a table that is in the output directory (the
+ * same directory as the checkpointed run) from its length at the checkpoint:
+ * the rows written after the checkpoint (by the run that went on, or by
+ * its finish) are cut off. The file must start with the checkpointed bytes
+ * (their hash, when the checkpoint has it): another run's table left in the
+ * directory is not cut in the middle of a row but started anew, with a
+ * note. Returns the open descriptor, or -1 when the file is missing, shorter
+ * or different (then a new file with the header is started). */
+static int resume_table(sluice_table *table)
+{
+    int fd = open(table->path, O_RDWR | O_APPEND | O_CLOEXEC);
+    if (fd < 0)
+        return -1;
+    struct stat st;
+    uint64_t hash = 0;
+    int same = fstat(fd, &st) == 0 && S_ISREG(st.st_mode) &&
+               (uint64_t)st.st_size >= table->resume_bytes &&
+               file_hash(fd, table->resume_bytes, &hash) &&
+               (!table->resume_hashed || hash == table->resume_hash);
+    if (!same || ftruncate(fd, (off_t)table->resume_bytes) != 0) {
+        if (!same && !table->sim->quiet)
+            fprintf(stderr,
+                    "sluice: note: '%s' is not the checkpointed run's table (its first %llu "
+                    "bytes differ or are missing): it is started anew\n",
+                    table->path, (unsigned long long)table->resume_bytes);
+        close(fd);
+        return -1;
+    }
+    table->bytes = table->resume_bytes;
+    table->hash = hash;
+    return fd;
+}
+
+/* Appends one complete line (one write call) to a table, creating the file
+ * with its header first. */
+int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t length)
+{
+    if (table->fd < 0) {
+        size_t n = strlen(table->sim->output_directory) + strlen(table->path) + 2;
+        char *full = malloc(n);
+        if (!full) {
+            table->failed = 1;
+            return SLUICE_ERROR;
+        }
+        snprintf(full, n, "%s/%s", table->sim->output_directory, table->path);
+        free(table->path);
+        table->path = full;
+        if (table->resume && table->resume_bytes > 0 &&
+            (table->fd = resume_table(table)) >= 0) {
+            if (write_all(table->fd, line, length) != 0) {
+                table->failed = 1;
+                sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path,
+                                strerror(errno));
+                return SLUICE_ERROR;
+            }
+            table->bytes += length;
+            table->hash = sluice_table_hash_bytes(table->hash, line, length);
+            return SLUICE_OK;
+        }
+        table->fd = open(table->path, O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0644);
+        if (table->fd < 0) {
+            table->failed = 1;
+            sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path, strerror(errno));
+            return SLUICE_ERROR;
+        }
+        size_t hl = strlen(table->header);
+        char *header = malloc(hl + 2);
+        if (!header) {
+            table->failed = 1;
+            return SLUICE_ERROR;
+        }
+        memcpy(header, table->header, hl);
+        header[hl] = '\n';
+        int rc = write_all(table->fd, header, hl + 1);
+        table->bytes = hl + 1;
+        table->hash = sluice_table_hash_bytes(SLUICE_TABLE_HASH_START, header, hl + 1);
+        free(header);
+        if (rc != 0) {
+            table->failed = 1;
+            sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path, strerror(errno));
+            return SLUICE_ERROR;
+        }
+    }
+    if (write_all(table->fd, line, length) != 0) {
+        table->failed = 1;
+        sluice_sim_fail(table->sim, "cannot write '%s': %s", table->path, strerror(errno));
+        return SLUICE_ERROR;
+    }
+    table->bytes += length;
+    table->hash = sluice_table_hash_bytes(table->hash, line, length);
+    return SLUICE_OK;
+}
+
+int sluice_sim_make_directory(const char *path, char *error, size_t size)
+{
+    char *copy = strdup(path);
+    if (!copy) {
+        snprintf(error, size, "out of memory");
+        return -1;
+    }
+    for (char *p = copy + 1; *p; p++) {
+        if (*p != '/')
+            continue;
+        *p = '\0';
+        if (mkdir(copy, 0755) != 0 && errno != EEXIST) {
+            snprintf(error, size, "cannot create output directory '%s': %s", copy,
+                     strerror(errno));
+            free(copy);
+            return -1;
+        }
+        *p = '/';
+    }
+    if (mkdir(copy, 0755) != 0 && errno != EEXIST) {
+        snprintf(error, size, "cannot create output directory '%s': %s", copy, strerror(errno));
+        free(copy);
+        return -1;
+    }
+    free(copy);
+    struct stat st;
+    if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode)) {
+        snprintf(error, size, "output path '%s' is not a directory", path);
+        return -1;
+    }
+    if (access(path, W_OK) != 0) {
+        snprintf(error, size, "cannot write to output directory '%s': %s", path, strerror(errno));
+        return -1;
+    }
+    return 0;
+}
