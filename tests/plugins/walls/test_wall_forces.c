@@ -28,7 +28,7 @@
  * "{penalty_scale: 0.1}") change the scenes, not the assertions. */
 #include <math.h>
 
-#include "../plugins/walls/wall_contact.h"
+#include "wall_contact.h"
 #include "geometry.h"
 #include "sim_util.h"
 

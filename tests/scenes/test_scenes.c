@@ -23,7 +23,7 @@ static series load_martin_moyce(double a_inches)
     s.z[0] = 1;
     s.n = 1;
     char *path = NULL;
-    ck_assert_int_ge(asprintf(&path, "%s/tests/data/martin_moyce_1952_n2.csv", test_source_dir()),
+    ck_assert_int_ge(asprintf(&path, "%s/tests/scenes/data/martin_moyce_1952_n2.csv", test_source_dir()),
                      0);
     FILE *f = fopen(path, "r");
     ck_assert_ptr_nonnull(f);

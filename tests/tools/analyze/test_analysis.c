@@ -34,7 +34,7 @@
 #include <math.h>
 #include <stdint.h>
 
-#include "../tools/analyze/hydraulics.h"
+#include "hydraulics.h"
 #include "test_util.h"
 
 #ifndef M_PI
