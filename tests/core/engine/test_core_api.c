@@ -1,5 +1,5 @@
 /* The core services of ABI 1.3, through the fixture plugins in
- * tests/fixtures/api_probe.c and old_minor_plugin.c:
+ * tests/sdk/fixtures/api_probe.c and old_minor_plugin.c:
  *  - prepare() runs at every evaluation after the neighbour update and
  *    before the passes;
  *  - api->point_pass finds exactly the particles within the support of

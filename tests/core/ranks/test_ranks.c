@@ -692,7 +692,7 @@ END_TEST
 
 /* ------------------------------------------ inlets and outlets across ranks -- */
 
-/* A channel 1 m long (tests/test_open_boundaries.c's uniform channel): water
+/* A channel 1 m long (tests/plugins/open_boundaries/test_open_boundaries.c's uniform channel): water
  * 0.1 m deep at 0.5 m/s between a buffer inlet at x = 0, on the first
  * rank's slab, and a free outlet at x = 1 m, on the last rank's; 0.5 s, in
  * which the inlet adds 13 columns of 5 particles and the outlet removes
@@ -871,7 +871,7 @@ START_TEST(inlet_and_outlet_on_other_ranks)
 END_TEST
 
 /* A term that reads a field at its neighbours without declaring it
- * (tests/fixtures/neighbour_reader.c: density_rate, declared SLUICE_READ
+ * (tests/sdk/fixtures/neighbour_reader.c: density_rate, declared SLUICE_READ
  * only) gets NaN from the halo across ranks, where the refresh does not send
  * that field: one evaluation leaves NaN in the acceleration of the particles
  * with neighbours on other ranks (which the watchdog then stops), never a

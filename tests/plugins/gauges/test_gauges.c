@@ -112,7 +112,7 @@ START_TEST(point_gauge_hydrostatic_start)
 END_TEST
 
 /* Runs the tank (water up to 0.5 m) with the fixture
- * tests/fixtures/do_phase_fixture.c marking the fluid at or above y = 0.25 as
+ * tests/sdk/fixtures/do_phase_fixture.c marking the fluid at or above y = 0.25 as
  * air, and the plugin lines `gauges`; with `velocities` the water carries
  * u = 1 and the air u = 2. Returns the output directory (free it). */
 static char *run_tank_under_air(const char *gauges, int velocities)
@@ -221,7 +221,7 @@ END_TEST
 
 /* ------------------------------------------------------- air fraction -- */
 
-/* A still two-layer tank (as tests/test_two_phase.c's column): water up to
+/* A still two-layer tank (as tests/plugins/two_phase/test_two_phase.c's column): water up to
  * H = 0.15 m under 0.1 m of air, dbc walls and a lid at 0.25 m, dx = 0.01 m,
  * h = 1.225 dx, the two_phase plugin with c0_w = 20 m/s and p_b = 100 Pa,
  * hydrostatic start. Rows lie at (k + 1/2) dx: the interface y = 0.15 m is

@@ -1,5 +1,5 @@
 /* Time integrators and time-step conditions, checked through the real core
- * with the test plugin harmonic_force (tests/fixtures/harmonic_force.c): every
+ * with the test plugin harmonic_force (tests/sdk/fixtures/harmonic_force.c): every
  * fluid particle is an independent harmonic oscillator
  *   dv/dt = -omega^2 (x - c),  dx/dt = v (+ u_T, a transport correction),
  * with the exact solution y(t) = y0 cos(omega t) + (v0 + u_T)/omega sin(omega t),

@@ -18,7 +18,7 @@
  *  - particles an inlet creates start at initial_concentration;
  *  - bad input gives one clear message; a single-phase scene warns.
  * The source needs the field `phase`: it comes from the fixture plugin
- * tests/fixtures/do_phase_fixture.c, built with the tests. */
+ * tests/sdk/fixtures/do_phase_fixture.c, built with the tests. */
 #include <math.h>
 
 #include "sim_util.h"

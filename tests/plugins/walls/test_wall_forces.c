@@ -761,7 +761,7 @@ static const char *scheme_parameters(const char *scheme)
 
 /* The mean relative error of the pressure of the fluid particles of the
  * lowest layer away from the side walls (y <= 1.5 dx, 0.2 < x < 0.8 m)
- * against rho g (H - y) at their height, H = 0.5 m (as tests/test_scenes.c
+ * against rho g (H - y) at their height, H = 0.5 m (as tests/scenes/test_scenes.c
  * measures it for dbc), on the current state; *lowest receives the lowest
  * fluid particle's height. */
 static double bottom_pressure_error(sluice_sim *sim, double dx, double *lowest)

@@ -767,7 +767,7 @@ static tank_result still_tank(const char *walls, double dx, double t_end)
     int crossed = crossings(sim, &r.gap);
     if (crossed > r.crossed)
         r.crossed = crossed;
-    /* bottom pressure as tests/test_scenes.c measures it, on the current
+    /* bottom pressure as tests/scenes/test_scenes.c measures it, on the current
      * state through one more evaluation */
     ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
     const sluice_view *v = sluice_sim_view(sim);
@@ -826,7 +826,7 @@ static tank_result still_tank(const char *walls, double dx, double t_end)
  * its mean over the first second, and the fluid at rest, its rms speed below
  * 1e-3 sqrt(g H) (the speed of the sloshing the start excites; the dynamic
  * pressure of that residual flow is 5e-7 rho g H, nothing against the 3 %).
- * tests/test_scenes.c asks for a tenfold decay from the first second, which
+ * tests/scenes/test_scenes.c asks for a tenfold decay from the first second, which
  * dbc's initial drop (0.17 J here) gives; mirror walls start in equilibrium
  * with the hydrostatic fluid (0.006 J in the first second), so their
  * residual, not the decay ratio, is the measure of rest. */
