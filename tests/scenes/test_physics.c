@@ -5,6 +5,8 @@
 #include <math.h>
 
 #include "sim_util.h"
+/* Internal: evaluates the loaded kernel on its state; the grid and particles (not in sim.h) */
+#include "sim_internal.h"
 
 #define SCENE_HEAD                                                                              \
     "dimensions: %d\n"                                                                          \

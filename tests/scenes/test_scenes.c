@@ -8,6 +8,8 @@
 #include <math.h>
 
 #include "sim_util.h"
+/* Internal: max_density_deviation (run.json has it too) (not in sim.h) */
+#include "sim_internal.h"
 
 /* ---------------------------------------------------- Martin & Moyce data -- */
 

@@ -5,6 +5,8 @@
 #include <math.h>
 
 #include "sim_util.h"
+/* Internal: which file each plugin instance came from (not in sim.h) */
+#include "sim_internal.h"
 
 START_TEST(template_plugin_builds_loads_and_acts)
 {

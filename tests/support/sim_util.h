@@ -1,9 +1,10 @@
-/* Loading simulations from scene text in tests. */
+/* Loading simulations from scene text in tests, through the embedding API
+ * (sim.h) alone. A suite that reads the core's internals includes
+ * sim_internal.h itself and says why. */
 #ifndef SLUICE_TEST_SIM_UTIL_H
 #define SLUICE_TEST_SIM_UTIL_H
 
 #include "sim.h"
-#include "sim_internal.h"
 #include "test_util.h"
 
 /* Writes `yaml` to a scratch file and loads it; fails the test with the

@@ -13,6 +13,8 @@
 
 #include "api_probe.h"
 #include "sim_util.h"
+/* Internal: the engine's own state: instances, passes, the grid, fields (not in sim.h) */
+#include "sim_internal.h"
 
 static const char *fixture_dir(void)
 {

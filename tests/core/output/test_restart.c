@@ -14,6 +14,8 @@
 #include <time.h>
 
 #include "sim_util.h"
+/* Internal: compares the restored particle columns and fields with the saved ones byte by byte (not in sim.h) */
+#include "sim_internal.h"
 
 /* A horizontal frictionless channel (penalty_contact) between an inlet at
  * x = 0 and an outlet at x = 1 m (particles added and removed every step),

@@ -10,6 +10,8 @@
 #include <mpi.h>
 
 #include "sim_util.h"
+/* Internal: each rank's halo lists, particles and grid (not in sim.h) */
+#include "sim_internal.h"
 
 
 /* configs/dam_break_2d.yaml at dx = 0.04 m without its gauge and writer

@@ -12,6 +12,9 @@
 #include <math.h>
 
 #include "sim_util.h"
+/* Internal: calls the loaded kernel and the tait, transport_velocity and pressure_smoothing
+ * instances on their state; dt, support, the grid (not in sim.h) */
+#include "sim_internal.h"
 
 static uint64_t rng = 7;
 static double uniform(void)

@@ -15,6 +15,8 @@
 #include <math.h>
 
 #include "sim_util.h"
+/* Internal: reads the integrators' instance state by name; dt, dt_limit (not in sim.h) */
+#include "sim_internal.h"
 
 #define PI 3.14159265358979323846
 #define OMEGA (2 * PI) /* period 1 s */

@@ -6,6 +6,8 @@
 #include <string.h>
 
 #include "sim_util.h"
+/* Internal: the particle bookkeeping: next_id, particles_initial, removed (not in sim.h) */
+#include "sim_internal.h"
 
 /* A horizontal, frictionless (penalty_contact) channel: inflow at x = 0,
  * outflow at x = length; water of depth `depth` at velocity `velocity`

@@ -22,6 +22,8 @@
 #include <math.h>
 
 #include "sim_util.h"
+/* Internal: calls the loaded kernel on its state; rest_density (not in sim.h) */
+#include "sim_internal.h"
 
 static uint64_t rng = 1001;
 static double uniform(void)

@@ -13,6 +13,8 @@
 #include <math.h>
 
 #include "sim_util.h"
+/* Internal: calls the loaded kernel on its state (not in sim.h) */
+#include "sim_internal.h"
 
 static uint64_t rng = 4004;
 static double uniform(void)

@@ -19,6 +19,9 @@
 #include <math.h>
 
 #include "sim_util.h"
+/* Internal: calls the loaded kernel on its state; published constants, dt_limit, support (not
+ * in sim.h) */
+#include "sim_internal.h"
 
 static const char *const forms[] = {"morris", "lo_shao"};
 

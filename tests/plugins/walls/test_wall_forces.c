@@ -31,6 +31,9 @@
 #include "wall_contact.h"
 #include "geometry.h"
 #include "sim_util.h"
+/* Internal: the scene's walls and the core's geometry (geometry.h) as the reference for
+ * wall_contact.h; instance state, dt_limit (not in sim.h) */
+#include "sim_internal.h"
 
 /* ------------------------------------------------- fake host for the header -- */
 

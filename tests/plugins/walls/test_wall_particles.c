@@ -24,6 +24,8 @@
 
 #include "geometry.h"
 #include "sim_util.h"
+/* Internal: signed distances to the scene's walls (geometry.h) (not in sim.h) */
+#include "sim_internal.h"
 
 #define G 9.81
 #define RHO0 1000.0
