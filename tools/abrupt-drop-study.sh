@@ -34,7 +34,7 @@ pick() { sed -n "s|^$1 = \([^ ]*\).*|\1|p" "$2" | head -n 1; }
 for t in $tests; do
     scene="configs/abrupt_drop_$t.yaml"
     run="$out/$t"
-    observed=$(awk -F, -v t="$t" '$1 == t { print $12 }' tests/data/depadova2017_table1.csv)
+    observed=$(awk -F, -v t="$t" '$1 == t { print $12 }' tests/scenes/data/depadova2017_table1.csv)
     drop_x=$(sed -n 's|^#   sluice-analyze drop-type [^ ]* --drop-x \([^ ]*\).*|\1|p' "$scene")
     latest=$(ls "$run"/checkpoint_*.h5 2>/dev/null | tail -n 1)
     echo "== $t ($observed), $end s${latest:+, continued from $latest}" >&2

@@ -57,7 +57,7 @@ cases=${CASES:-dam still poiseuille jump speed pysph}
 mkdir -p "$out"
 csv=$out/benchmark.csv
 echo "case,variant,resolution,dx_m,particles,steps,wall_s,particle_steps_per_s,pair_interactions_per_s,state_bytes_per_particle,threads,status,error_name,error" >"$csv"
-martin_moyce=tests/data/martin_moyce_1952_n2.csv
+martin_moyce=tests/scenes/data/martin_moyce_1952_n2.csv
 
 json() { sed -n "s/.*\"$2\": \\([0-9.eE+-]*\\).*/\\1/p" "$1/run.json" | head -n 1; }
 has() { case " $cases " in *" $1 "*) return 0 ;; *) return 1 ;; esac; }

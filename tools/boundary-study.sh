@@ -34,7 +34,7 @@ build=${1:-build}
 out=${OUT:-runs/boundary-study}
 quick=${QUICK:-0}
 schemes=${SCHEMES:-dbc mdbc ghost_no_slip ghost_free_slip penalty_contact repulsive_force mixed}
-data=tests/data/martin_moyce_1952_n2.csv
+data=tests/scenes/data/martin_moyce_1952_n2.csv
 mkdir -p "$out"
 
 # The YAML line of each scheme (the scenes' walls are handled by `dbc: {}`).

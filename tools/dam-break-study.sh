@@ -15,7 +15,7 @@ build=${1:-build}
 spacings=${*:-0.04 0.02 0.01}
 scene=${SCENE:-configs/dam_break_2d.yaml}
 out=${OUT:-runs/dam-break-study/$(basename "$scene" .yaml)}
-data=tests/data/martin_moyce_1952_n2.csv
+data=tests/scenes/data/martin_moyce_1952_n2.csv
 mkdir -p "$out"
 echo "dx_m,particles,wall_s,series_a_in,worst_error,worst_at_T,mean_error,front_speed_sim,front_speed_exp" >"$out/summary.csv.tmp"
 for dx in $spacings; do

@@ -1,8 +1,8 @@
 #!/bin/sh
-# Fuzzes the scene loader (tests/fuzz/fuzz_scene.c: YAML, schema, plugin
+# Fuzzes the scene loader (tests/core/fuzz/fuzz_scene.c: YAML, schema, plugin
 # lookup and parameters, plugin creation, geometry, the initial state and two
 # steps of a valid scene) with libFuzzer under AddressSanitizer and
-# UndefinedBehaviorSanitizer, starting from the corpus in tests/fuzz/corpus
+# UndefinedBehaviorSanitizer, starting from the corpus in tests/core/fuzz/corpus
 # (every scene of configs/ and small scenes using every plugin).
 #
 #   tools/fuzz.sh [SECONDS] [WORKERS]     defaults: 60 s, 1 worker
@@ -28,14 +28,14 @@ mkdir -p "$work/corpus" "$work/artifacts"
 # (-Wno-pass-failed: clang reports the `omp simd` loops it leaves scalar
 # under the sanitizers' instrumentation)
 meson compile -C "$build" >"$work/build.log" 2>&1 || { tail -n 20 "$work/build.log" >&2; exit 2; }
-cp -n tests/fuzz/corpus/* "$work/corpus/"
+cp -n tests/core/fuzz/corpus/* "$work/corpus/"
 export SLUICE_PLUGIN_PATH="$PWD/$build/plugins"
 export ASAN_OPTIONS="detect_leaks=1:intercept_tls_get_addr=0:allocator_may_return_null=1"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
 export OMP_NUM_THREADS=1
 set +e
-"$build/tests/fuzz/fuzz_scene" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=4096 \
-    -max_len=16384 -dict=tests/fuzz/scene.dict -artifact_prefix="$work/artifacts/" \
+"$build/tests/core/fuzz/fuzz_scene" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=4096 \
+    -max_len=16384 -dict=tests/core/fuzz/scene.dict -artifact_prefix="$work/artifacts/" \
     -print_final_stats=1 -close_fd_mask=1 \
     $([ "$workers" -gt 1 ] && echo "-jobs=$workers -workers=$workers") \
     "$work/corpus" >"$work/fuzz.log" 2>&1

@@ -26,7 +26,7 @@ from=${FROM:-2.5}
 to=${TO:-5}
 scheme=${SCHEME:-penalty_contact}
 out=${OUT:-runs/jump-study}
-table=tests/data/jonsson2016_table2.csv
+table=tests/scenes/data/jonsson2016_table2.csv
 mkdir -p "$out"
 scene="$out/scene-$scheme.yaml"
 sed "s/^  penalty_contact: {}.*\$/  $scheme: {}/" configs/hydraulic_jump_jonsson2016.yaml >"$scene"

@@ -1,9 +1,9 @@
 #!/bin/sh
 # Writes configs/abrupt_drop_T1.yaml .. T7.yaml from seed 004's table 1
-# (tests/data/depadova2017_table1.csv): the seven jumps differ only in their
+# (tests/scenes/data/depadova2017_table1.csv): the seven jumps differ only in their
 # inflow, tailwater and spacing. Run it after changing the template below.
 cd "$(dirname "$0")/.."
-tail -n +5 tests/data/depadova2017_table1.csv | while IFS=, read t run y1 yt v1 vt f1 ratio re s sy type; do
+tail -n +5 tests/scenes/data/depadova2017_table1.csv | while IFS=, read t run y1 yt v1 vt f1 ratio re s sy type; do
 y1m=$(awk -v a=$y1 'BEGIN{printf "%.4f", a/100}'); ytm=$(awk -v a=$yt 'BEGIN{printf "%.4f", a/100}')
 dx=$(awk -v a=$y1m 'BEGIN{printf "%.6g", a/4}')
 xd=$(awk -v d=$dx 'BEGIN{printf "%.6g", int(0.8/d+0.5)*d}')
@@ -17,7 +17,7 @@ xfa=$(awk -v x=$xd -v d=$dx 'BEGIN{printf "%.6g", x-d}')
 xfb=$(awk -v x=$xd -v d=$dx 'BEGIN{printf "%.6g", x+d}')
 cat > configs/abrupt_drop_$t.yaml <<EOF
 # Hydraulic jump at an abrupt drop: seed 004 (De Padova, Mossa & Sibilla
-# 2017), test $t (run $run of Mossa et al. 2003; tests/data/depadova2017_table1.csv):
+# 2017), test $t (run $run of Mossa et al. 2003; tests/scenes/data/depadova2017_table1.csv):
 # y1 = $y1 cm, V1 = $v1 m/s (Fr1 = $fr by V1/sqrt(g y1); the table prints
 # $f1), tailwater yt = $yt cm, Vt = $vt m/s, drop s = 3.2 cm. Observed jump
 # type: $type.

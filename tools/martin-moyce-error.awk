@@ -1,5 +1,5 @@
 # Worst relative error of a dam-break front against Martin & Moyce (1952):
-#   awk -F, -f tools/martin-moyce-error.awk tests/data/martin_moyce_1952_n2.csv RUN/front.csv
+#   awk -F, -f tools/martin-moyce-error.awk tests/scenes/data/martin_moyce_1952_n2.csv RUN/front.csv
 # The first file is the experiment (rows a,T,Z; the a = 2.25 in column is
 # used, with Z = 1 at T = 0 added), the second a front table (time,x_front,
 # header first). Prints the signed error (Z_run - Z_exp) / Z_exp of largest

@@ -3,7 +3,7 @@
 # H = 0.1 m over a flat DBC bed, slope S = 0.0025 (gravity tilted by the
 # slope), free surface, c0 = 10 m/s (> 10 u_max and > 10 sqrt(g H)), h = 1.5 dx,
 # 12 dx long. It runs the `study` case of the turbulence test program
-# (tests/test_turbulence.c, run_open_channel), which for every case measures,
+# (tests/plugins/turbulence/test_turbulence.c, run_open_channel), which for every case measures,
 # time-averaged over the last T_AVERAGE seconds:
 #   - u* = sqrt(g S H) from the exact momentum balance (fluid mass);
 #   - the bulk velocity U and the bed friction / driving force ratio

@@ -25,7 +25,7 @@
  * increment spans: identical at constant dt, exact for a constant rate, and
  * second order while dt varies smoothly.
  *
- * Accuracy and energy (measured in tests/test_integrators.c): second order in
+ * Accuracy and energy (measured in tests/plugins/integrators/test_integrators.c): second order in
  * dt for an even euler_every (the default 40), first order for an odd one.
  * An Euler step leaves an O(dt^2) defect in the value it computes, which the
  * leapfrog then carries in one of the two interleaved sequences only. With an

@@ -18,7 +18,7 @@
  * boundary particles) have zero velocity: the term then drags the fluid to
  * rest at the walls (no-slip). With DBC layers on the lattice behind a wall,
  * the effective no-slip position lies 0.6 to 0.9 dx behind the wall line
- * (Poiseuille flow, tests/test_viscosity.c): first-order accurate walls.
+ * (Poiseuille flow, tests/plugins/viscosity/test_viscosity.c): first-order accurate walls.
  *
  * Time step: the explicit viscous condition of Morris et al. (1997),
  * dt <= 0.125 h^2 / nu over fluid particles. It is a stability bound of its

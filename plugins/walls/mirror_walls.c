@@ -85,7 +85,7 @@
  * pressure column is the one the last evaluation used. dbc's clamp acts only
  * on dbc's own particles (by id), so the schemes mix in one scene.
  *
- * Limitation (measured with tests/test_wall_particles.c's study hooks): both
+ * Limitation (measured with tests/plugins/walls/test_wall_particles.c's study hooks): both
  * schemes hold the fluid at a wall only through the field they mirror, with
  * no memory of an approach. Particles in tension (p < 0) in the film the
  * dam break leaves on its left wall are pulled towards the wall by their own

@@ -7,7 +7,7 @@
  * NaN samples (a gauge outside the fluid) are skipped where documented.
  * Units: SI throughout (m, s, m s^-1). See docs/analysis.md for the
  * definitions, references and the tests that verify each function
- * (tests/test_analysis.c). */
+ * (tests/tools/analyze/test_analysis.c). */
 #ifndef SLUICE_HYDRAULICS_H
 #define SLUICE_HYDRAULICS_H
 
