@@ -1,6 +1,6 @@
 /* Gravity: a uniform body force on fluid particles, dv/dt += g. Publishes the
  * constant 'gravity' (used by the core for the hydrostatic initial state). */
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct gravity_config {
     sluice_real acceleration[3];

@@ -38,7 +38,7 @@
  * Both forms vanish for a uniform velocity and are exact for the divergence
  * of a linear velocity field on a lattice (with renormalisation, on any
  * particle set). */
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct continuity_config {
     int form;

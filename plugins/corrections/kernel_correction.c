@@ -28,7 +28,7 @@
  * all of these fully. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct kc_config {
     sluice_real singular_below, regular_above;

@@ -37,7 +37,7 @@
  * targets, fluid neighbours. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct ps_config {
     int64_t every;

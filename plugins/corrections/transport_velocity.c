@@ -37,7 +37,7 @@
  * et al.'s momentum equation, of order dt p_b, is not included. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct transport_config {
     sluice_real background_pressure, min_kernel_sum;

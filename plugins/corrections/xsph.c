@@ -25,7 +25,7 @@
  *                           / (V_i W(0) + sum_{j != i} V_j W_ij).
  *
  * Both forms vanish identically for a uniform velocity field. */
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct xsph_config {
     int form;

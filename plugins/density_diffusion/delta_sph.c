@@ -20,7 +20,7 @@
  * rho^H_ji = rho0_k (g . r_ji) / c0_k^2. Across the interface the density
  * jumps by the density ratio: diffusing it would drag air density into the
  * water and back. */
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct delta_config {
     sluice_real delta;

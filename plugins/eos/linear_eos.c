@@ -3,7 +3,7 @@
  * p0 is the pressure at the rest density (0 for gauge pressure). It is the
  * LS-DYNA linear-polynomial form with C1 = p0, C2 = c^2 rho0 and no other
  * term (seed 000 eq. 13), with the density range unrestricted. */
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct linear_config {
     sluice_real speed_of_sound, reference_pressure;

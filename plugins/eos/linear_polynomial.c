@@ -14,7 +14,7 @@
  * directly, not both. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct polynomial_config {
     sluice_real c1, c2, c3, c4, c5, c6, c7;

@@ -9,7 +9,7 @@
  * only. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct tait_config {
     sluice_real speed_of_sound, gamma, background_pressure;

@@ -58,7 +58,7 @@
  * sums. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct energy_config {
     sluice_real interval;

@@ -39,8 +39,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "gauge_column.h"
-#include "phase_filter.h"
+#include <sluice/gauge_column.h>
+#include <sluice/phase_filter.h>
 
 #define MAX_SAMPLES 1000000u
 

@@ -8,7 +8,7 @@
  * row, which is exactly the one-rank row. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct front_config {
     sluice_real interval, origin;

@@ -32,7 +32,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "phase_filter.h"
+#include <sluice/phase_filter.h>
 
 #define MAX_FIELDS 16
 

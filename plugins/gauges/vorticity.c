@@ -41,7 +41,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct vort_config {
     sluice_real interval;

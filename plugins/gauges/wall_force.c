@@ -37,7 +37,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "phase_filter.h"
+#include <sluice/phase_filter.h>
 
 #define MAX_SAMPLES 1000000u
 #define MAX_WALLS 32

@@ -32,7 +32,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct monitor_config {
     sluice_real interval;

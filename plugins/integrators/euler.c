@@ -20,7 +20,7 @@
  * multiplies the oscillator's energy by exactly 1 + (omega dt)^2, so it only
  * runs where dissipation (viscosity) outweighs that growth; it is offered for
  * comparison with seed 000, not for production. */
-#include "integrator_util.h"
+#include <sluice/integrator_util.h>
 
 enum { FORM_SEMI_IMPLICIT = 0, FORM_EXPLICIT = 1 };
 

@@ -43,7 +43,7 @@
  * multiplied by a fixed factor every step, but grows as the spectral radius
  * of its step squared, 1 + (omega dt)^4 / 2 + O((omega dt)^6) per step
  * (test_integrators, energy_pec): twice the epec rate. */
-#include "integrator_util.h"
+#include <sluice/integrator_util.h>
 
 enum { MODE_EPEC = 0, MODE_PEC = 1 };
 

@@ -7,7 +7,7 @@
  * particles move with the velocity plus, when a plugin (XSPH) declares it, the
  * field transport_velocity_correction; walls move only when a wall plugin
  * moves them. The step size comes from the rates at t^n (first evaluation). */
-#include "integrator_util.h"
+#include <sluice/integrator_util.h>
 
 typedef struct symplectic_state {
     const sluice_api *api;

@@ -35,7 +35,7 @@
  * symplectic: on an undamped oscillator its energy grows secularly, at the
  * rate given by the spectral radius of its per-cycle amplification matrix
  * (x1.0068 per period at omega dt = 2 pi / 64 with euler_every 40). */
-#include "integrator_util.h"
+#include <sluice/integrator_util.h>
 
 typedef struct verlet_config {
     int64_t euler_every;

@@ -7,7 +7,7 @@
  * Both are antisymmetric in i, j, so linear momentum is conserved exactly.
  * The kernel gradient is never renormalised here (seed 004).
  * Targets fluid particles; wall particles act through their pressure (DBC). */
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct pressure_config {
     int form;

@@ -96,8 +96,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "phase_filter.h"
-#include "plugin_util.h"
+#include <sluice/phase_filter.h>
+#include <sluice/plugin_util.h>
 
 enum { INLET_BUFFER = 0, INLET_BLOCK = 1 };
 enum { OUTLET_FREE = 0, OUTLET_FROZEN = 1, OUTLET_BUFFER = 2 };

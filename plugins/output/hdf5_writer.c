@@ -49,7 +49,7 @@
 
 #include <hdf5.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 #define H5W_NONE ((hid_t)-1)
 #define H5W_PATH_MAX 4096

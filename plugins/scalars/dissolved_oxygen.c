@@ -72,7 +72,7 @@
 #include <float.h>
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 enum { TWO_PHASE_AUTO = 0, TWO_PHASE_YES = 1, TWO_PHASE_NO = 2 };
 

@@ -24,7 +24,7 @@
  *     acoustic with the artificial viscosity's limit, C = 0.2. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct step_config {
     sluice_real courant;

@@ -35,7 +35,7 @@
  * inflow: I = 10 %, length scale 0.5 y1). */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct ke_config {
     sluice_real c_mu, sigma_k, sigma_epsilon, c1, c2, kappa;

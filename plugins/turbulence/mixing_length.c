@@ -24,7 +24,7 @@
  * channel, one bed segment, 240 fluid particles; perf). */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct ml_config {
     sluice_real c_mu, kappa, l_max;

@@ -51,7 +51,7 @@
  * Time-step limit: dt <= 0.125 h^2 / max_i nu_T,i (Morris et al. 1997). */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 enum { FORM_TENSOR = 0, FORM_EDDY_VISCOSITY = 1 };
 

@@ -13,7 +13,7 @@
  *    exact for every linear velocity field wherever L_i exists (M_i L_i^T = I).
  * Writes the field velocity_gradient, component a*dims + b = d v_a / d x_b, for
  * fluid particles (wall particles keep zero). */
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct vg_config {
     int renormalise;

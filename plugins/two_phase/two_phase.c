@@ -70,7 +70,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 enum { PHASE_WATER = 0, PHASE_AIR = 1 };
 

@@ -12,7 +12,7 @@
  * is the water's and not c0_air / c0_water = 13.5 times it. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct av_config {
     sluice_real alpha, beta, speed_of_sound;

@@ -34,7 +34,7 @@
  * it would break the pairwise symmetry that conserves momentum. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct laminar_config {
     sluice_real nu;

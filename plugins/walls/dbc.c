@@ -25,7 +25,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 #include "wall_layers.h"
 
 typedef struct dbc_config {

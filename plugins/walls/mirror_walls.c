@@ -98,7 +98,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 #include "wall_layers.h"
 
 enum { SCHEME_GHOST = 0, SCHEME_MDBC = 1 };

@@ -74,7 +74,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 #include "wall_contact.h"
 
 typedef struct penalty_config {

@@ -46,7 +46,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 #include "wall_contact.h"
 
 typedef struct repulsive_config {

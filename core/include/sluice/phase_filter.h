@@ -7,7 +7,7 @@
 #ifndef SLUICE_PHASE_FILTER_H
 #define SLUICE_PHASE_FILTER_H
 
-#include "plugin_util.h"
+#include "sluice/plugin_util.h"
 
 enum { SLUICE_PHASE_ALL = 0, SLUICE_PHASE_WATER = 1, SLUICE_PHASE_AIR = 2 };
 

@@ -1,5 +1,20 @@
-/* Small inline helpers shared by Sluice's own plugins (header only: plugins
- * never link against the core or each other). */
+/* The plugin SDK: helpers for writing Sluice plugins, installed with
+ * sluice/plugin.h (pkg-config sluice). Header only (static inline): plugins
+ * never link against the core or each other, and nothing here holds state.
+ *
+ * This header has the small helpers (constants, field look-ups, state
+ * allocation, named scalars in checkpoints) and includes the focused ones:
+ *
+ * - sluice/field_specs.h: the standard declarations of velocity, mass,
+ *   density, pressure, acceleration, density_rate and other shared fields;
+ * - sluice/output_schedule.h: output at regular intervals of simulated time
+ *   (gauges, writers), with its checkpoint;
+ * - sluice/integrator_util.h: what every integrator binds (positions,
+ *   velocities, rate pairs, stored copies) and the position update;
+ * - sluice/phase_filter.h: the `phase` parameter of gauges in two-phase
+ *   scenes;
+ * - sluice/gauge_column.h: columns of sample points (per-gauge list
+ *   parameters, the free surface of a kernel sum). */
 #ifndef SLUICE_PLUGIN_UTIL_H
 #define SLUICE_PLUGIN_UTIL_H
 
@@ -11,7 +26,7 @@
 
 #include "sluice/plugin.h"
 
-/* Reads a scalar constant; reports an error naming `who` when absent. */
+/* Reads a scalar constant; reports an error when no plugin publishes it. */
 static inline int sluice_util_constant(const sluice_api *api, sluice_host *host, const char *name,
                                        sluice_real *value)
 {
@@ -122,5 +137,12 @@ static inline int sluice_util_load_int(const sluice_api *api, sluice_host *host,
 {
     return api->state_read(host, name, SLUICE_STATE_INT64, 1, value);
 }
+
+/* The focused headers (each also includes this one). */
+#include "sluice/field_specs.h"
+#include "sluice/gauge_column.h"
+#include "sluice/integrator_util.h"
+#include "sluice/output_schedule.h"
+#include "sluice/phase_filter.h"
 
 #endif
