@@ -78,16 +78,10 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
-     SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
-     "velocity"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", 0, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "mass density"},
-    {"density_rate", SLUICE_TYPE_REAL, 1, "kg m^-3 s^-1", SLUICE_ACCUMULATE, 0, "density",
-     SLUICE_KIND_MASK(SLUICE_KIND_FLUID) | SLUICE_KIND_MASK(SLUICE_KIND_WALL),
-     "time derivative of the density"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY(0),
+    SLUICE_SPEC_DENSITY_RATE(SLUICE_ACCUMULATE),
 };
 
 static int continuity_create(const sluice_api *api, sluice_host *host, const void *config,
@@ -120,9 +114,7 @@ static int continuity_create(const sluice_api *api, sluice_host *host, const voi
     }
     /* only what the chosen form reads is declared (and gathered) */
     if (s->form == FORM_VOLUME) {
-        const sluice_field_spec density = {"density", SLUICE_TYPE_REAL, 1, "kg m^-3",
-                                           SLUICE_READ | SLUICE_READ_NEIGHBOUR, 0, NULL, 0,
-                                           "mass density"};
+        const sluice_field_spec density = SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR);
         if (api->declare_field(host, &density) != SLUICE_OK) {
             free(s);
             return SLUICE_ERROR;

@@ -73,10 +73,8 @@ static int kc_create(const sluice_api *api, sluice_host *host, const void *confi
     }
     s->dims = (uint32_t)dims;
     const sluice_field_spec fields[] = {
-        {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ_NEIGHBOUR,
-         SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-        {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-         "particle mass"},
+        SLUICE_SPEC_DENSITY(SLUICE_READ_NEIGHBOUR),
+        SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
         {"kernel_correction", SLUICE_TYPE_REAL, s->dims * s->dims, "1", SLUICE_WRITE, 0, NULL, 0,
          "renormalisation matrix L = [sum_j V_j grad_i W_ij (x) (x_j - x_i)]^-1, row-major"},
     };

@@ -65,12 +65,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_READ | SLUICE_READ_NEIGHBOUR | SLUICE_WRITE,
-     SLUICE_FIELD_OUTPUT, NULL, 0, "pressure from the equation of state"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR | SLUICE_WRITE,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART,
-     NULL, 0, "particle mass"},
+    SLUICE_SPEC_PRESSURE(SLUICE_READ | SLUICE_READ_NEIGHBOUR | SLUICE_WRITE),
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR | SLUICE_WRITE),
+    SLUICE_SPEC_MASS(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
     {"hydrostatic_pressure", SLUICE_TYPE_REAL, 1, "Pa",
      SLUICE_READ | SLUICE_READ_NEIGHBOUR | SLUICE_WRITE, 0, NULL, 0,
      "rho0 |g| (eta - z) below the local free surface eta (pressure smoothing)"},

@@ -65,10 +65,8 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART,
-     NULL, 0, "particle mass"},
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_MASS(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
     {"transport_velocity_correction", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
      SLUICE_ACCUMULATE, 0, NULL, 0,
      "transport-velocity correction: fluid particles move with velocity + this"},

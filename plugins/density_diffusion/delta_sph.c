@@ -52,13 +52,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"density_rate", SLUICE_TYPE_REAL, 1, "kg m^-3 s^-1", SLUICE_ACCUMULATE, 0, "density",
-     SLUICE_KIND_MASK(SLUICE_KIND_FLUID) | SLUICE_KIND_MASK(SLUICE_KIND_WALL),
-     "time derivative of the density"},
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY_RATE(SLUICE_ACCUMULATE),
 };
 
 static int delta_create(const sluice_api *api, sluice_host *host, const void *config, void **state)

@@ -60,12 +60,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_WRITE, SLUICE_FIELD_OUTPUT, NULL, 0,
-     "pressure from the equation of state"},
-    {"sound_speed", SLUICE_TYPE_REAL, 1, "m s^-1", SLUICE_WRITE, 0, NULL, 0,
-     "local speed of sound c = sqrt(dp/drho)"},
+    SLUICE_SPEC_DENSITY(SLUICE_READ),
+    SLUICE_SPEC_PRESSURE(SLUICE_WRITE),
+    SLUICE_SPEC_SOUND_SPEED(SLUICE_WRITE),
 };
 
 static int polynomial_create(const sluice_api *api, sluice_host *host, const void *config,

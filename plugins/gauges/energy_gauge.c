@@ -92,9 +92,8 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", 0,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
+    SLUICE_SPEC_MASS(0),
+    SLUICE_SPEC_VELOCITY(0),
 };
 
 static int energy_create(const sluice_api *api, sluice_host *host, const void *config,

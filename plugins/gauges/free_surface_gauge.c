@@ -99,9 +99,8 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", 0, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
+    SLUICE_SPEC_DENSITY(0),
+    SLUICE_SPEC_MASS(0),
 };
 
 static void fs_destroy(void *state)

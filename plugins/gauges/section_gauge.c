@@ -136,11 +136,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", 0,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", 0, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
+    SLUICE_SPEC_VELOCITY(0),
+    SLUICE_SPEC_DENSITY(0),
+    SLUICE_SPEC_MASS(0),
 };
 
 static void sg_destroy(void *state)
@@ -202,8 +200,7 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
         free(s);
         return SLUICE_ERROR;
     }
-    static const sluice_field_spec pressure = {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_READ,
-                                               0, NULL, 0, "pressure"};
+    static const sluice_field_spec pressure = SLUICE_SPEC_PRESSURE_DOC(SLUICE_READ, 0, "pressure");
     if (s->forces && api->declare_field(host, &pressure) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;

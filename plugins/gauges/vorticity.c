@@ -75,13 +75,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
-     SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
-     "velocity"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY(SLUICE_READ_NEIGHBOUR),
 };
 
 static int vort_create(const sluice_api *api, sluice_host *host, const void *config, void **state)

@@ -109,10 +109,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", 0, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
-    {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_READ, 0, NULL, 0, "pressure"},
+    SLUICE_SPEC_DENSITY(0),
+    SLUICE_SPEC_MASS(0),
+    SLUICE_SPEC_PRESSURE_DOC(SLUICE_READ, 0, "pressure"),
 };
 
 static void wf_destroy(void *state)

@@ -70,8 +70,7 @@ typedef struct pc_state {
 } pc_state;
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", SLUICE_READ | SLUICE_WRITE,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_WRITE),
     {"position_previous", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m",
      SLUICE_READ | SLUICE_WRITE, SLUICE_FIELD_RESTART, NULL, 0,
      "position at the start of the step (predictor-corrector integrator)"},

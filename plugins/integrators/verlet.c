@@ -61,8 +61,7 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", SLUICE_READ | SLUICE_WRITE,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_WRITE),
 };
 
 static int verlet_create(const sluice_api *api, sluice_host *host, const void *config,

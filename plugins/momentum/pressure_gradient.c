@@ -29,16 +29,11 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT, NULL, 0, "pressure"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", 0,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
-    {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0,
-     "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
+    SLUICE_SPEC_PRESSURE_DOC(SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT, "pressure"),
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_VELOCITY(0),
+    SLUICE_SPEC_ACCELERATION(SLUICE_ACCUMULATE),
 };
 
 static int pressure_create(const sluice_api *api, sluice_host *host, const void *config,

@@ -295,12 +295,9 @@ static const sluice_param_spec vent_params[] = {
 };
 
 static const sluice_field_spec boundary_fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", SLUICE_READ,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity (imposed on open particles)"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "density (imposed on open particles)"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
+    SLUICE_SPEC_VELOCITY_DOC(SLUICE_READ, "velocity (imposed on open particles)"),
+    SLUICE_SPEC_DENSITY_DOC(SLUICE_READ, "density (imposed on open particles)"),
+    SLUICE_SPEC_MASS(SLUICE_READ),
 };
 
 static int boundary_create(const sluice_api *api, sluice_host *host, const void *config,

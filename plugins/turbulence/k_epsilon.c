@@ -99,12 +99,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", SLUICE_READ,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ),
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
     {"turbulent_kinetic_energy", SLUICE_TYPE_REAL, 1, "m^2 s^-2",
      SLUICE_READ | SLUICE_READ_NEIGHBOUR | SLUICE_WRITE,
      SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "turbulent kinetic energy k"},
@@ -116,8 +113,7 @@ static const sluice_field_spec fields[] = {
      "turbulent_kinetic_energy", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "dk/dt"},
     {"turbulent_dissipation_rate_rate", SLUICE_TYPE_REAL, 1, "m^2 s^-4", SLUICE_ACCUMULATE, 0,
      "turbulent_dissipation_rate", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "d eps/dt"},
-    {"eddy_viscosity", SLUICE_TYPE_REAL, 1, "m^2 s^-1", SLUICE_WRITE, SLUICE_FIELD_OUTPUT, NULL, 0,
-     "kinematic eddy viscosity nu_T"},
+    SLUICE_SPEC_EDDY_VISCOSITY(SLUICE_WRITE),
 };
 
 static int ke_create(const sluice_api *api, sluice_host *host, const void *config, void **state)

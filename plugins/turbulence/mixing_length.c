@@ -54,12 +54,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART,
-     NULL, 0, "particle mass"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"eddy_viscosity", SLUICE_TYPE_REAL, 1, "m^2 s^-1", SLUICE_WRITE, SLUICE_FIELD_OUTPUT, NULL, 0,
-     "kinematic eddy viscosity nu_T"},
+    SLUICE_SPEC_MASS(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_EDDY_VISCOSITY(SLUICE_WRITE),
     {"mixing_length", SLUICE_TYPE_REAL, 1, "m", SLUICE_WRITE, SLUICE_FIELD_OUTPUT, NULL, 0,
      "mixing length l = min(1, s^3) min(kappa y, l_max)"},
 };

@@ -137,15 +137,14 @@ static const sluice_param_spec phase_params[] = {
 };
 
 static const sluice_field_spec phase_fields[] = {
-    {"phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_WRITE, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "phase of the particle: 0 water, 1 air (set at the start)"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
-    {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_WRITE, SLUICE_FIELD_OUTPUT, NULL, 0,
-     "pressure from the equation of state of the particle's phase"},
-    {"sound_speed", SLUICE_TYPE_REAL, 1, "m s^-1", SLUICE_WRITE, 0, NULL, 0,
-     "local speed of sound c = sqrt(dp/drho) of the particle's phase"},
+    SLUICE_SPEC_PHASE_DOC(SLUICE_WRITE, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
+                          "phase of the particle: 0 water, 1 air (set at the start)"),
+    SLUICE_SPEC_DENSITY(SLUICE_READ),
+    SLUICE_SPEC_MASS(0),
+    SLUICE_SPEC_PRESSURE_DOC(SLUICE_WRITE, SLUICE_FIELD_OUTPUT,
+                             "pressure from the equation of state of the particle's phase"),
+    SLUICE_SPEC_SOUND_SPEED_DOC(SLUICE_WRITE,
+                                "local speed of sound c = sqrt(dp/drho) of the particle's phase"),
 };
 
 static void phase_destroy(void *state)
@@ -499,14 +498,10 @@ static const sluice_param_spec held_params[] = {
 };
 
 #define COHESION_FIELDS \
-    {"phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_READ, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, \
-     NULL, 0, "phase of the particle: 0 water, 1 air"}, \
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0, \
-     "particle mass"}, \
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", 0, \
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"}, \
-    {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0, \
-     "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
+    SLUICE_SPEC_PHASE(SLUICE_READ), \
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR), \
+    SLUICE_SPEC_VELOCITY(0), \
+    SLUICE_SPEC_ACCELERATION(SLUICE_ACCUMULATE),
 
 static const sluice_field_spec cohesion_fields[] = {COHESION_FIELDS};
 
@@ -786,16 +781,13 @@ static const sluice_param_spec bubbles_params[] = {
 };
 
 static const sluice_field_spec bubbles_fields[] = {
-    {"phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_READ, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "phase of the particle: 0 water, 1 air"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
+    SLUICE_SPEC_PHASE(SLUICE_READ),
+    SLUICE_SPEC_MASS(SLUICE_READ),
     {"isolation_time", SLUICE_TYPE_REAL, 1, "s", SLUICE_READ | SLUICE_WRITE,
      SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
      "time an air particle has spent without another air particle within the kernel support "
      "(0 in the water; unresolved_bubbles)"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "density (max_compression)"},
+    SLUICE_SPEC_DENSITY_DOC(SLUICE_READ, "density (max_compression)"),
 };
 
 static int bubbles_create(const sluice_api *api, sluice_host *host, const void *config,
