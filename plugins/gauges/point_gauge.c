@@ -53,7 +53,7 @@ typedef struct gauge_state {
     uint32_t dims;
     sluice_index count;
     sluice_real *points;
-    sluice_real interval, min_kernel_sum;
+    sluice_real min_kernel_sum;
     const char *file;
     char *field_text;
     uint32_t field_count, value_count; /* value_count: columns per point */
@@ -75,7 +75,7 @@ typedef struct gauge_state {
     double *sums;
     double *row;
     sluice_table *table;
-    int64_t written;
+    sluice_schedule rows; /* the next row is due at rows.count x rows.interval */
 } gauge_state;
 
 static const sluice_param_spec params[] = {
@@ -133,7 +133,7 @@ static int gauge_create(const sluice_api *api, sluice_host *host, const void *co
     }
     s->dims = (uint32_t)dims;
     s->count = c->points.count;
-    s->interval = c->interval;
+    s->rows = sluice_schedule_every(c->interval);
     s->min_kernel_sum = c->min_kernel_sum;
     s->file = c->file;
     s->phase_filter = c->phase;
@@ -364,9 +364,7 @@ static int gauge_after_step(void *state, sluice_host *host)
     gauge_state *s = state;
     const sluice_api *api = s->api;
     const sluice_view *v = api->view(host);
-    double next = (double)s->written * (double)s->interval;
-    double tolerance = 1e-9 * (double)s->interval;
-    if (v->time + tolerance < next)
+    if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     /* pressure and the other derived fields of the current state */
     if (api->evaluate(host) != SLUICE_OK)
@@ -400,9 +398,7 @@ static int gauge_after_step(void *state, sluice_host *host)
     }
     if (api->table_row(s->table, s->row, (uint32_t)column) != SLUICE_OK)
         return SLUICE_ERROR;
-    while ((double)s->written * (double)s->interval <= v->time + tolerance)
-        s->written++;
-    api->request_time(host, (double)s->written * (double)s->interval);
+    sluice_schedule_advance(&s->rows, api, host, v->time);
     return SLUICE_OK;
 }
 
@@ -410,13 +406,13 @@ static int gauge_after_step(void *state, sluice_host *host)
 static int gauge_save(void *state, sluice_host *host)
 {
     const gauge_state *s = state;
-    return sluice_util_save_int(s->api, host, "rows_written", s->written);
+    return sluice_schedule_save(&s->rows, s->api, host, "rows_written");
 }
 
 static int gauge_load(void *state, sluice_host *host)
 {
     gauge_state *s = state;
-    return sluice_util_load_int(s->api, host, "rows_written", &s->written);
+    return sluice_schedule_load(&s->rows, s->api, host, "rows_written");
 }
 
 static const sluice_component components[] = {{

@@ -97,13 +97,13 @@ typedef struct sg_state {
     sluice_index columns; /* per section: 4, or 6 with forces */
     double reference_pressure; /* Pa */
     sluice_real *bed;
-    sluice_real threshold, interval;
+    sluice_real threshold;
     double g;             /* gravity along -y, m s^-2 */
     const char *file;
     sluice_field density, mass, velocity, pressure, phase;
     int phase_filter;
     sluice_table *table;
-    int64_t written;
+    sluice_schedule rows; /* the next row is due at rows.count x rows.interval */
 } sg_state;
 
 static const sluice_param_spec params[] = {
@@ -191,7 +191,7 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
     s->api = api;
     s->sections = c->positions.count;
     s->threshold = c->threshold;
-    s->interval = c->interval;
+    s->rows = sluice_schedule_every(c->interval);
     s->file = c->file;
     s->phase_filter = c->phase;
     s->forces = c->forces;
@@ -418,8 +418,7 @@ static int sg_after_step(void *state, sluice_host *host)
     sg_state *s = state;
     const sluice_api *api = s->api;
     const sluice_view *v = api->view(host);
-    const double tolerance = 1e-9 * (double)s->interval;
-    if (v->time + tolerance < (double)s->written * (double)s->interval)
+    if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     const sluice_index total = s->first[s->sections];
     /* with forces: the pressure of the current state (one evaluation, as
@@ -439,9 +438,7 @@ static int sg_after_step(void *state, sluice_host *host)
         measure(s, k, s->row + 1 + (size_t)s->columns * k);
     if (api->table_row(s->table, s->row, s->columns * s->sections + 1) != SLUICE_OK)
         return SLUICE_ERROR;
-    while ((double)s->written * (double)s->interval <= v->time + tolerance)
-        s->written++;
-    api->request_time(host, (double)s->written * (double)s->interval);
+    sluice_schedule_advance(&s->rows, api, host, v->time);
     return SLUICE_OK;
 }
 
@@ -449,13 +446,13 @@ static int sg_after_step(void *state, sluice_host *host)
 static int sg_save(void *state, sluice_host *host)
 {
     const sg_state *s = state;
-    return sluice_util_save_int(s->api, host, "rows_written", s->written);
+    return sluice_schedule_save(&s->rows, s->api, host, "rows_written");
 }
 
 static int sg_load(void *state, sluice_host *host)
 {
     sg_state *s = state;
-    return sluice_util_load_int(s->api, host, "rows_written", &s->written);
+    return sluice_schedule_load(&s->rows, s->api, host, "rows_written");
 }
 
 static const sluice_component components[] = {{

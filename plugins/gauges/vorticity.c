@@ -52,8 +52,7 @@ typedef struct vort_state {
     const sluice_api *api;
     uint32_t dims, components;
     int renormalise;
-    double interval;
-    int64_t scheduled;     /* the next computation is at scheduled * interval */
+    sluice_schedule schedule; /* the next computation */
     int computed;          /* the vorticity of (computed_step, computed_time) is current */
     int64_t computed_step;
     double computed_time;
@@ -87,7 +86,7 @@ static int vort_create(const sluice_api *api, sluice_host *host, const void *con
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
-    s->interval = (double)c->interval;
+    s->schedule = sluice_schedule_every(c->interval);
     s->renormalise = c->renormalise;
     sluice_real dims;
     if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
@@ -282,15 +281,12 @@ static int vort_after_step(void *state, sluice_host *host)
     vort_state *s = state;
     const sluice_api *api = s->api;
     const sluice_view *v = api->view(host);
-    const double tolerance = 1e-9 * s->interval;
-    if (v->time + tolerance < (double)s->scheduled * s->interval)
+    if (!sluice_schedule_due(&s->schedule, v->time))
         return SLUICE_OK;
     if (compute(s, host) != SLUICE_OK)
         return SLUICE_ERROR;
     v = api->view(host);
-    while ((double)s->scheduled * s->interval <= v->time + tolerance)
-        s->scheduled++;
-    api->request_time(host, (double)s->scheduled * s->interval);
+    sluice_schedule_advance(&s->schedule, api, host, v->time);
     return SLUICE_OK;
 }
 
@@ -323,7 +319,7 @@ static int vort_save(void *state, sluice_host *host)
 {
     const vort_state *s = state;
     const sluice_api *api = s->api;
-    if (sluice_util_save_int(api, host, "scheduled", s->scheduled) != SLUICE_OK ||
+    if (sluice_schedule_save(&s->schedule, api, host, "scheduled") != SLUICE_OK ||
         sluice_util_save_int(api, host, "computed", s->computed) != SLUICE_OK ||
         sluice_util_save_int(api, host, "computed_step", s->computed_step) != SLUICE_OK ||
         sluice_util_save_double(api, host, "computed_time", s->computed_time) != SLUICE_OK)
@@ -336,7 +332,7 @@ static int vort_load(void *state, sluice_host *host)
     vort_state *s = state;
     const sluice_api *api = s->api;
     int64_t computed = 0;
-    if (sluice_util_load_int(api, host, "scheduled", &s->scheduled) != SLUICE_OK ||
+    if (sluice_schedule_load(&s->schedule, api, host, "scheduled") != SLUICE_OK ||
         sluice_util_load_int(api, host, "computed", &computed) != SLUICE_OK ||
         sluice_util_load_int(api, host, "computed_step", &s->computed_step) != SLUICE_OK ||
         sluice_util_load_double(api, host, "computed_time", &s->computed_time) != SLUICE_OK)

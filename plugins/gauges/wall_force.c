@@ -58,7 +58,6 @@ typedef struct wf_state {
     int box;
     double box_min[2], box_max[2];
     double offset, spacing, min_kernel_sum;
-    sluice_real interval;
     const char *file;
     int phase_filter;
     /* the measured walls, in scene order */
@@ -75,7 +74,7 @@ typedef struct wf_state {
     double reference_pressure;
     sluice_field density, mass, pressure, phase;
     sluice_table *table;
-    int64_t written;
+    sluice_schedule rows; /* the next row is due at rows.count x rows.interval */
 } wf_state;
 
 static const sluice_param_spec params[] = {
@@ -156,7 +155,7 @@ static int wf_create(const sluice_api *api, sluice_host *host, const void *confi
     s->offset = (double)c->offset * (double)dx;
     s->spacing = (double)c->sample_spacing * (double)dx;
     s->min_kernel_sum = (double)c->min_kernel_sum;
-    s->interval = c->interval;
+    s->rows = sluice_schedule_every(c->interval);
     s->file = c->file;
     s->phase_filter = c->phase;
     const int has_box = c->box_min[0] != 0 || c->box_min[1] != 0 || c->box_max[0] != 0 ||
@@ -405,8 +404,7 @@ static int wf_after_step(void *state, sluice_host *host)
     wf_state *s = state;
     const sluice_api *api = s->api;
     const sluice_view *v = api->view(host);
-    const double tolerance = 1e-9 * (double)s->interval;
-    if (v->time + tolerance < (double)s->written * (double)s->interval)
+    if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     /* the pressure of the current state */
     if (api->evaluate(host) != SLUICE_OK)
@@ -434,9 +432,7 @@ static int wf_after_step(void *state, sluice_host *host)
     }
     if (api->table_row(s->table, s->row, 3 * s->wall_count + 1) != SLUICE_OK)
         return SLUICE_ERROR;
-    while ((double)s->written * (double)s->interval <= v->time + tolerance)
-        s->written++;
-    api->request_time(host, (double)s->written * (double)s->interval);
+    sluice_schedule_advance(&s->rows, api, host, v->time);
     return SLUICE_OK;
 }
 
@@ -444,13 +440,13 @@ static int wf_after_step(void *state, sluice_host *host)
 static int wf_save(void *state, sluice_host *host)
 {
     const wf_state *s = state;
-    return sluice_util_save_int(s->api, host, "rows_written", s->written);
+    return sluice_schedule_save(&s->rows, s->api, host, "rows_written");
 }
 
 static int wf_load(void *state, sluice_host *host)
 {
     wf_state *s = state;
-    return sluice_util_load_int(s->api, host, "rows_written", &s->written);
+    return sluice_schedule_load(&s->rows, s->api, host, "rows_written");
 }
 
 static const sluice_component components[] = {{

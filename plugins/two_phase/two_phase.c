@@ -745,7 +745,7 @@ typedef struct bubbles_config {
 
 typedef struct bubbles_state {
     const sluice_api *api;
-    sluice_real lifetime, interval, rho_a, span, max_compression;
+    sluice_real lifetime, rho_a, span, max_compression;
     int64_t check_every;
     const char *file;
     sluice_field phase, mass, isolation, density;
@@ -754,7 +754,8 @@ typedef struct bubbles_state {
     sluice_index capacity;
     /* bookkeeping, alike on every rank (reduced) and kept in checkpoints */
     double last_check, row_time, mass_total, mass_interval;
-    int64_t removed_total, removed_interval, isolated, written, logged;
+    int64_t removed_total, removed_interval, isolated, logged;
+    sluice_schedule rows; /* the next row is due at rows.count x rows.interval */
     int64_t compressed_total;
 } bubbles_state;
 
@@ -799,7 +800,7 @@ static int bubbles_create(const sluice_api *api, sluice_host *host, const void *
         return SLUICE_ERROR;
     s->api = api;
     s->lifetime = c->lifetime;
-    s->interval = c->interval;
+    s->rows = sluice_schedule_every(c->interval);
     s->check_every = c->check_every;
     s->max_compression = c->max_compression;
     s->file = c->file;
@@ -887,14 +888,11 @@ static int bubbles_row(bubbles_state *s, double time)
 
 static int bubbles_rows(bubbles_state *s, sluice_host *host, double time)
 {
-    const double tolerance = 1e-9 * s->interval;
-    if (time + tolerance < (double)s->written * s->interval)
+    if (!sluice_schedule_due(&s->rows, time))
         return SLUICE_OK;
     if (bubbles_row(s, time) != SLUICE_OK)
         return SLUICE_ERROR;
-    while ((double)s->written * s->interval <= time + tolerance)
-        s->written++;
-    s->api->request_time(host, (double)s->written * s->interval);
+    sluice_schedule_advance(&s->rows, s->api, host, time);
     return SLUICE_OK;
 }
 
@@ -1041,7 +1039,7 @@ static int bubbles_save(void *state, sluice_host *host)
 {
     const bubbles_state *s = state;
     const double values[4] = {s->last_check, s->row_time, s->mass_total, s->mass_interval};
-    const int64_t counts[5] = {s->removed_total, s->removed_interval, s->isolated, s->written,
+    const int64_t counts[5] = {s->removed_total, s->removed_interval, s->isolated, s->rows.count,
                                s->logged};
     if (s->api->state_write(host, "last_check,row_time,mass_total,mass_interval",
                             SLUICE_STATE_DOUBLE, 4, values) != SLUICE_OK ||
@@ -1077,7 +1075,7 @@ static int bubbles_load(void *state, sluice_host *host)
     s->removed_total = counts[0];
     s->removed_interval = counts[1];
     s->isolated = counts[2];
-    s->written = counts[3];
+    s->rows.count = counts[3];
     s->logged = counts[4];
     return SLUICE_OK;
 }
