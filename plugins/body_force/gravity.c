@@ -32,12 +32,10 @@ static int gravity_create(const sluice_api *api, sluice_host *host, const void *
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     for (int d = 0; d < 3; d++)
         s->g[d] = c->acceleration[d];
     if (api->publish_constant(host, "gravity", s->g, s->dims, "m s^-2") != SLUICE_OK) {

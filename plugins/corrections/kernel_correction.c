@@ -66,12 +66,10 @@ static int kc_create(const sluice_api *api, sluice_host *host, const void *confi
     s->api = api;
     s->low = c->singular_below;
     s->high = c->regular_above;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     const sluice_field_spec fields[] = {
         SLUICE_SPEC_DENSITY(SLUICE_READ_NEIGHBOUR),
         SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),

@@ -69,12 +69,10 @@ static int delta_create(const sluice_api *api, sluice_host *host, const void *co
         free(s);
         return SLUICE_ERROR;
     }
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     s->form = c->form;
     s->coefficient = c->delta * h; /* times c0, known in bind */
     s->eta2 = (sluice_real)0.01 * h * h;

@@ -126,12 +126,10 @@ static int gauge_create(const sluice_api *api, sluice_host *host, const void *co
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     s->count = c->points.count;
     s->rows = sluice_schedule_every(c->interval);
     s->min_kernel_sum = c->min_kernel_sum;

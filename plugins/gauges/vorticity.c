@@ -88,12 +88,10 @@ static int vort_create(const sluice_api *api, sluice_host *host, const void *con
     s->api = api;
     s->schedule = sluice_schedule_every(c->interval);
     s->renormalise = c->renormalise;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     s->components = s->dims == 3 ? 3 : 1;
     const sluice_field_spec vorticity = {
         "vorticity", SLUICE_TYPE_REAL, s->components, "s^-1", SLUICE_WRITE, SLUICE_FIELD_OUTPUT,
@@ -206,25 +204,9 @@ static inline void vort_pairs(const vort_state *s, const sluice_view *v,
         }
         /* g_cb = sum_j V_j (v_j - v_i)_c (r_ij F_ij)_b, then
          * d v_c / d x_b = sum_e L_be g_ce */
-        sluice_real gxx = 0, gxy = 0, gxz = 0, gyx = 0, gyy = 0, gyz = 0, gzx = 0, gzy = 0,
-                    gzz = 0;
-        for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
-            const sluice_real w = mj[k] / rhoj[k] * F[k];
-            const sluice_real du = (vxj[k] - vxi) * w, dv = (vyj[k] - vyi) * w;
-            gxx += du * rx[k];
-            gxy += du * ry[k];
-            gyx += dv * rx[k];
-            gyy += dv * ry[k];
-            if (dims == 3) {
-                const sluice_real dw = (vzj[k] - vzi) * w;
-                gxz += du * rz[k];
-                gyz += dv * rz[k];
-                gzx += dw * rx[k];
-                gzy += dw * ry[k];
-                gzz += dw * rz[k];
-            }
-        }
-        const sluice_real g[9] = {gxx, gxy, gxz, gyx, gyy, gyz, gzx, gzy, gzz};
+        const sluice_real vi[3] = {vxi, vyi, vzi};
+        sluice_real g[9];
+        sluice_velocity_gradient_sum(b, t, dims, s->velocity, s->mass, s->density, vi, g);
         sluice_real G[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}; /* G[c][b] = d v_c / d x_b */
         for (uint32_t c = 0; c < dims; c++)
             for (uint32_t bb = 0; bb < dims; bb++) {

@@ -57,12 +57,10 @@ static int euler_create(const sluice_api *api, sluice_host *host, const void *co
         return SLUICE_ERROR;
     s->api = api;
     s->form = c->form;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     *state = s;
     return SLUICE_OK;
 }

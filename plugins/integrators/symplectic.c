@@ -28,12 +28,10 @@ static int symplectic_create(const sluice_api *api, sluice_host *host, const voi
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     *state = s;
     return SLUICE_OK;
 }

@@ -73,12 +73,10 @@ static int verlet_create(const sluice_api *api, sluice_host *host, const void *c
         return SLUICE_ERROR;
     s->api = api;
     s->euler_every = c->euler_every;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     *state = s;
     return SLUICE_OK;
 }

@@ -71,12 +71,10 @@ static int ml_create(const sluice_api *api, sluice_host *host, const void *confi
     s->c_mu = c->c_mu;
     s->kappa = c->kappa;
     s->l_max = c->l_max;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     if (api->size < offsetof(sluice_api, wall_distance) + sizeof api->wall_distance ||
         !api->wall_distance) {
         api->error(host, "needs api->wall_distance (Sluice plugin ABI 1.1 or later)");

@@ -11,6 +11,8 @@
  *   (gauges, writers), with its checkpoint;
  * - sluice/integrator_util.h: what every integrator binds (positions,
  *   velocities, rate pairs, stored copies) and the position update;
+ * - sluice/kernel_sums.h: kernel sums shared by pair terms (the velocity
+ *   gradient);
  * - sluice/phase_filter.h: the `phase` parameter of gauges in two-phase
  *   scenes;
  * - sluice/gauge_column.h: columns of sample points (per-gauge list
@@ -36,6 +38,17 @@ static inline int sluice_util_constant(const sluice_api *api, sluice_host *host,
         return SLUICE_ERROR;
     }
     *value = v[0];
+    return SLUICE_OK;
+}
+
+/* The core constant `dimensions` (2 or 3), as a count; reports an error when
+ * absent (never, from create on). */
+static inline int sluice_util_dimensions(const sluice_api *api, sluice_host *host, uint32_t *dims)
+{
+    sluice_real value;
+    if (sluice_util_constant(api, host, "dimensions", &value) != SLUICE_OK)
+        return SLUICE_ERROR;
+    *dims = (uint32_t)value;
     return SLUICE_OK;
 }
 
@@ -142,6 +155,7 @@ static inline int sluice_util_load_int(const sluice_api *api, sluice_host *host,
 #include "sluice/field_specs.h"
 #include "sluice/gauge_column.h"
 #include "sluice/integrator_util.h"
+#include "sluice/kernel_sums.h"
 #include "sluice/output_schedule.h"
 #include "sluice/phase_filter.h"
 
