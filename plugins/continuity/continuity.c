@@ -141,14 +141,11 @@ static int continuity_create(const sluice_api *api, sluice_host *host, const voi
 static int continuity_bind(void *state, sluice_host *host)
 {
     continuity_state *s = state;
-    static const char *const names[] = {"velocity", "mass", "density", "density_rate"};
-    sluice_field f[4];
-    if (sluice_util_fields(s->api, host, names, f, 4) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"mass", &s->mass}, {"density", &s->density},
+        {"density_rate", &s->density_rate}};
+    if (sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->mass = f[1];
-    s->density = f[2];
-    s->density_rate = f[3];
     if (s->renormalise && s->api->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
         return SLUICE_ERROR;
     if (s->transport && s->api->field(host, "transport_velocity_correction", &s->shift) !=

@@ -88,14 +88,9 @@ static int kc_create(const sluice_api *api, sluice_host *host, const void *confi
 static int kc_bind(void *state, sluice_host *host)
 {
     kc_state *s = state;
-    static const char *const names[] = {"density", "mass", "kernel_correction"};
-    sluice_field f[3];
-    if (sluice_util_fields(s->api, host, names, f, 3) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->density = f[0];
-    s->mass = f[1];
-    s->correction = f[2];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"mass", &s->mass}, {"kernel_correction", &s->correction}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 static void kc_destroy(void *state)

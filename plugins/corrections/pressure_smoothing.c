@@ -140,16 +140,11 @@ static int ps_bind(void *state, sluice_host *host)
 {
     ps_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"density", "mass", "pressure", "hydrostatic_pressure",
-                                        "smoothed_pressure"};
-    sluice_field f[5];
-    if (sluice_util_fields(api, host, names, f, 5) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"mass", &s->mass}, {"pressure", &s->pressure},
+        {"hydrostatic_pressure", &s->hydrostatic}, {"smoothed_pressure", &s->smoothed}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->density = f[0];
-    s->mass = f[1];
-    s->pressure = f[2];
-    s->hydrostatic = f[3];
-    s->smoothed = f[4];
     /* the smoothed pressure persists through the equation of state's inverse */
     if (api->density_from_pressure(host, 0, NULL, NULL) != SLUICE_OK)
         return SLUICE_ERROR;

@@ -96,14 +96,10 @@ static int transport_create(const sluice_api *api, sluice_host *host, const void
 static int transport_bind(void *state, sluice_host *host)
 {
     transport_state *s = state;
-    static const char *const names[] = {"density", "mass", "transport_velocity_correction"};
-    sluice_field f[3];
-    if (sluice_util_fields(s->api, host, names, f, 3) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->density = f[0];
-    s->mass = f[1];
-    s->correction = f[2];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"mass", &s->mass},
+        {"transport_velocity_correction", &s->correction}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 static void transport_destroy(void *state)

@@ -115,15 +115,11 @@ static int xsph_create(const sluice_api *api, sluice_host *host, const void *con
 static int xsph_bind(void *state, sluice_host *host)
 {
     xsph_state *s = state;
-    static const char *const names[] = {"velocity", "density", "mass",
-                                        "transport_velocity_correction"};
-    sluice_field f[4];
-    if (sluice_util_fields(s->api, host, names, f, 4) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"density", &s->density}, {"mass", &s->mass},
+        {"transport_velocity_correction", &s->correction}};
+    if (sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->density = f[1];
-    s->mass = f[2];
-    s->correction = f[3];
     if (s->same_phase && sluice_util_phase_field(s->api, host, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;

@@ -101,13 +101,10 @@ static int delta_bind(void *state, sluice_host *host)
         for (int d = 0; d < 3; d++)
             s->hydrostatic[d] = -rho0 * g[d] / (c0 * c0);
     }
-    static const char *const names[] = {"density", "mass", "density_rate"};
-    sluice_field f[3];
-    if (sluice_util_fields(s->api, host, names, f, 3) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"mass", &s->mass}, {"density_rate", &s->density_rate}};
+    if (sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->density = f[0];
-    s->mass = f[1];
-    s->density_rate = f[2];
     s->two_phase = sluice_util_optional_field(s->api, host, "phase", &s->phase);
     if (s->two_phase) {
         sluice_real c_air, rho_air;

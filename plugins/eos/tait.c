@@ -72,14 +72,9 @@ static int tait_create(const sluice_api *api, sluice_host *host, const void *con
 static int tait_bind(void *state, sluice_host *host)
 {
     tait_state *s = state;
-    static const char *const names[] = {"density", "pressure", "sound_speed"};
-    sluice_field f[3];
-    if (sluice_util_fields(s->api, host, names, f, 3) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->density = f[0];
-    s->pressure = f[1];
-    s->sound_speed = f[2];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"pressure", &s->pressure}, {"sound_speed", &s->sound_speed}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 static void tait_destroy(void *state)

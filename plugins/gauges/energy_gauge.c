@@ -128,12 +128,10 @@ static int energy_bind(void *state, sluice_host *host)
     sluice_real p_ref[3] = {0, 0, 0};
     if (api->constant(host, "reference_pressure", p_ref, 3) > 0)
         s->p_ref = p_ref[0];
-    static const char *const names[] = {"mass", "velocity"};
-    sluice_field f[2];
-    if (sluice_util_fields(api, host, names, f, 2) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"mass", &s->mass}, {"velocity", &s->velocity}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->mass = f[0];
-    s->velocity = f[1];
     s->elastic = sluice_util_optional_field(api, host, "density", &s->density);
     if (s->elastic) {
         /* a density without an equation of state has no elastic energy to

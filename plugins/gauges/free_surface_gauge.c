@@ -306,17 +306,7 @@ static int fs_after_step(void *state, sluice_host *host)
 }
 
 /* Checkpoints: the rows written (the next row is at rows_written x interval). */
-static int fs_save(void *state, sluice_host *host)
-{
-    const fs_state *s = state;
-    return sluice_schedule_save(&s->rows, s->api, host, "rows_written");
-}
-
-static int fs_load(void *state, sluice_host *host)
-{
-    fs_state *s = state;
-    return sluice_schedule_load(&s->rows, s->api, host, "rows_written");
-}
+SLUICE_DEFINE_SCHEDULE_STATE(fs_save, fs_load, fs_state, rows, "rows_written")
 
 static const sluice_component components[] = {{
     .name = "free_surface_gauge",

@@ -79,17 +79,7 @@ static int front_after_step(void *state, sluice_host *host)
 }
 
 /* Checkpoints: the rows written (the next row is at rows_written x interval). */
-static int front_save(void *state, sluice_host *host)
-{
-    const front_state *s = state;
-    return sluice_schedule_save(&s->rows, s->api, host, "rows_written");
-}
-
-static int front_load(void *state, sluice_host *host)
-{
-    front_state *s = state;
-    return sluice_schedule_load(&s->rows, s->api, host, "rows_written");
-}
+SLUICE_DEFINE_SCHEDULE_STATE(front_save, front_load, front_state, rows, "rows_written")
 
 static const sluice_component components[] = {{
     .name = "front_gauge",

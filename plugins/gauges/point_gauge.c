@@ -401,17 +401,7 @@ static int gauge_after_step(void *state, sluice_host *host)
 }
 
 /* Checkpoints: the rows written (the next row is at rows_written x interval). */
-static int gauge_save(void *state, sluice_host *host)
-{
-    const gauge_state *s = state;
-    return sluice_schedule_save(&s->rows, s->api, host, "rows_written");
-}
-
-static int gauge_load(void *state, sluice_host *host)
-{
-    gauge_state *s = state;
-    return sluice_schedule_load(&s->rows, s->api, host, "rows_written");
-}
+SLUICE_DEFINE_SCHEDULE_STATE(gauge_save, gauge_load, gauge_state, rows, "rows_written")
 
 static const sluice_component components[] = {{
     .name = "point_gauge",

@@ -262,13 +262,10 @@ static int sg_bind(void *state, sluice_host *host)
 {
     sg_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"density", "mass", "velocity"};
-    sluice_field f[3];
-    if (sluice_util_fields(api, host, names, f, 3) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"mass", &s->mass}, {"velocity", &s->velocity}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->density = f[0];
-    s->mass = f[1];
-    s->velocity = f[2];
     if (sluice_phase_bind(api, host, s->phase_filter, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
     s->pressure.column = -1;
@@ -443,17 +440,7 @@ static int sg_after_step(void *state, sluice_host *host)
 }
 
 /* Checkpoints: the rows written (the next row is at rows_written x interval). */
-static int sg_save(void *state, sluice_host *host)
-{
-    const sg_state *s = state;
-    return sluice_schedule_save(&s->rows, s->api, host, "rows_written");
-}
-
-static int sg_load(void *state, sluice_host *host)
-{
-    sg_state *s = state;
-    return sluice_schedule_load(&s->rows, s->api, host, "rows_written");
-}
+SLUICE_DEFINE_SCHEDULE_STATE(sg_save, sg_load, sg_state, rows, "rows_written")
 
 static const sluice_component components[] = {{
     .name = "section_gauge",

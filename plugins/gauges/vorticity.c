@@ -114,14 +114,11 @@ static int vort_bind(void *state, sluice_host *host)
 {
     vort_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"velocity", "mass", "density", "vorticity"};
-    sluice_field f[4];
-    if (sluice_util_fields(api, host, names, f, 4) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"mass", &s->mass}, {"density", &s->density},
+        {"vorticity", &s->vorticity}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->mass = f[1];
-    s->density = f[2];
-    s->vorticity = f[3];
     if (s->renormalise && api->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
         return SLUICE_ERROR;
     /* hooks run in scene order: the writer must come after this plugin */

@@ -215,13 +215,10 @@ static int wf_bind(void *state, sluice_host *host)
 {
     wf_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"density", "mass", "pressure"};
-    sluice_field f[3];
-    if (sluice_util_fields(api, host, names, f, 3) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"mass", &s->mass}, {"pressure", &s->pressure}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->density = f[0];
-    s->mass = f[1];
-    s->pressure = f[2];
     if (sluice_phase_bind(api, host, s->phase_filter, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
     sluice_real p_ref = 0;
@@ -437,17 +434,7 @@ static int wf_after_step(void *state, sluice_host *host)
 }
 
 /* Checkpoints: the rows written (the next row is at rows_written x interval). */
-static int wf_save(void *state, sluice_host *host)
-{
-    const wf_state *s = state;
-    return sluice_schedule_save(&s->rows, s->api, host, "rows_written");
-}
-
-static int wf_load(void *state, sluice_host *host)
-{
-    wf_state *s = state;
-    return sluice_schedule_load(&s->rows, s->api, host, "rows_written");
-}
+SLUICE_DEFINE_SCHEDULE_STATE(wf_save, wf_load, wf_state, rows, "rows_written")
 
 static const sluice_component components[] = {{
     .name = "wall_force",

@@ -52,15 +52,10 @@ static int pressure_create(const sluice_api *api, sluice_host *host, const void 
 static int pressure_bind(void *state, sluice_host *host)
 {
     pressure_state *s = state;
-    static const char *const names[] = {"pressure", "density", "mass", "acceleration"};
-    sluice_field f[4];
-    if (sluice_util_fields(s->api, host, names, f, 4) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->pressure = f[0];
-    s->density = f[1];
-    s->mass = f[2];
-    s->acceleration = f[3];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"pressure", &s->pressure}, {"density", &s->density}, {"mass", &s->mass},
+        {"acceleration", &s->acceleration}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 static void pressure_destroy(void *state)

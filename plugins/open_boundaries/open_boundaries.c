@@ -487,13 +487,10 @@ static int boundary_bind(void *state, sluice_host *host)
 {
     boundary_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"velocity", "density", "mass"};
-    sluice_field f[3];
-    if (sluice_util_fields(api, host, names, f, 3) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity_field}, {"density", &s->density_field}, {"mass", &s->mass_field}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity_field = f[0];
-    s->density_field = f[1];
-    s->mass_field = f[2];
     s->has_pressure = sluice_util_optional_field(api, host, "pressure", &s->pressure_field);
     sluice_real value, vec[3] = {0, 0, 0};
     if (sluice_util_constant(api, host, "spacing", &value) != SLUICE_OK)

@@ -203,15 +203,11 @@ static int do_bind(void *state, sluice_host *host)
 {
     do_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"mass", "density", "dissolved_oxygen",
-                                        "dissolved_oxygen_rate"};
-    sluice_field f[4];
-    if (sluice_util_fields(api, host, names, f, 4) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"mass", &s->mass}, {"density", &s->density}, {"dissolved_oxygen", &s->concentration},
+        {"dissolved_oxygen_rate", &s->rate}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->mass = f[0];
-    s->density = f[1];
-    s->concentration = f[2];
-    s->rate = f[3];
 
     sluice_real ratio;
     if (sluice_util_constant(api, host, "kernel_support", &ratio) != SLUICE_OK)

@@ -164,27 +164,13 @@ static int ke_bind(void *state, sluice_host *host)
     ke_state *s = state;
     const sluice_api *api = s->api;
     s->host = host;
-    static const char *const names[] = {"velocity",
-                                        "mass",
-                                        "density",
-                                        "velocity_gradient",
-                                        "turbulent_kinetic_energy",
-                                        "turbulent_dissipation_rate",
-                                        "turbulent_kinetic_energy_rate",
-                                        "turbulent_dissipation_rate_rate",
-                                        "eddy_viscosity"};
-    sluice_field f[9];
-    if (sluice_util_fields(api, host, names, f, 9) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"mass", &s->mass}, {"density", &s->density},
+        {"velocity_gradient", &s->gradient}, {"turbulent_kinetic_energy", &s->k},
+        {"turbulent_dissipation_rate", &s->eps}, {"turbulent_kinetic_energy_rate", &s->k_rate},
+        {"turbulent_dissipation_rate_rate", &s->eps_rate}, {"eddy_viscosity", &s->eddy_viscosity}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->mass = f[1];
-    s->density = f[2];
-    s->gradient = f[3];
-    s->k = f[4];
-    s->eps = f[5];
-    s->k_rate = f[6];
-    s->eps_rate = f[7];
-    s->eddy_viscosity = f[8];
     s->nu_lam = 0;
     api->constant(host, "kinematic_viscosity", &s->nu_lam, 1);
     if (sluice_util_constant(api, host, "courant_number", &s->courant) != SLUICE_OK)

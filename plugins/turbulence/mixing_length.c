@@ -96,17 +96,10 @@ static int ml_bind(void *state, sluice_host *host)
 {
     ml_state *s = state;
     s->host = host;
-    static const char *const names[] = {"mass", "density", "velocity_gradient", "eddy_viscosity",
-                                        "mixing_length"};
-    sluice_field f[5];
-    if (sluice_util_fields(s->api, host, names, f, 5) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->mass = f[0];
-    s->density = f[1];
-    s->gradient = f[2];
-    s->eddy_viscosity = f[3];
-    s->mixing_length = f[4];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"mass", &s->mass}, {"density", &s->density}, {"velocity_gradient", &s->gradient},
+        {"eddy_viscosity", &s->eddy_viscosity}, {"mixing_length", &s->mixing_length}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 static void ml_destroy(void *state)

@@ -138,16 +138,11 @@ static int ts_create(const sluice_api *api, sluice_host *host, const void *confi
 static int ts_bind(void *state, sluice_host *host)
 {
     ts_state *s = state;
-    static const char *const names[] = {"velocity", "mass", "density", "eddy_viscosity",
-                                        "acceleration"};
-    sluice_field f[5];
-    if (sluice_util_fields(s->api, host, names, f, 5) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"mass", &s->mass}, {"density", &s->density},
+        {"eddy_viscosity", &s->eddy_viscosity}, {"acceleration", &s->acceleration}};
+    if (sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->mass = f[1];
-    s->density = f[2];
-    s->eddy_viscosity = f[3];
-    s->acceleration = f[4];
     if (s->form == FORM_TENSOR &&
         s->api->field(host, "velocity_gradient", &s->gradient) != SLUICE_OK)
         return SLUICE_ERROR;

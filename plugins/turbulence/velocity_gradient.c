@@ -69,14 +69,11 @@ static int vg_create(const sluice_api *api, sluice_host *host, const void *confi
 static int vg_bind(void *state, sluice_host *host)
 {
     vg_state *s = state;
-    static const char *const names[] = {"velocity", "mass", "density", "velocity_gradient"};
-    sluice_field f[4];
-    if (sluice_util_fields(s->api, host, names, f, 4) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"mass", &s->mass}, {"density", &s->density},
+        {"velocity_gradient", &s->gradient}};
+    if (sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->mass = f[1];
-    s->density = f[2];
-    s->gradient = f[3];
     if (s->renormalise && s->api->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;

@@ -287,16 +287,10 @@ static int phase_create(const sluice_api *api, sluice_host *host, const void *co
 static int phase_bind(void *state, sluice_host *host)
 {
     two_phase_state *s = state;
-    static const char *const names[] = {"phase", "density", "pressure", "sound_speed", "mass"};
-    sluice_field f[5];
-    if (sluice_util_fields(s->api, host, names, f, 5) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->phase = f[0];
-    s->density = f[1];
-    s->pressure = f[2];
-    s->sound_speed = f[3];
-    s->mass = f[4];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"phase", &s->phase}, {"density", &s->density}, {"pressure", &s->pressure},
+        {"sound_speed", &s->sound_speed}, {"mass", &s->mass}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 /* Level of the air_above polyline at x (2D), or its one level. */
@@ -570,15 +564,13 @@ static int cohesion_bind(void *state, sluice_host *host)
 {
     cohesion_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"phase", "mass", "acceleration", "cohesion_acceleration"};
-    sluice_field f[4];
-    if (sluice_util_fields(api, host, names, f, s->update_every ? 4 : 3) != SLUICE_OK)
+    const sluice_field_binding fields[] = {{"phase", &s->phase},
+                                           {"mass", &s->mass},
+                                           {"acceleration", &s->acceleration},
+                                           {"cohesion_acceleration", &s->held}};
+    /* the held acceleration only when it is updated every N steps */
+    if (sluice_util_bind(api, host, fields, s->update_every ? 4 : 3) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->phase = f[0];
-    s->mass = f[1];
-    s->acceleration = f[2];
-    if (s->update_every)
-        s->held = f[3];
     sluice_real rho_a, background;
     if (api->constant(host, "air_rest_density", &rho_a, 1) < 1 ||
         api->constant(host, "reference_pressure", &background, 1) < 1) {
@@ -820,14 +812,11 @@ static int bubbles_bind(void *state, sluice_host *host)
 {
     bubbles_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"phase", "mass", "isolation_time", "density"};
-    sluice_field f[4];
-    if (sluice_util_fields(api, host, names, f, 4) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"phase", &s->phase}, {"mass", &s->mass}, {"isolation_time", &s->isolation},
+        {"density", &s->density}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->phase = f[0];
-    s->mass = f[1];
-    s->isolation = f[2];
-    s->density = f[3];
     if (api->constant(host, "air_rest_density", &s->rho_a, 1) < 1) {
         api->error(host, "needs the two_phase plugin, which sets the field 'phase' and publishes "
                          "'air_rest_density': load two_phase");

@@ -94,21 +94,17 @@ static int av_create(const sluice_api *api, sluice_host *host, const void *confi
 static int av_bind(void *state, sluice_host *host)
 {
     av_state *s = state;
-    static const char *const names[] = {"velocity", "density",      "sound_speed",
-                                        "mass",     "acceleration", "viscous_mu_max"};
-    sluice_field f[6];
-    if (sluice_util_fields(s->api, host, names, f, s->limit ? 6 : 5) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"density", &s->density},
+        {"sound_speed", &s->sound_speed}, {"mass", &s->mass},
+        {"acceleration", &s->acceleration}, {"viscous_mu_max", &s->mu_max}};
+    /* viscous_mu_max only with the time-step limit */
+    if (sluice_util_bind(s->api, host, fields, s->limit ? 6 : 5) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->density = f[1];
-    s->sound_speed = f[2];
-    s->mass = f[3];
-    s->acceleration = f[4];
     if (s->same_phase && sluice_util_phase_field(s->api, host, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
     if (!s->limit)
         return SLUICE_OK;
-    s->mu_max = f[5];
     if (sluice_util_constant(s->api, host, "courant_number", &s->courant) != SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;

@@ -92,15 +92,10 @@ static int laminar_create(const sluice_api *api, sluice_host *host, const void *
 static int laminar_bind(void *state, sluice_host *host)
 {
     laminar_state *s = state;
-    static const char *const names[] = {"velocity", "density", "mass", "acceleration"};
-    sluice_field f[4];
-    if (sluice_util_fields(s->api, host, names, f, 4) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->density = f[1];
-    s->mass = f[2];
-    s->acceleration = f[3];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"density", &s->density}, {"mass", &s->mass},
+        {"acceleration", &s->acceleration}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 static void laminar_destroy(void *state)

@@ -81,4 +81,24 @@ static inline int sluice_schedule_load(sluice_schedule *s, const sluice_api *api
     return api->state_read(host, name, SLUICE_STATE_INT64, 1, &s->count);
 }
 
+/* Defines the save_state and load_state callbacks (named save_fn, load_fn)
+ * of a component whose only state across steps is one schedule: the member
+ * `member` of its state type `state_type`, which also holds `api` (the
+ * sluice_api), saved under `name`:
+ *
+ *     SLUICE_DEFINE_SCHEDULE_STATE(gauge_save, gauge_load, gauge_state, rows, "rows_written")
+ *     ... .save_state = gauge_save, .load_state = gauge_load, ...
+ */
+#define SLUICE_DEFINE_SCHEDULE_STATE(save_fn, load_fn, state_type, member, name)                 \
+    static int save_fn(void *state, sluice_host *host)                                         \
+    {                                                                                          \
+        const state_type *s_ = state;                                                          \
+        return sluice_schedule_save(&s_->member, s_->api, host, name);                         \
+    }                                                                                          \
+    static int load_fn(void *state, sluice_host *host)                                         \
+    {                                                                                          \
+        state_type *s_ = state;                                                                \
+        return sluice_schedule_load(&s_->member, s_->api, host, name);                         \
+    }
+
 #endif

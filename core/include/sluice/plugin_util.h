@@ -62,6 +62,27 @@ static inline int sluice_util_fields(const sluice_api *api, sluice_host *host,
     return SLUICE_OK;
 }
 
+/* A field handle to look up by name in bind():
+ *
+ *     const sluice_field_binding fields[] = {
+ *         {"density", &s->density}, {"pressure", &s->pressure}};
+ *     return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
+ */
+typedef struct sluice_field_binding {
+    const char *name;
+    sluice_field *field;
+} sluice_field_binding;
+
+/* Resolves every binding (api->field, which reports an unknown name). */
+static inline int sluice_util_bind(const sluice_api *api, sluice_host *host,
+                                   const sluice_field_binding *bindings, size_t count)
+{
+    for (size_t i = 0; i < count; i++)
+        if (api->field(host, bindings[i].name, bindings[i].field) != SLUICE_OK)
+            return SLUICE_ERROR;
+    return SLUICE_OK;
+}
+
 /* Looks up a field that may legitimately be absent (no error when it is):
  * returns 1 and fills *out when some loaded plugin declares it, else 0. */
 static inline int sluice_util_optional_field(const sluice_api *api, sluice_host *host,
