@@ -126,9 +126,8 @@ static int continuity_create(const sluice_api *api, sluice_host *host, const voi
             free(s);
             return SLUICE_ERROR;
         }
-        const sluice_field_spec correction = {
-            "kernel_correction", SLUICE_TYPE_REAL, (uint32_t)(dims * dims), "1", SLUICE_READ, 0,
-            NULL, 0, "kernel-gradient correction matrix L_i"};
+        const sluice_field_spec correction = SLUICE_SPEC_KERNEL_CORRECTION_DOC(
+            dims, SLUICE_READ, "kernel-gradient correction matrix L_i");
         if (api->declare_field(host, &correction) != SLUICE_OK) {
             free(s);
             return SLUICE_ERROR;

@@ -73,8 +73,9 @@ static int kc_create(const sluice_api *api, sluice_host *host, const void *confi
     const sluice_field_spec fields[] = {
         SLUICE_SPEC_DENSITY(SLUICE_READ_NEIGHBOUR),
         SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
-        {"kernel_correction", SLUICE_TYPE_REAL, s->dims * s->dims, "1", SLUICE_WRITE, 0, NULL, 0,
-         "renormalisation matrix L = [sum_j V_j grad_i W_ij (x) (x_j - x_i)]^-1, row-major"},
+        SLUICE_SPEC_KERNEL_CORRECTION_DOC(
+            s->dims, SLUICE_WRITE,
+            "renormalisation matrix L = [sum_j V_j grad_i W_ij (x) (x_j - x_i)]^-1, row-major"),
     };
     for (int f = 0; f < 3; f++)
         if (api->declare_field(host, &fields[f]) != SLUICE_OK) {

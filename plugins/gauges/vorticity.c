@@ -98,9 +98,7 @@ static int vort_create(const sluice_api *api, sluice_host *host, const void *con
         NULL, 0,
         s->dims == 3 ? "vorticity curl v (x, y, z) of fluid particles at the last computation"
                      : "vorticity dv/dx - du/dy of fluid particles at the last computation"};
-    const sluice_field_spec correction = {
-        "kernel_correction", SLUICE_TYPE_REAL, s->dims * s->dims, "1", SLUICE_READ, 0, NULL, 0,
-        "kernel gradient correction matrix L, component a*dims+b = L_ab"};
+    const sluice_field_spec correction = SLUICE_SPEC_KERNEL_CORRECTION(s->dims, SLUICE_READ);
     if (api->declare_field(host, &vorticity) != SLUICE_OK ||
         (s->renormalise && api->declare_field(host, &correction) != SLUICE_OK)) {
         free(s);

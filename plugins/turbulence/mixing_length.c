@@ -81,9 +81,7 @@ static int ml_create(const sluice_api *api, sluice_host *host, const void *confi
         free(s);
         return SLUICE_ERROR;
     }
-    const sluice_field_spec gradient = {
-        "velocity_gradient", SLUICE_TYPE_REAL, s->dims * s->dims, "s^-1", SLUICE_READ,
-        SLUICE_FIELD_OUTPUT, NULL, 0, "velocity gradient, component a*dims+b = d v_a / d x_b"};
+    const sluice_field_spec gradient = SLUICE_SPEC_VELOCITY_GRADIENT(s->dims, SLUICE_READ);
     if (api->declare_field(host, &gradient) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;

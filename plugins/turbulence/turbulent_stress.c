@@ -119,13 +119,9 @@ static int ts_create(const sluice_api *api, sluice_host *host, const void *confi
         free(s);
         return SLUICE_ERROR;
     }
-    const sluice_field_spec gradient = {
-        "velocity_gradient", SLUICE_TYPE_REAL, s->dims * s->dims, "s^-1",
-        SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT, NULL, 0,
-        "velocity gradient, component a*dims+b = d v_a / d x_b"};
-    const sluice_field_spec correction = {
-        "kernel_correction", SLUICE_TYPE_REAL, s->dims * s->dims, "1", SLUICE_READ, 0, NULL, 0,
-        "kernel gradient correction matrix L, component a*dims+b = L_ab"};
+    const sluice_field_spec gradient =
+        SLUICE_SPEC_VELOCITY_GRADIENT(s->dims, SLUICE_READ | SLUICE_READ_NEIGHBOUR);
+    const sluice_field_spec correction = SLUICE_SPEC_KERNEL_CORRECTION(s->dims, SLUICE_READ);
     if ((s->form == FORM_TENSOR && api->declare_field(host, &gradient) != SLUICE_OK) ||
         (s->renormalise && api->declare_field(host, &correction) != SLUICE_OK)) {
         free(s);

@@ -28,6 +28,8 @@
  * | SLUICE_SPEC_SOUND_SPEED | sound_speed | m s^-1 | | |
  * | SLUICE_SPEC_EDDY_VISCOSITY | eddy_viscosity | m^2 s^-1 | output | |
  * | SLUICE_SPEC_PHASE | phase (uint8: 0 water, 1 air) | 1 | output, restart | |
+ * | SLUICE_SPEC_VELOCITY_GRADIENT(dims, access) | velocity_gradient[dims^2] | s^-1 | output | |
+ * | SLUICE_SPEC_KERNEL_CORRECTION(dims, access) | kernel_correction[dims^2] | 1 | | |
  *
  * The description of a field is the first non-empty one declared in the
  * scene (it is written with the field into snapshots). The _DOC forms give a
@@ -84,5 +86,19 @@
 #define SLUICE_SPEC_PHASE(access)                                                                 \
     SLUICE_SPEC_PHASE_DOC(access, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,                  \
                           "phase of the particle: 0 water, 1 air")
+
+/* Matrices of dims x dims components (row-major), declared in create() once
+ * the dimension count is known (sluice_util_dimensions). */
+#define SLUICE_SPEC_VELOCITY_GRADIENT(dims, access)                                               \
+    {"velocity_gradient", SLUICE_TYPE_REAL, (uint32_t)((dims) * (dims)), "s^-1", (access),     \
+     SLUICE_FIELD_OUTPUT, NULL, 0, "velocity gradient, component a*dims+b = d v_a / d x_b"}
+
+#define SLUICE_SPEC_KERNEL_CORRECTION_DOC(dims, access, doc)                                      \
+    {"kernel_correction", SLUICE_TYPE_REAL, (uint32_t)((dims) * (dims)), "1", (access), 0, NULL, \
+     0, (doc)}
+#define SLUICE_SPEC_KERNEL_CORRECTION(dims, access)                                               \
+    SLUICE_SPEC_KERNEL_CORRECTION_DOC(dims, access,                                            \
+                                      "kernel gradient correction matrix L, component a*dims+b " \
+                                      "= L_ab")
 
 #endif
