@@ -1,6 +1,6 @@
 /* Gravity: a uniform body force on fluid particles, dv/dt += g. Publishes the
  * constant 'gravity' (used by the core for the hydrostatic initial state). */
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct gravity_config {
     sluice_real acceleration[3];
@@ -20,10 +20,8 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", 0,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
-    {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0,
-     "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
+    SLUICE_SPEC_VELOCITY(0),
+    SLUICE_SPEC_ACCELERATION(SLUICE_ACCUMULATE),
 };
 
 static int gravity_create(const sluice_api *api, sluice_host *host, const void *config,
@@ -34,12 +32,10 @@ static int gravity_create(const sluice_api *api, sluice_host *host, const void *
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     for (int d = 0; d < 3; d++)
         s->g[d] = c->acceleration[d];
     if (api->publish_constant(host, "gravity", s->g, s->dims, "m s^-2") != SLUICE_OK) {

@@ -38,7 +38,7 @@
  * Both forms vanish for a uniform velocity and are exact for the divergence
  * of a linear velocity field on a lattice (with renormalisation, on any
  * particle set). */
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct continuity_config {
     int form;
@@ -78,16 +78,10 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
-     SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
-     "velocity"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", 0, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "mass density"},
-    {"density_rate", SLUICE_TYPE_REAL, 1, "kg m^-3 s^-1", SLUICE_ACCUMULATE, 0, "density",
-     SLUICE_KIND_MASK(SLUICE_KIND_FLUID) | SLUICE_KIND_MASK(SLUICE_KIND_WALL),
-     "time derivative of the density"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY(0),
+    SLUICE_SPEC_DENSITY_RATE(SLUICE_ACCUMULATE),
 };
 
 static int continuity_create(const sluice_api *api, sluice_host *host, const void *config,
@@ -120,9 +114,7 @@ static int continuity_create(const sluice_api *api, sluice_host *host, const voi
     }
     /* only what the chosen form reads is declared (and gathered) */
     if (s->form == FORM_VOLUME) {
-        const sluice_field_spec density = {"density", SLUICE_TYPE_REAL, 1, "kg m^-3",
-                                           SLUICE_READ | SLUICE_READ_NEIGHBOUR, 0, NULL, 0,
-                                           "mass density"};
+        const sluice_field_spec density = SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR);
         if (api->declare_field(host, &density) != SLUICE_OK) {
             free(s);
             return SLUICE_ERROR;
@@ -134,9 +126,8 @@ static int continuity_create(const sluice_api *api, sluice_host *host, const voi
             free(s);
             return SLUICE_ERROR;
         }
-        const sluice_field_spec correction = {
-            "kernel_correction", SLUICE_TYPE_REAL, (uint32_t)(dims * dims), "1", SLUICE_READ, 0,
-            NULL, 0, "kernel-gradient correction matrix L_i"};
+        const sluice_field_spec correction = SLUICE_SPEC_KERNEL_CORRECTION_DOC(
+            dims, SLUICE_READ, "kernel-gradient correction matrix L_i");
         if (api->declare_field(host, &correction) != SLUICE_OK) {
             free(s);
             return SLUICE_ERROR;
@@ -149,14 +140,11 @@ static int continuity_create(const sluice_api *api, sluice_host *host, const voi
 static int continuity_bind(void *state, sluice_host *host)
 {
     continuity_state *s = state;
-    static const char *const names[] = {"velocity", "mass", "density", "density_rate"};
-    sluice_field f[4];
-    if (sluice_util_fields(s->api, host, names, f, 4) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"mass", &s->mass}, {"density", &s->density},
+        {"density_rate", &s->density_rate}};
+    if (sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->mass = f[1];
-    s->density = f[2];
-    s->density_rate = f[3];
     if (s->renormalise && s->api->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
         return SLUICE_ERROR;
     if (s->transport && s->api->field(host, "transport_velocity_correction", &s->shift) !=

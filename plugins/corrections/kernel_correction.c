@@ -28,7 +28,7 @@
  * all of these fully. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct kc_config {
     sluice_real singular_below, regular_above;
@@ -66,19 +66,16 @@ static int kc_create(const sluice_api *api, sluice_host *host, const void *confi
     s->api = api;
     s->low = c->singular_below;
     s->high = c->regular_above;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     const sluice_field_spec fields[] = {
-        {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ_NEIGHBOUR,
-         SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-        {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-         "particle mass"},
-        {"kernel_correction", SLUICE_TYPE_REAL, s->dims * s->dims, "1", SLUICE_WRITE, 0, NULL, 0,
-         "renormalisation matrix L = [sum_j V_j grad_i W_ij (x) (x_j - x_i)]^-1, row-major"},
+        SLUICE_SPEC_DENSITY(SLUICE_READ_NEIGHBOUR),
+        SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+        SLUICE_SPEC_KERNEL_CORRECTION_DOC(
+            s->dims, SLUICE_WRITE,
+            "renormalisation matrix L = [sum_j V_j grad_i W_ij (x) (x_j - x_i)]^-1, row-major"),
     };
     for (int f = 0; f < 3; f++)
         if (api->declare_field(host, &fields[f]) != SLUICE_OK) {
@@ -92,14 +89,9 @@ static int kc_create(const sluice_api *api, sluice_host *host, const void *confi
 static int kc_bind(void *state, sluice_host *host)
 {
     kc_state *s = state;
-    static const char *const names[] = {"density", "mass", "kernel_correction"};
-    sluice_field f[3];
-    if (sluice_util_fields(s->api, host, names, f, 3) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->density = f[0];
-    s->mass = f[1];
-    s->correction = f[2];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"mass", &s->mass}, {"kernel_correction", &s->correction}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 static void kc_destroy(void *state)

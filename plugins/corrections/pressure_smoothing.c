@@ -37,7 +37,7 @@
  * targets, fluid neighbours. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct ps_config {
     int64_t every;
@@ -65,12 +65,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_READ | SLUICE_READ_NEIGHBOUR | SLUICE_WRITE,
-     SLUICE_FIELD_OUTPUT, NULL, 0, "pressure from the equation of state"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR | SLUICE_WRITE,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART,
-     NULL, 0, "particle mass"},
+    SLUICE_SPEC_PRESSURE(SLUICE_READ | SLUICE_READ_NEIGHBOUR | SLUICE_WRITE),
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR | SLUICE_WRITE),
+    SLUICE_SPEC_MASS(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
     {"hydrostatic_pressure", SLUICE_TYPE_REAL, 1, "Pa",
      SLUICE_READ | SLUICE_READ_NEIGHBOUR | SLUICE_WRITE, 0, NULL, 0,
      "rho0 |g| (eta - z) below the local free surface eta (pressure smoothing)"},
@@ -143,16 +140,11 @@ static int ps_bind(void *state, sluice_host *host)
 {
     ps_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"density", "mass", "pressure", "hydrostatic_pressure",
-                                        "smoothed_pressure"};
-    sluice_field f[5];
-    if (sluice_util_fields(api, host, names, f, 5) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"mass", &s->mass}, {"pressure", &s->pressure},
+        {"hydrostatic_pressure", &s->hydrostatic}, {"smoothed_pressure", &s->smoothed}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->density = f[0];
-    s->mass = f[1];
-    s->pressure = f[2];
-    s->hydrostatic = f[3];
-    s->smoothed = f[4];
     /* the smoothed pressure persists through the equation of state's inverse */
     if (api->density_from_pressure(host, 0, NULL, NULL) != SLUICE_OK)
         return SLUICE_ERROR;

@@ -37,7 +37,7 @@
  * et al.'s momentum equation, of order dt p_b, is not included. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct transport_config {
     sluice_real background_pressure, min_kernel_sum;
@@ -65,10 +65,8 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART,
-     NULL, 0, "particle mass"},
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_MASS(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
     {"transport_velocity_correction", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
      SLUICE_ACCUMULATE, 0, NULL, 0,
      "transport-velocity correction: fluid particles move with velocity + this"},
@@ -98,14 +96,10 @@ static int transport_create(const sluice_api *api, sluice_host *host, const void
 static int transport_bind(void *state, sluice_host *host)
 {
     transport_state *s = state;
-    static const char *const names[] = {"density", "mass", "transport_velocity_correction"};
-    sluice_field f[3];
-    if (sluice_util_fields(s->api, host, names, f, 3) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->density = f[0];
-    s->mass = f[1];
-    s->correction = f[2];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"mass", &s->mass},
+        {"transport_velocity_correction", &s->correction}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 static void transport_destroy(void *state)

@@ -25,7 +25,7 @@
  *                           / (V_i W(0) + sum_{j != i} V_j W_ij).
  *
  * Both forms vanish identically for a uniform velocity field. */
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct xsph_config {
     int form;
@@ -74,13 +74,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
-     SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
-     "velocity"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART,
-     NULL, 0, "particle mass"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_MASS(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
     {"transport_velocity_correction", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
      SLUICE_ACCUMULATE, 0, NULL, 0,
      "XSPH correction: fluid particles move with velocity + this"},
@@ -119,15 +115,11 @@ static int xsph_create(const sluice_api *api, sluice_host *host, const void *con
 static int xsph_bind(void *state, sluice_host *host)
 {
     xsph_state *s = state;
-    static const char *const names[] = {"velocity", "density", "mass",
-                                        "transport_velocity_correction"};
-    sluice_field f[4];
-    if (sluice_util_fields(s->api, host, names, f, 4) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"density", &s->density}, {"mass", &s->mass},
+        {"transport_velocity_correction", &s->correction}};
+    if (sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->density = f[1];
-    s->mass = f[2];
-    s->correction = f[3];
     if (s->same_phase && sluice_util_phase_field(s->api, host, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;

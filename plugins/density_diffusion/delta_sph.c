@@ -20,7 +20,7 @@
  * rho^H_ji = rho0_k (g . r_ji) / c0_k^2. Across the interface the density
  * jumps by the density ratio: diffusing it would drag air density into the
  * water and back. */
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct delta_config {
     sluice_real delta;
@@ -52,13 +52,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"density_rate", SLUICE_TYPE_REAL, 1, "kg m^-3 s^-1", SLUICE_ACCUMULATE, 0, "density",
-     SLUICE_KIND_MASK(SLUICE_KIND_FLUID) | SLUICE_KIND_MASK(SLUICE_KIND_WALL),
-     "time derivative of the density"},
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY_RATE(SLUICE_ACCUMULATE),
 };
 
 static int delta_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
@@ -73,12 +69,10 @@ static int delta_create(const sluice_api *api, sluice_host *host, const void *co
         free(s);
         return SLUICE_ERROR;
     }
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     s->form = c->form;
     s->coefficient = c->delta * h; /* times c0, known in bind */
     s->eta2 = (sluice_real)0.01 * h * h;
@@ -107,13 +101,10 @@ static int delta_bind(void *state, sluice_host *host)
         for (int d = 0; d < 3; d++)
             s->hydrostatic[d] = -rho0 * g[d] / (c0 * c0);
     }
-    static const char *const names[] = {"density", "mass", "density_rate"};
-    sluice_field f[3];
-    if (sluice_util_fields(s->api, host, names, f, 3) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"mass", &s->mass}, {"density_rate", &s->density_rate}};
+    if (sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->density = f[0];
-    s->mass = f[1];
-    s->density_rate = f[2];
     s->two_phase = sluice_util_optional_field(s->api, host, "phase", &s->phase);
     if (s->two_phase) {
         sluice_real c_air, rho_air;

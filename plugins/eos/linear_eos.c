@@ -3,7 +3,7 @@
  * p0 is the pressure at the rest density (0 for gauge pressure). It is the
  * LS-DYNA linear-polynomial form with C1 = p0, C2 = c^2 rho0 and no other
  * term (seed 000 eq. 13), with the density range unrestricted. */
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct linear_config {
     sluice_real speed_of_sound, reference_pressure;
@@ -26,12 +26,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_WRITE, SLUICE_FIELD_OUTPUT, NULL, 0,
-     "pressure from the equation of state"},
-    {"sound_speed", SLUICE_TYPE_REAL, 1, "m s^-1", SLUICE_WRITE, 0, NULL, 0,
-     "local speed of sound c = sqrt(dp/drho)"},
+    SLUICE_SPEC_DENSITY(SLUICE_READ),
+    SLUICE_SPEC_PRESSURE(SLUICE_WRITE),
+    SLUICE_SPEC_SOUND_SPEED(SLUICE_WRITE),
 };
 
 static int linear_create(const sluice_api *api, sluice_host *host, const void *config,
@@ -58,14 +55,9 @@ static int linear_create(const sluice_api *api, sluice_host *host, const void *c
 static int linear_bind(void *state, sluice_host *host)
 {
     linear_state *s = state;
-    static const char *const names[] = {"density", "pressure", "sound_speed"};
-    sluice_field f[3];
-    if (sluice_util_fields(s->api, host, names, f, 3) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->density = f[0];
-    s->pressure = f[1];
-    s->sound_speed = f[2];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"pressure", &s->pressure}, {"sound_speed", &s->sound_speed}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 static void linear_destroy(void *state)

@@ -14,7 +14,7 @@
  * directly, not both. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct polynomial_config {
     sluice_real c1, c2, c3, c4, c5, c6, c7;
@@ -60,12 +60,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_WRITE, SLUICE_FIELD_OUTPUT, NULL, 0,
-     "pressure from the equation of state"},
-    {"sound_speed", SLUICE_TYPE_REAL, 1, "m s^-1", SLUICE_WRITE, 0, NULL, 0,
-     "local speed of sound c = sqrt(dp/drho)"},
+    SLUICE_SPEC_DENSITY(SLUICE_READ),
+    SLUICE_SPEC_PRESSURE(SLUICE_WRITE),
+    SLUICE_SPEC_SOUND_SPEED(SLUICE_WRITE),
 };
 
 static int polynomial_create(const sluice_api *api, sluice_host *host, const void *config,
@@ -121,14 +118,9 @@ static int polynomial_create(const sluice_api *api, sluice_host *host, const voi
 static int polynomial_bind(void *state, sluice_host *host)
 {
     polynomial_state *s = state;
-    static const char *const names[] = {"density", "pressure", "sound_speed"};
-    sluice_field f[3];
-    if (sluice_util_fields(s->api, host, names, f, 3) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->density = f[0];
-    s->pressure = f[1];
-    s->sound_speed = f[2];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"pressure", &s->pressure}, {"sound_speed", &s->sound_speed}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 static void polynomial_destroy(void *state)

@@ -58,7 +58,7 @@
  * sums. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct energy_config {
     sluice_real interval;
@@ -68,14 +68,14 @@ typedef struct energy_config {
 typedef struct energy_state {
     const sluice_api *api;
     uint32_t dims;
-    sluice_real interval, rho0, p_ref;
+    sluice_real rho0, p_ref;
     sluice_real g[3];
     const char *file;
     sluice_table *table;
     int elastic; /* the scene has a density field (and an equation of state) */
     int has_pressure;
     sluice_field mass, velocity, density, pressure;
-    int64_t written;
+    sluice_schedule rows; /* the next row is due at rows.count x rows.interval */
     double last_row_time;
     int have_initial;
     double potential0, total0, scale;
@@ -92,9 +92,8 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", 0,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
+    SLUICE_SPEC_MASS(0),
+    SLUICE_SPEC_VELOCITY(0),
 };
 
 static int energy_create(const sluice_api *api, sluice_host *host, const void *config,
@@ -112,7 +111,7 @@ static int energy_create(const sluice_api *api, sluice_host *host, const void *c
         return SLUICE_ERROR;
     }
     s->dims = (uint32_t)dims;
-    s->interval = c->interval;
+    s->rows = sluice_schedule_every(c->interval);
     s->file = c->file;
     *state = s;
     return SLUICE_OK;
@@ -129,12 +128,10 @@ static int energy_bind(void *state, sluice_host *host)
     sluice_real p_ref[3] = {0, 0, 0};
     if (api->constant(host, "reference_pressure", p_ref, 3) > 0)
         s->p_ref = p_ref[0];
-    static const char *const names[] = {"mass", "velocity"};
-    sluice_field f[2];
-    if (sluice_util_fields(api, host, names, f, 2) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"mass", &s->mass}, {"velocity", &s->velocity}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->mass = f[0];
-    s->velocity = f[1];
     s->elastic = sluice_util_optional_field(api, host, "density", &s->density);
     if (s->elastic) {
         /* a density without an equation of state has no elastic energy to
@@ -324,15 +321,11 @@ static int energy_after_step(void *state, sluice_host *host)
 {
     energy_state *s = state;
     const sluice_view *v = s->api->view(host);
-    double next = (double)s->written * (double)s->interval;
-    double tolerance = 1e-9 * (double)s->interval;
-    if (v->time + tolerance < next)
+    if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     if (energy_row(s, host) != SLUICE_OK)
         return SLUICE_ERROR;
-    while ((double)s->written * (double)s->interval <= v->time + tolerance)
-        s->written++;
-    s->api->request_time(host, (double)s->written * (double)s->interval);
+    sluice_schedule_advance(&s->rows, s->api, host, v->time);
     return SLUICE_OK;
 }
 
@@ -345,7 +338,7 @@ static int energy_finish(void *state, sluice_host *host, int status)
     if (!s->table || !s->have_initial)
         return SLUICE_OK;
     const sluice_view *v = s->api->view(host);
-    if (!(v->time > s->last_row_time + 1e-9 * (double)s->interval))
+    if (!(v->time > s->last_row_time + sluice_schedule_tolerance(&s->rows)))
         return SLUICE_OK;
     return energy_row(s, host);
 }
@@ -359,7 +352,7 @@ static int energy_save(void *state, sluice_host *host)
     if (s->api->state_write(host, "potential0,total0,scale,last_row_time,have_initial",
                             SLUICE_STATE_DOUBLE, 5, values) != SLUICE_OK)
         return SLUICE_ERROR;
-    return sluice_util_save_int(s->api, host, "rows_written", s->written);
+    return sluice_schedule_save(&s->rows, s->api, host, "rows_written");
 }
 
 static int energy_load(void *state, sluice_host *host)
@@ -368,7 +361,7 @@ static int energy_load(void *state, sluice_host *host)
     double values[5];
     if (s->api->state_read(host, "potential0,total0,scale,last_row_time,have_initial",
                            SLUICE_STATE_DOUBLE, 5, values) != SLUICE_OK ||
-        sluice_util_load_int(s->api, host, "rows_written", &s->written) != SLUICE_OK)
+        sluice_schedule_load(&s->rows, s->api, host, "rows_written") != SLUICE_OK)
         return SLUICE_ERROR;
     s->potential0 = values[0];
     s->total0 = values[1];

@@ -39,8 +39,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "gauge_column.h"
-#include "phase_filter.h"
+#include <sluice/gauge_column.h>
+#include <sluice/phase_filter.h>
 
 #define MAX_SAMPLES 1000000u
 
@@ -59,12 +59,12 @@ typedef struct fs_state {
     sluice_real *points;   /* 3 reals per sample, bottom to top within a column */
     double *sum;           /* kernel sum per sample */
     double *row;
-    sluice_real threshold, interval;
+    sluice_real threshold;
     const char *file;
     sluice_field density, mass, phase;
     int phase_filter;
     sluice_table *table;
-    int64_t written;
+    sluice_schedule rows; /* the next row is due at rows.count x rows.interval */
 } fs_state;
 
 static const sluice_param_spec params[] = {
@@ -99,9 +99,8 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", 0, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
+    SLUICE_SPEC_DENSITY(0),
+    SLUICE_SPEC_MASS(0),
 };
 
 static void fs_destroy(void *state)
@@ -139,7 +138,7 @@ static int fs_create(const sluice_api *api, sluice_host *host, const void *confi
                             api->constant(host, "domain_max", hi, 3) == s->dims;
     s->columns = c->positions.count;
     s->threshold = c->threshold;
-    s->interval = c->interval;
+    s->rows = sluice_schedule_every(c->interval);
     s->file = c->file;
     s->phase_filter = c->phase;
     if (sluice_phase_declare(api, host, s->phase_filter) != SLUICE_OK) {
@@ -286,8 +285,7 @@ static int fs_after_step(void *state, sluice_host *host)
     fs_state *s = state;
     const sluice_api *api = s->api;
     const sluice_view *v = api->view(host);
-    const double tolerance = 1e-9 * (double)s->interval;
-    if (v->time + tolerance < (double)s->written * (double)s->interval)
+    if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     const sluice_index total = s->first[s->columns];
     if (api->point_pass(host, s->points, total, SLUICE_KIND_MASK(SLUICE_KIND_FLUID), kernel_sums,
@@ -303,24 +301,12 @@ static int fs_after_step(void *state, sluice_host *host)
         s->row[1 + k] = surface(s, k);
     if (api->table_row(s->table, s->row, s->columns + 1) != SLUICE_OK)
         return SLUICE_ERROR;
-    while ((double)s->written * (double)s->interval <= v->time + tolerance)
-        s->written++;
-    api->request_time(host, (double)s->written * (double)s->interval);
+    sluice_schedule_advance(&s->rows, api, host, v->time);
     return SLUICE_OK;
 }
 
 /* Checkpoints: the rows written (the next row is at rows_written x interval). */
-static int fs_save(void *state, sluice_host *host)
-{
-    const fs_state *s = state;
-    return sluice_util_save_int(s->api, host, "rows_written", s->written);
-}
-
-static int fs_load(void *state, sluice_host *host)
-{
-    fs_state *s = state;
-    return sluice_util_load_int(s->api, host, "rows_written", &s->written);
-}
+SLUICE_DEFINE_SCHEDULE_STATE(fs_save, fs_load, fs_state, rows, "rows_written")
 
 static const sluice_component components[] = {{
     .name = "free_surface_gauge",

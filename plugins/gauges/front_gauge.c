@@ -8,7 +8,7 @@
  * row, which is exactly the one-rank row. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct front_config {
     sluice_real interval, origin;
@@ -17,10 +17,10 @@ typedef struct front_config {
 
 typedef struct front_state {
     const sluice_api *api;
-    sluice_real interval, origin;
+    sluice_real origin;
     const char *file;
     sluice_table *table;
-    int64_t written;
+    sluice_schedule rows; /* the next row is due at rows.count x rows.interval */
 } front_state;
 
 static const sluice_param_spec params[] = {
@@ -39,7 +39,7 @@ static int front_create(const sluice_api *api, sluice_host *host, const void *co
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
-    s->interval = c->interval;
+    s->rows = sluice_schedule_every(c->interval);
     s->origin = c->origin;
     s->file = c->file;
     *state = s;
@@ -62,9 +62,7 @@ static int front_after_step(void *state, sluice_host *host)
 {
     front_state *s = state;
     const sluice_view *v = s->api->view(host);
-    double next = (double)s->written * (double)s->interval;
-    double tolerance = 1e-9 * (double)s->interval;
-    if (v->time + tolerance < next)
+    if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     double front = -INFINITY;
     for (sluice_index i = 0; i < v->count; i++)
@@ -76,24 +74,12 @@ static int front_after_step(void *state, sluice_host *host)
     double row[2] = {v->time, front - (double)s->origin};
     if (s->api->table_row(s->table, row, 2) != SLUICE_OK)
         return SLUICE_ERROR;
-    while ((double)s->written * (double)s->interval <= v->time + tolerance)
-        s->written++;
-    s->api->request_time(host, (double)s->written * (double)s->interval);
+    sluice_schedule_advance(&s->rows, s->api, host, v->time);
     return SLUICE_OK;
 }
 
 /* Checkpoints: the rows written (the next row is at rows_written x interval). */
-static int front_save(void *state, sluice_host *host)
-{
-    const front_state *s = state;
-    return sluice_util_save_int(s->api, host, "rows_written", s->written);
-}
-
-static int front_load(void *state, sluice_host *host)
-{
-    front_state *s = state;
-    return sluice_util_load_int(s->api, host, "rows_written", &s->written);
-}
+SLUICE_DEFINE_SCHEDULE_STATE(front_save, front_load, front_state, rows, "rows_written")
 
 static const sluice_component components[] = {{
     .name = "front_gauge",

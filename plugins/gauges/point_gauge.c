@@ -32,7 +32,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "phase_filter.h"
+#include <sluice/phase_filter.h>
 
 #define MAX_FIELDS 16
 
@@ -53,7 +53,7 @@ typedef struct gauge_state {
     uint32_t dims;
     sluice_index count;
     sluice_real *points;
-    sluice_real interval, min_kernel_sum;
+    sluice_real min_kernel_sum;
     const char *file;
     char *field_text;
     uint32_t field_count, value_count; /* value_count: columns per point */
@@ -75,7 +75,7 @@ typedef struct gauge_state {
     double *sums;
     double *row;
     sluice_table *table;
-    int64_t written;
+    sluice_schedule rows; /* the next row is due at rows.count x rows.interval */
 } gauge_state;
 
 static const sluice_param_spec params[] = {
@@ -102,9 +102,8 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", 0, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
+    SLUICE_SPEC_DENSITY(0),
+    SLUICE_SPEC_MASS(0),
 };
 
 static void gauge_destroy(void *state)
@@ -127,14 +126,12 @@ static int gauge_create(const sluice_api *api, sluice_host *host, const void *co
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     s->count = c->points.count;
-    s->interval = c->interval;
+    s->rows = sluice_schedule_every(c->interval);
     s->min_kernel_sum = c->min_kernel_sum;
     s->file = c->file;
     s->phase_filter = c->phase;
@@ -365,9 +362,7 @@ static int gauge_after_step(void *state, sluice_host *host)
     gauge_state *s = state;
     const sluice_api *api = s->api;
     const sluice_view *v = api->view(host);
-    double next = (double)s->written * (double)s->interval;
-    double tolerance = 1e-9 * (double)s->interval;
-    if (v->time + tolerance < next)
+    if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     /* pressure and the other derived fields of the current state */
     if (api->evaluate(host) != SLUICE_OK)
@@ -401,24 +396,12 @@ static int gauge_after_step(void *state, sluice_host *host)
     }
     if (api->table_row(s->table, s->row, (uint32_t)column) != SLUICE_OK)
         return SLUICE_ERROR;
-    while ((double)s->written * (double)s->interval <= v->time + tolerance)
-        s->written++;
-    api->request_time(host, (double)s->written * (double)s->interval);
+    sluice_schedule_advance(&s->rows, api, host, v->time);
     return SLUICE_OK;
 }
 
 /* Checkpoints: the rows written (the next row is at rows_written x interval). */
-static int gauge_save(void *state, sluice_host *host)
-{
-    const gauge_state *s = state;
-    return sluice_util_save_int(s->api, host, "rows_written", s->written);
-}
-
-static int gauge_load(void *state, sluice_host *host)
-{
-    gauge_state *s = state;
-    return sluice_util_load_int(s->api, host, "rows_written", &s->written);
-}
+SLUICE_DEFINE_SCHEDULE_STATE(gauge_save, gauge_load, gauge_state, rows, "rows_written")
 
 static const sluice_component components[] = {{
     .name = "point_gauge",

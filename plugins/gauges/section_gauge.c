@@ -72,8 +72,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "gauge_column.h"
-#include "phase_filter.h"
+#include <sluice/gauge_column.h>
+#include <sluice/phase_filter.h>
 
 #define MAX_SAMPLES 1000000u
 #define SUMS 4
@@ -97,13 +97,13 @@ typedef struct sg_state {
     sluice_index columns; /* per section: 4, or 6 with forces */
     double reference_pressure; /* Pa */
     sluice_real *bed;
-    sluice_real threshold, interval;
+    sluice_real threshold;
     double g;             /* gravity along -y, m s^-2 */
     const char *file;
     sluice_field density, mass, velocity, pressure, phase;
     int phase_filter;
     sluice_table *table;
-    int64_t written;
+    sluice_schedule rows; /* the next row is due at rows.count x rows.interval */
 } sg_state;
 
 static const sluice_param_spec params[] = {
@@ -136,11 +136,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", 0,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", 0, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
+    SLUICE_SPEC_VELOCITY(0),
+    SLUICE_SPEC_DENSITY(0),
+    SLUICE_SPEC_MASS(0),
 };
 
 static void sg_destroy(void *state)
@@ -193,7 +191,7 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
     s->api = api;
     s->sections = c->positions.count;
     s->threshold = c->threshold;
-    s->interval = c->interval;
+    s->rows = sluice_schedule_every(c->interval);
     s->file = c->file;
     s->phase_filter = c->phase;
     s->forces = c->forces;
@@ -202,8 +200,7 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
         free(s);
         return SLUICE_ERROR;
     }
-    static const sluice_field_spec pressure = {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_READ,
-                                               0, NULL, 0, "pressure"};
+    static const sluice_field_spec pressure = SLUICE_SPEC_PRESSURE_DOC(SLUICE_READ, 0, "pressure");
     if (s->forces && api->declare_field(host, &pressure) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
@@ -265,13 +262,10 @@ static int sg_bind(void *state, sluice_host *host)
 {
     sg_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"density", "mass", "velocity"};
-    sluice_field f[3];
-    if (sluice_util_fields(api, host, names, f, 3) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"mass", &s->mass}, {"velocity", &s->velocity}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->density = f[0];
-    s->mass = f[1];
-    s->velocity = f[2];
     if (sluice_phase_bind(api, host, s->phase_filter, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
     s->pressure.column = -1;
@@ -421,8 +415,7 @@ static int sg_after_step(void *state, sluice_host *host)
     sg_state *s = state;
     const sluice_api *api = s->api;
     const sluice_view *v = api->view(host);
-    const double tolerance = 1e-9 * (double)s->interval;
-    if (v->time + tolerance < (double)s->written * (double)s->interval)
+    if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     const sluice_index total = s->first[s->sections];
     /* with forces: the pressure of the current state (one evaluation, as
@@ -442,24 +435,12 @@ static int sg_after_step(void *state, sluice_host *host)
         measure(s, k, s->row + 1 + (size_t)s->columns * k);
     if (api->table_row(s->table, s->row, s->columns * s->sections + 1) != SLUICE_OK)
         return SLUICE_ERROR;
-    while ((double)s->written * (double)s->interval <= v->time + tolerance)
-        s->written++;
-    api->request_time(host, (double)s->written * (double)s->interval);
+    sluice_schedule_advance(&s->rows, api, host, v->time);
     return SLUICE_OK;
 }
 
 /* Checkpoints: the rows written (the next row is at rows_written x interval). */
-static int sg_save(void *state, sluice_host *host)
-{
-    const sg_state *s = state;
-    return sluice_util_save_int(s->api, host, "rows_written", s->written);
-}
-
-static int sg_load(void *state, sluice_host *host)
-{
-    sg_state *s = state;
-    return sluice_util_load_int(s->api, host, "rows_written", &s->written);
-}
+SLUICE_DEFINE_SCHEDULE_STATE(sg_save, sg_load, sg_state, rows, "rows_written")
 
 static const sluice_component components[] = {{
     .name = "section_gauge",

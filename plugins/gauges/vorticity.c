@@ -41,7 +41,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct vort_config {
     sluice_real interval;
@@ -52,8 +52,7 @@ typedef struct vort_state {
     const sluice_api *api;
     uint32_t dims, components;
     int renormalise;
-    double interval;
-    int64_t scheduled;     /* the next computation is at scheduled * interval */
+    sluice_schedule schedule; /* the next computation */
     int computed;          /* the vorticity of (computed_step, computed_time) is current */
     int64_t computed_step;
     double computed_time;
@@ -75,13 +74,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
-     SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
-     "velocity"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY(SLUICE_READ_NEIGHBOUR),
 };
 
 static int vort_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
@@ -91,23 +86,19 @@ static int vort_create(const sluice_api *api, sluice_host *host, const void *con
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
-    s->interval = (double)c->interval;
+    s->schedule = sluice_schedule_every(c->interval);
     s->renormalise = c->renormalise;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     s->components = s->dims == 3 ? 3 : 1;
     const sluice_field_spec vorticity = {
         "vorticity", SLUICE_TYPE_REAL, s->components, "s^-1", SLUICE_WRITE, SLUICE_FIELD_OUTPUT,
         NULL, 0,
         s->dims == 3 ? "vorticity curl v (x, y, z) of fluid particles at the last computation"
                      : "vorticity dv/dx - du/dy of fluid particles at the last computation"};
-    const sluice_field_spec correction = {
-        "kernel_correction", SLUICE_TYPE_REAL, s->dims * s->dims, "1", SLUICE_READ, 0, NULL, 0,
-        "kernel gradient correction matrix L, component a*dims+b = L_ab"};
+    const sluice_field_spec correction = SLUICE_SPEC_KERNEL_CORRECTION(s->dims, SLUICE_READ);
     if (api->declare_field(host, &vorticity) != SLUICE_OK ||
         (s->renormalise && api->declare_field(host, &correction) != SLUICE_OK)) {
         free(s);
@@ -121,14 +112,11 @@ static int vort_bind(void *state, sluice_host *host)
 {
     vort_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"velocity", "mass", "density", "vorticity"};
-    sluice_field f[4];
-    if (sluice_util_fields(api, host, names, f, 4) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"mass", &s->mass}, {"density", &s->density},
+        {"vorticity", &s->vorticity}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->mass = f[1];
-    s->density = f[2];
-    s->vorticity = f[3];
     if (s->renormalise && api->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
         return SLUICE_ERROR;
     /* hooks run in scene order: the writer must come after this plugin */
@@ -211,25 +199,9 @@ static inline void vort_pairs(const vort_state *s, const sluice_view *v,
         }
         /* g_cb = sum_j V_j (v_j - v_i)_c (r_ij F_ij)_b, then
          * d v_c / d x_b = sum_e L_be g_ce */
-        sluice_real gxx = 0, gxy = 0, gxz = 0, gyx = 0, gyy = 0, gyz = 0, gzx = 0, gzy = 0,
-                    gzz = 0;
-        for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
-            const sluice_real w = mj[k] / rhoj[k] * F[k];
-            const sluice_real du = (vxj[k] - vxi) * w, dv = (vyj[k] - vyi) * w;
-            gxx += du * rx[k];
-            gxy += du * ry[k];
-            gyx += dv * rx[k];
-            gyy += dv * ry[k];
-            if (dims == 3) {
-                const sluice_real dw = (vzj[k] - vzi) * w;
-                gxz += du * rz[k];
-                gyz += dv * rz[k];
-                gzx += dw * rx[k];
-                gzy += dw * ry[k];
-                gzz += dw * rz[k];
-            }
-        }
-        const sluice_real g[9] = {gxx, gxy, gxz, gyx, gyy, gyz, gzx, gzy, gzz};
+        const sluice_real vi[3] = {vxi, vyi, vzi};
+        sluice_real g[9];
+        sluice_velocity_gradient_sum(b, t, dims, s->velocity, s->mass, s->density, vi, g);
         sluice_real G[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}; /* G[c][b] = d v_c / d x_b */
         for (uint32_t c = 0; c < dims; c++)
             for (uint32_t bb = 0; bb < dims; bb++) {
@@ -286,15 +258,12 @@ static int vort_after_step(void *state, sluice_host *host)
     vort_state *s = state;
     const sluice_api *api = s->api;
     const sluice_view *v = api->view(host);
-    const double tolerance = 1e-9 * s->interval;
-    if (v->time + tolerance < (double)s->scheduled * s->interval)
+    if (!sluice_schedule_due(&s->schedule, v->time))
         return SLUICE_OK;
     if (compute(s, host) != SLUICE_OK)
         return SLUICE_ERROR;
     v = api->view(host);
-    while ((double)s->scheduled * s->interval <= v->time + tolerance)
-        s->scheduled++;
-    api->request_time(host, (double)s->scheduled * s->interval);
+    sluice_schedule_advance(&s->schedule, api, host, v->time);
     return SLUICE_OK;
 }
 
@@ -327,7 +296,7 @@ static int vort_save(void *state, sluice_host *host)
 {
     const vort_state *s = state;
     const sluice_api *api = s->api;
-    if (sluice_util_save_int(api, host, "scheduled", s->scheduled) != SLUICE_OK ||
+    if (sluice_schedule_save(&s->schedule, api, host, "scheduled") != SLUICE_OK ||
         sluice_util_save_int(api, host, "computed", s->computed) != SLUICE_OK ||
         sluice_util_save_int(api, host, "computed_step", s->computed_step) != SLUICE_OK ||
         sluice_util_save_double(api, host, "computed_time", s->computed_time) != SLUICE_OK)
@@ -340,7 +309,7 @@ static int vort_load(void *state, sluice_host *host)
     vort_state *s = state;
     const sluice_api *api = s->api;
     int64_t computed = 0;
-    if (sluice_util_load_int(api, host, "scheduled", &s->scheduled) != SLUICE_OK ||
+    if (sluice_schedule_load(&s->schedule, api, host, "scheduled") != SLUICE_OK ||
         sluice_util_load_int(api, host, "computed", &computed) != SLUICE_OK ||
         sluice_util_load_int(api, host, "computed_step", &s->computed_step) != SLUICE_OK ||
         sluice_util_load_double(api, host, "computed_time", &s->computed_time) != SLUICE_OK)

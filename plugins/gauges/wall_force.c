@@ -37,7 +37,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "phase_filter.h"
+#include <sluice/phase_filter.h>
 
 #define MAX_SAMPLES 1000000u
 #define MAX_WALLS 32
@@ -58,7 +58,6 @@ typedef struct wf_state {
     int box;
     double box_min[2], box_max[2];
     double offset, spacing, min_kernel_sum;
-    sluice_real interval;
     const char *file;
     int phase_filter;
     /* the measured walls, in scene order */
@@ -75,7 +74,7 @@ typedef struct wf_state {
     double reference_pressure;
     sluice_field density, mass, pressure, phase;
     sluice_table *table;
-    int64_t written;
+    sluice_schedule rows; /* the next row is due at rows.count x rows.interval */
 } wf_state;
 
 static const sluice_param_spec params[] = {
@@ -109,10 +108,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", 0, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
-    {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_READ, 0, NULL, 0, "pressure"},
+    SLUICE_SPEC_DENSITY(0),
+    SLUICE_SPEC_MASS(0),
+    SLUICE_SPEC_PRESSURE_DOC(SLUICE_READ, 0, "pressure"),
 };
 
 static void wf_destroy(void *state)
@@ -157,7 +155,7 @@ static int wf_create(const sluice_api *api, sluice_host *host, const void *confi
     s->offset = (double)c->offset * (double)dx;
     s->spacing = (double)c->sample_spacing * (double)dx;
     s->min_kernel_sum = (double)c->min_kernel_sum;
-    s->interval = c->interval;
+    s->rows = sluice_schedule_every(c->interval);
     s->file = c->file;
     s->phase_filter = c->phase;
     const int has_box = c->box_min[0] != 0 || c->box_min[1] != 0 || c->box_max[0] != 0 ||
@@ -217,13 +215,10 @@ static int wf_bind(void *state, sluice_host *host)
 {
     wf_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"density", "mass", "pressure"};
-    sluice_field f[3];
-    if (sluice_util_fields(api, host, names, f, 3) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"density", &s->density}, {"mass", &s->mass}, {"pressure", &s->pressure}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->density = f[0];
-    s->mass = f[1];
-    s->pressure = f[2];
     if (sluice_phase_bind(api, host, s->phase_filter, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
     sluice_real p_ref = 0;
@@ -406,8 +401,7 @@ static int wf_after_step(void *state, sluice_host *host)
     wf_state *s = state;
     const sluice_api *api = s->api;
     const sluice_view *v = api->view(host);
-    const double tolerance = 1e-9 * (double)s->interval;
-    if (v->time + tolerance < (double)s->written * (double)s->interval)
+    if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     /* the pressure of the current state */
     if (api->evaluate(host) != SLUICE_OK)
@@ -435,24 +429,12 @@ static int wf_after_step(void *state, sluice_host *host)
     }
     if (api->table_row(s->table, s->row, 3 * s->wall_count + 1) != SLUICE_OK)
         return SLUICE_ERROR;
-    while ((double)s->written * (double)s->interval <= v->time + tolerance)
-        s->written++;
-    api->request_time(host, (double)s->written * (double)s->interval);
+    sluice_schedule_advance(&s->rows, api, host, v->time);
     return SLUICE_OK;
 }
 
 /* Checkpoints: the rows written (the next row is at rows_written x interval). */
-static int wf_save(void *state, sluice_host *host)
-{
-    const wf_state *s = state;
-    return sluice_util_save_int(s->api, host, "rows_written", s->written);
-}
-
-static int wf_load(void *state, sluice_host *host)
-{
-    wf_state *s = state;
-    return sluice_util_load_int(s->api, host, "rows_written", &s->written);
-}
+SLUICE_DEFINE_SCHEDULE_STATE(wf_save, wf_load, wf_state, rows, "rows_written")
 
 static const sluice_component components[] = {{
     .name = "wall_force",

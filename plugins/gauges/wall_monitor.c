@@ -32,7 +32,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct monitor_config {
     sluice_real interval;
@@ -43,11 +43,11 @@ typedef struct monitor_config {
 typedef struct monitor_state {
     const sluice_api *api;
     uint32_t dims;
-    sluice_real interval, dx, h;
+    sluice_real dx, h;
     int stop;
     const char *file;
     sluice_table *table;
-    int64_t written;
+    sluice_schedule rows; /* the next row is due at rows.count x rows.interval */
     sluice_id *crossed_ids; /* sorted */
     size_t crossed_count, crossed_capacity;
     double *distance;
@@ -86,7 +86,7 @@ static int monitor_create(const sluice_api *api, sluice_host *host, const void *
         return SLUICE_ERROR;
     }
     s->dims = (uint32_t)dims;
-    s->interval = c->interval;
+    s->rows = sluice_schedule_every(c->interval);
     s->stop = c->stop_on_crossing;
     s->file = c->file;
     *state = s;
@@ -180,9 +180,7 @@ static int monitor_after_step(void *state, sluice_host *host)
     monitor_state *s = state;
     const sluice_api *api = s->api;
     const sluice_view *v = api->view(host);
-    double next = (double)s->written * (double)s->interval;
-    double tolerance = 1e-9 * (double)s->interval;
-    if (v->time + tolerance < next)
+    if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     if (!s->ranks_known) {
         /* collective: every rank samples first at the same step */
@@ -321,9 +319,7 @@ static int monitor_after_step(void *state, sluice_host *host)
                    wall && wall->name[0] ? "'" : "", wall ? wall->scheme : "?", crossed_count);
         return SLUICE_ERROR;
     }
-    while ((double)s->written * (double)s->interval <= v->time + tolerance)
-        s->written++;
-    api->request_time(host, (double)s->written * (double)s->interval);
+    sluice_schedule_advance(&s->rows, api, host, v->time);
     return SLUICE_OK;
 }
 
@@ -331,7 +327,7 @@ static int monitor_after_step(void *state, sluice_host *host)
 static int monitor_save(void *state, sluice_host *host)
 {
     const monitor_state *s = state;
-    if (sluice_util_save_int(s->api, host, "rows_written", s->written) != SLUICE_OK)
+    if (sluice_schedule_save(&s->rows, s->api, host, "rows_written") != SLUICE_OK)
         return SLUICE_ERROR;
     return s->api->state_write(host, "crossed_ids", SLUICE_STATE_UINT64, s->crossed_count,
                                s->crossed_ids);
@@ -341,7 +337,7 @@ static int monitor_load(void *state, sluice_host *host)
 {
     monitor_state *s = state;
     int64_t length = s->api->state_length(host, "crossed_ids");
-    if (sluice_util_load_int(s->api, host, "rows_written", &s->written) != SLUICE_OK ||
+    if (sluice_schedule_load(&s->rows, s->api, host, "rows_written") != SLUICE_OK ||
         length < 0)
         return SLUICE_ERROR;
     if ((size_t)length > s->crossed_capacity) {

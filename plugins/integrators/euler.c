@@ -20,7 +20,7 @@
  * multiplies the oscillator's energy by exactly 1 + (omega dt)^2, so it only
  * runs where dissipation (viscosity) outweighs that growth; it is offered for
  * comparison with seed 000, not for production. */
-#include "integrator_util.h"
+#include <sluice/integrator_util.h>
 
 enum { FORM_SEMI_IMPLICIT = 0, FORM_EXPLICIT = 1 };
 
@@ -45,8 +45,7 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", SLUICE_READ | SLUICE_WRITE,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_WRITE),
 };
 
 static int euler_create(const sluice_api *api, sluice_host *host, const void *config,
@@ -58,12 +57,10 @@ static int euler_create(const sluice_api *api, sluice_host *host, const void *co
         return SLUICE_ERROR;
     s->api = api;
     s->form = c->form;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     *state = s;
     return SLUICE_OK;
 }

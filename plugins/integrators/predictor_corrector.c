@@ -43,7 +43,7 @@
  * multiplied by a fixed factor every step, but grows as the spectral radius
  * of its step squared, 1 + (omega dt)^4 / 2 + O((omega dt)^6) per step
  * (test_integrators, energy_pec): twice the epec rate. */
-#include "integrator_util.h"
+#include <sluice/integrator_util.h>
 
 enum { MODE_EPEC = 0, MODE_PEC = 1 };
 
@@ -70,8 +70,7 @@ typedef struct pc_state {
 } pc_state;
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", SLUICE_READ | SLUICE_WRITE,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_WRITE),
     {"position_previous", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m",
      SLUICE_READ | SLUICE_WRITE, SLUICE_FIELD_RESTART, NULL, 0,
      "position at the start of the step (predictor-corrector integrator)"},
@@ -85,12 +84,10 @@ static int pc_create(const sluice_api *api, sluice_host *host, const void *confi
         return SLUICE_ERROR;
     s->api = api;
     s->mode = c->mode;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     *state = s;
     return SLUICE_OK;
 }

@@ -7,7 +7,7 @@
  * particles move with the velocity plus, when a plugin (XSPH) declares it, the
  * field transport_velocity_correction; walls move only when a wall plugin
  * moves them. The step size comes from the rates at t^n (first evaluation). */
-#include "integrator_util.h"
+#include <sluice/integrator_util.h>
 
 typedef struct symplectic_state {
     const sluice_api *api;
@@ -17,8 +17,7 @@ typedef struct symplectic_state {
 } symplectic_state;
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", SLUICE_READ | SLUICE_WRITE,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_WRITE),
 };
 
 static int symplectic_create(const sluice_api *api, sluice_host *host, const void *config,
@@ -29,12 +28,10 @@ static int symplectic_create(const sluice_api *api, sluice_host *host, const voi
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     *state = s;
     return SLUICE_OK;
 }

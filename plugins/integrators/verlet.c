@@ -35,7 +35,7 @@
  * symplectic: on an undamped oscillator its energy grows secularly, at the
  * rate given by the spectral radius of its per-cycle amplification matrix
  * (x1.0068 per period at omega dt = 2 pi / 64 with euler_every 40). */
-#include "integrator_util.h"
+#include <sluice/integrator_util.h>
 
 typedef struct verlet_config {
     int64_t euler_every;
@@ -61,8 +61,7 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", SLUICE_READ | SLUICE_WRITE,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_WRITE),
 };
 
 static int verlet_create(const sluice_api *api, sluice_host *host, const void *config,
@@ -74,12 +73,10 @@ static int verlet_create(const sluice_api *api, sluice_host *host, const void *c
         return SLUICE_ERROR;
     s->api = api;
     s->euler_every = c->euler_every;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     *state = s;
     return SLUICE_OK;
 }

@@ -6,7 +6,7 @@
  * (seed 000 prints constants 9/4 too large; these are the normalised ones). */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct kernel_state {
     sluice_real h, inverse_h, normalisation, gradient_normalisation;

@@ -7,7 +7,7 @@
  * Both are antisymmetric in i, j, so linear momentum is conserved exactly.
  * The kernel gradient is never renormalised here (seed 004).
  * Targets fluid particles; wall particles act through their pressure (DBC). */
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct pressure_config {
     int form;
@@ -29,16 +29,11 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT, NULL, 0, "pressure"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", 0,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
-    {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0,
-     "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
+    SLUICE_SPEC_PRESSURE_DOC(SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT, "pressure"),
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_VELOCITY(0),
+    SLUICE_SPEC_ACCELERATION(SLUICE_ACCUMULATE),
 };
 
 static int pressure_create(const sluice_api *api, sluice_host *host, const void *config,
@@ -57,15 +52,10 @@ static int pressure_create(const sluice_api *api, sluice_host *host, const void 
 static int pressure_bind(void *state, sluice_host *host)
 {
     pressure_state *s = state;
-    static const char *const names[] = {"pressure", "density", "mass", "acceleration"};
-    sluice_field f[4];
-    if (sluice_util_fields(s->api, host, names, f, 4) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->pressure = f[0];
-    s->density = f[1];
-    s->mass = f[2];
-    s->acceleration = f[3];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"pressure", &s->pressure}, {"density", &s->density}, {"mass", &s->mass},
+        {"acceleration", &s->acceleration}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 static void pressure_destroy(void *state)

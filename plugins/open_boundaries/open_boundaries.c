@@ -96,8 +96,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "phase_filter.h"
-#include "plugin_util.h"
+#include <sluice/phase_filter.h>
+#include <sluice/plugin_util.h>
 
 enum { INLET_BUFFER = 0, INLET_BLOCK = 1 };
 enum { OUTLET_FREE = 0, OUTLET_FROZEN = 1, OUTLET_BUFFER = 2 };
@@ -127,7 +127,6 @@ typedef struct boundary_state {
     double position, bed, depth, velocity, width, dx, rho0, g, p_ref;
     double span[2];
     double turbulence_k, turbulence_epsilon, mixing_length;
-    double interval;
     const char *file;
     double domain_min[3], domain_max[3];
     sluice_field velocity_field, density_field, mass_field, pressure_field;
@@ -157,7 +156,7 @@ typedef struct boundary_state {
     sluice_index capacity;
     /* fluxes */
     double mass_interval, momentum_interval, mass_total, row_time;
-    int64_t written;
+    sluice_schedule table_rows; /* the next row is due at count x interval */
     sluice_index open_count;
     sluice_table *table;
     /* air_vent: its box, the water that reached it, and the mean pressure
@@ -295,12 +294,9 @@ static const sluice_param_spec vent_params[] = {
 };
 
 static const sluice_field_spec boundary_fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", SLUICE_READ,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity (imposed on open particles)"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "density (imposed on open particles)"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
+    SLUICE_SPEC_VELOCITY_DOC(SLUICE_READ, "velocity (imposed on open particles)"),
+    SLUICE_SPEC_DENSITY_DOC(SLUICE_READ, "density (imposed on open particles)"),
+    SLUICE_SPEC_MASS(SLUICE_READ),
 };
 
 static int boundary_create(const sluice_api *api, sluice_host *host, const void *config,
@@ -322,7 +318,7 @@ static int boundary_create(const sluice_api *api, sluice_host *host, const void 
     s->bed = c->bed;
     s->depth = c->depth;
     s->width = c->width;
-    s->interval = c->interval;
+    s->table_rows = sluice_schedule_every(c->interval);
     s->file = c->file;
     s->span[0] = c->span[0];
     s->span[1] = c->span[1];
@@ -491,13 +487,10 @@ static int boundary_bind(void *state, sluice_host *host)
 {
     boundary_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"velocity", "density", "mass"};
-    sluice_field f[3];
-    if (sluice_util_fields(api, host, names, f, 3) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity_field}, {"density", &s->density_field}, {"mass", &s->mass_field}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity_field = f[0];
-    s->density_field = f[1];
-    s->mass_field = f[2];
     s->has_pressure = sluice_util_optional_field(api, host, "pressure", &s->pressure_field);
     sluice_real value, vec[3] = {0, 0, 0};
     if (sluice_util_constant(api, host, "spacing", &value) != SLUICE_OK)
@@ -831,15 +824,11 @@ static int write_row(boundary_state *s, sluice_host *host, double time)
 /* Rows at multiples of the interval (the first at t = 0: zero flux). */
 static int flux_rows(boundary_state *s, sluice_host *host, double time)
 {
-    const double tolerance = 1e-9 * s->interval;
-    double next = (double)s->written * s->interval;
-    if (time + tolerance < next)
+    if (!sluice_schedule_due(&s->table_rows, time))
         return SLUICE_OK;
     if (write_row(s, host, time) != SLUICE_OK)
         return SLUICE_ERROR;
-    while ((double)s->written * s->interval <= time + tolerance)
-        s->written++;
-    s->api->request_time(host, (double)s->written * s->interval);
+    sluice_schedule_advance(&s->table_rows, s->api, host, time);
     return SLUICE_OK;
 }
 
@@ -1123,7 +1112,7 @@ static int vent_create(const sluice_api *api, sluice_host *host, const void *con
         return SLUICE_ERROR;
     s->api = api;
     s->vent = 1;
-    s->interval = c->interval;
+    s->table_rows = sluice_schedule_every(c->interval);
     s->response_time = c->response_time;
     s->file = c->file;
     /* the vent holds air: the field 'phase' of two_phase (the core refuses
@@ -1392,7 +1381,7 @@ static int vent_save(void *state, sluice_host *host)
     const boundary_state *s = state;
     const double values[6] = {s->last_time, s->mass_interval, s->mass_total, s->water_total,
                               s->row_time,  s->air_pressure};
-    const int64_t counts[2] = {s->written, s->water_warned};
+    const int64_t counts[2] = {s->table_rows.count, s->water_warned};
     if (s->api->state_write(host,
                             "last_time,mass_interval,mass_total,water_mass_total,row_time,"
                             "air_pressure",
@@ -1421,7 +1410,7 @@ static int vent_load(void *state, sluice_host *host)
     s->water_total = values[3];
     s->row_time = values[4];
     s->air_pressure = values[5];
-    s->written = counts[0];
+    s->table_rows.count = counts[0];
     s->water_warned = (int)counts[1];
     return SLUICE_OK;
 }
@@ -1443,7 +1432,7 @@ static int boundary_save(void *state, sluice_host *host)
     const sluice_api *api = s->api;
     const double values[6] = {s->last_time,        s->newest_column, s->mass_interval,
                               s->momentum_interval, s->mass_total,    s->row_time};
-    const int64_t counts[2] = {s->written, (int64_t)s->open_count};
+    const int64_t counts[2] = {s->table_rows.count, (int64_t)s->open_count};
     if (api->state_write(host, "last_time,newest_column,mass_interval,momentum_interval,"
                                "mass_total,row_time",
                          SLUICE_STATE_DOUBLE, 6, values) != SLUICE_OK ||
@@ -1478,7 +1467,7 @@ static int boundary_load(void *state, sluice_host *host)
     s->momentum_interval = values[3];
     s->mass_total = values[4];
     s->row_time = values[5];
-    s->written = counts[0];
+    s->table_rows.count = counts[0];
     s->open_count = (sluice_index)counts[1];
     double control[4];
     if (s->controlled) {

@@ -49,7 +49,7 @@
 
 #include <hdf5.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 #define H5W_NONE ((hid_t)-1)
 #define H5W_PATH_MAX 4096
@@ -89,7 +89,6 @@ typedef struct h5w_text {
 
 typedef struct h5w_state {
     const sluice_api *api;
-    double interval;
     int compression;
     char *prefix;
     /* explicit `fields` list (empty: every output field) */
@@ -99,8 +98,7 @@ typedef struct h5w_state {
     h5w_field *fields;
     uint32_t field_count;
     char *plugins; /* the `plugins` attribute text */
-    /* schedule: the next regular snapshot is at schedule * interval */
-    int64_t schedule;
+    sluice_schedule schedule; /* the next regular snapshot */
     uint64_t snapshots; /* files written; the next file's index */
     int have_last;
     int64_t last_step;
@@ -331,7 +329,7 @@ static int h5w_create(const sluice_api *api, sluice_host *host, const void *conf
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
-    s->interval = (double)c->interval;
+    s->schedule = sluice_schedule_every(c->interval);
     s->compression = (int)c->compression;
     const char *prefix = c->prefix ? c->prefix : "";
     if (!*prefix || strchr(prefix, '/') || strcmp(prefix, ".") == 0 ||
@@ -1183,14 +1181,11 @@ static int h5w_after_step(void *state, sluice_host *host)
 {
     h5w_state *s = state;
     const sluice_view *v = s->api->view(host);
-    const double tolerance = 1e-9 * s->interval;
-    if (v->time + tolerance < (double)s->schedule * s->interval)
+    if (!sluice_schedule_due(&s->schedule, v->time))
         return SLUICE_OK;
     if (!s->disabled && write_snapshot(s, host, "ok") != SLUICE_OK)
         return SLUICE_ERROR;
-    while ((double)s->schedule * s->interval <= v->time + tolerance)
-        s->schedule++;
-    s->api->request_time(host, (double)s->schedule * s->interval);
+    sluice_schedule_advance(&s->schedule, s->api, host, v->time);
     return SLUICE_OK;
 }
 
@@ -1225,7 +1220,7 @@ static int h5w_save(void *state, sluice_host *host)
             times[r] = s->records[r].time;
             counts[r] = s->records[r].count;
         }
-        if (sluice_util_save_int(api, host, "schedule", s->schedule) == SLUICE_OK &&
+        if (sluice_schedule_save(&s->schedule, api, host, "schedule") == SLUICE_OK &&
             sluice_util_save_int(api, host, "snapshots", (int64_t)s->snapshots) == SLUICE_OK &&
             sluice_util_save_int(api, host, "have_last", s->have_last) == SLUICE_OK &&
             sluice_util_save_int(api, host, "last_step", s->last_step) == SLUICE_OK &&
@@ -1245,7 +1240,7 @@ static int h5w_load(void *state, sluice_host *host)
     const sluice_api *api = s->api;
     int64_t snapshots = 0, have_last = 0;
     const int64_t n = api->state_length(host, "record_times");
-    if (sluice_util_load_int(api, host, "schedule", &s->schedule) != SLUICE_OK ||
+    if (sluice_schedule_load(&s->schedule, api, host, "schedule") != SLUICE_OK ||
         sluice_util_load_int(api, host, "snapshots", &snapshots) != SLUICE_OK ||
         sluice_util_load_int(api, host, "have_last", &have_last) != SLUICE_OK ||
         sluice_util_load_int(api, host, "last_step", &s->last_step) != SLUICE_OK ||

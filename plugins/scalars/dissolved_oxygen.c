@@ -72,7 +72,7 @@
 #include <float.h>
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 enum { TWO_PHASE_AUTO = 0, TWO_PHASE_YES = 1, TWO_PHASE_NO = 2 };
 
@@ -147,10 +147,8 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
     {"dissolved_oxygen", SLUICE_TYPE_REAL, 1, "mg L^-1",
      SLUICE_READ | SLUICE_READ_NEIGHBOUR | SLUICE_WRITE, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
      NULL, 0,
@@ -180,9 +178,8 @@ static int do_create(const sluice_api *api, sluice_host *host, const void *confi
     /* two_phase: yes declares the phase now, so that a scene without a
      * provider is refused by the core ("computed by no loaded plugin") */
     if (c->two_phase == TWO_PHASE_YES) {
-        const sluice_field_spec phase = {"phase", SLUICE_TYPE_UINT8, 1, "1",
-                                         SLUICE_READ | SLUICE_READ_NEIGHBOUR, 0, NULL, 0,
-                                         "phase of a fluid particle: 0 water, 1 air"};
+        const sluice_field_spec phase = SLUICE_SPEC_PHASE_DOC(
+            SLUICE_READ | SLUICE_READ_NEIGHBOUR, 0, "phase of a fluid particle: 0 water, 1 air");
         if (api->declare_field(host, &phase) != SLUICE_OK) {
             free(s);
             return SLUICE_ERROR;
@@ -206,15 +203,11 @@ static int do_bind(void *state, sluice_host *host)
 {
     do_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"mass", "density", "dissolved_oxygen",
-                                        "dissolved_oxygen_rate"};
-    sluice_field f[4];
-    if (sluice_util_fields(api, host, names, f, 4) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"mass", &s->mass}, {"density", &s->density}, {"dissolved_oxygen", &s->concentration},
+        {"dissolved_oxygen_rate", &s->rate}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->mass = f[0];
-    s->density = f[1];
-    s->concentration = f[2];
-    s->rate = f[3];
 
     sluice_real ratio;
     if (sluice_util_constant(api, host, "kernel_support", &ratio) != SLUICE_OK)

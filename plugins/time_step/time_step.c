@@ -24,7 +24,7 @@
  *     acoustic with the artificial viscosity's limit, C = 0.2. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct step_config {
     sluice_real courant;
@@ -58,10 +58,8 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_READ, 0,
-     "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", SLUICE_READ,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
+    SLUICE_SPEC_ACCELERATION(SLUICE_READ),
+    SLUICE_SPEC_VELOCITY(SLUICE_READ),
 };
 
 static const sluice_field_spec sound_speed_field = {

@@ -35,7 +35,7 @@
  * inflow: I = 10 %, length scale 0.5 y1). */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct ke_config {
     sluice_real c_mu, sigma_k, sigma_epsilon, c1, c2, kappa;
@@ -99,12 +99,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", SLUICE_READ,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ),
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
     {"turbulent_kinetic_energy", SLUICE_TYPE_REAL, 1, "m^2 s^-2",
      SLUICE_READ | SLUICE_READ_NEIGHBOUR | SLUICE_WRITE,
      SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "turbulent kinetic energy k"},
@@ -116,8 +113,7 @@ static const sluice_field_spec fields[] = {
      "turbulent_kinetic_energy", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "dk/dt"},
     {"turbulent_dissipation_rate_rate", SLUICE_TYPE_REAL, 1, "m^2 s^-4", SLUICE_ACCUMULATE, 0,
      "turbulent_dissipation_rate", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "d eps/dt"},
-    {"eddy_viscosity", SLUICE_TYPE_REAL, 1, "m^2 s^-1", SLUICE_WRITE, SLUICE_FIELD_OUTPUT, NULL, 0,
-     "kinematic eddy viscosity nu_T"},
+    SLUICE_SPEC_EDDY_VISCOSITY(SLUICE_WRITE),
 };
 
 static int ke_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
@@ -152,9 +148,7 @@ static int ke_create(const sluice_api *api, sluice_host *host, const void *confi
         free(s);
         return SLUICE_ERROR;
     }
-    const sluice_field_spec gradient = {
-        "velocity_gradient", SLUICE_TYPE_REAL, s->dims * s->dims, "s^-1", SLUICE_READ,
-        SLUICE_FIELD_OUTPUT, NULL, 0, "velocity gradient, component a*dims+b = d v_a / d x_b"};
+    const sluice_field_spec gradient = SLUICE_SPEC_VELOCITY_GRADIENT(s->dims, SLUICE_READ);
     if (api->declare_field(host, &gradient) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
@@ -168,27 +162,13 @@ static int ke_bind(void *state, sluice_host *host)
     ke_state *s = state;
     const sluice_api *api = s->api;
     s->host = host;
-    static const char *const names[] = {"velocity",
-                                        "mass",
-                                        "density",
-                                        "velocity_gradient",
-                                        "turbulent_kinetic_energy",
-                                        "turbulent_dissipation_rate",
-                                        "turbulent_kinetic_energy_rate",
-                                        "turbulent_dissipation_rate_rate",
-                                        "eddy_viscosity"};
-    sluice_field f[9];
-    if (sluice_util_fields(api, host, names, f, 9) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"mass", &s->mass}, {"density", &s->density},
+        {"velocity_gradient", &s->gradient}, {"turbulent_kinetic_energy", &s->k},
+        {"turbulent_dissipation_rate", &s->eps}, {"turbulent_kinetic_energy_rate", &s->k_rate},
+        {"turbulent_dissipation_rate_rate", &s->eps_rate}, {"eddy_viscosity", &s->eddy_viscosity}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->mass = f[1];
-    s->density = f[2];
-    s->gradient = f[3];
-    s->k = f[4];
-    s->eps = f[5];
-    s->k_rate = f[6];
-    s->eps_rate = f[7];
-    s->eddy_viscosity = f[8];
     s->nu_lam = 0;
     api->constant(host, "kinematic_viscosity", &s->nu_lam, 1);
     if (sluice_util_constant(api, host, "courant_number", &s->courant) != SLUICE_OK)

@@ -24,7 +24,7 @@
  * channel, one bed segment, 240 fluid particles; perf). */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct ml_config {
     sluice_real c_mu, kappa, l_max;
@@ -54,12 +54,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART,
-     NULL, 0, "particle mass"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"eddy_viscosity", SLUICE_TYPE_REAL, 1, "m^2 s^-1", SLUICE_WRITE, SLUICE_FIELD_OUTPUT, NULL, 0,
-     "kinematic eddy viscosity nu_T"},
+    SLUICE_SPEC_MASS(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_EDDY_VISCOSITY(SLUICE_WRITE),
     {"mixing_length", SLUICE_TYPE_REAL, 1, "m", SLUICE_WRITE, SLUICE_FIELD_OUTPUT, NULL, 0,
      "mixing length l = min(1, s^3) min(kappa y, l_max)"},
 };
@@ -74,21 +71,17 @@ static int ml_create(const sluice_api *api, sluice_host *host, const void *confi
     s->c_mu = c->c_mu;
     s->kappa = c->kappa;
     s->l_max = c->l_max;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
     if (api->size < offsetof(sluice_api, wall_distance) + sizeof api->wall_distance ||
         !api->wall_distance) {
         api->error(host, "needs api->wall_distance (Sluice plugin ABI 1.1 or later)");
         free(s);
         return SLUICE_ERROR;
     }
-    const sluice_field_spec gradient = {
-        "velocity_gradient", SLUICE_TYPE_REAL, s->dims * s->dims, "s^-1", SLUICE_READ,
-        SLUICE_FIELD_OUTPUT, NULL, 0, "velocity gradient, component a*dims+b = d v_a / d x_b"};
+    const sluice_field_spec gradient = SLUICE_SPEC_VELOCITY_GRADIENT(s->dims, SLUICE_READ);
     if (api->declare_field(host, &gradient) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
@@ -101,17 +94,10 @@ static int ml_bind(void *state, sluice_host *host)
 {
     ml_state *s = state;
     s->host = host;
-    static const char *const names[] = {"mass", "density", "velocity_gradient", "eddy_viscosity",
-                                        "mixing_length"};
-    sluice_field f[5];
-    if (sluice_util_fields(s->api, host, names, f, 5) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->mass = f[0];
-    s->density = f[1];
-    s->gradient = f[2];
-    s->eddy_viscosity = f[3];
-    s->mixing_length = f[4];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"mass", &s->mass}, {"density", &s->density}, {"velocity_gradient", &s->gradient},
+        {"eddy_viscosity", &s->eddy_viscosity}, {"mixing_length", &s->mixing_length}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 static void ml_destroy(void *state)

@@ -51,7 +51,7 @@
  * Time-step limit: dt <= 0.125 h^2 / max_i nu_T,i (Morris et al. 1997). */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 enum { FORM_TENSOR = 0, FORM_EDDY_VISCOSITY = 1 };
 
@@ -88,17 +88,11 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
-     SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
-     "velocity"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"eddy_viscosity", SLUICE_TYPE_REAL, 1, "m^2 s^-1", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT, NULL, 0, "kinematic eddy viscosity nu_T"},
-    {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0,
-     "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_EDDY_VISCOSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_ACCELERATION(SLUICE_ACCUMULATE),
 };
 
 static int ts_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
@@ -125,13 +119,9 @@ static int ts_create(const sluice_api *api, sluice_host *host, const void *confi
         free(s);
         return SLUICE_ERROR;
     }
-    const sluice_field_spec gradient = {
-        "velocity_gradient", SLUICE_TYPE_REAL, s->dims * s->dims, "s^-1",
-        SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT, NULL, 0,
-        "velocity gradient, component a*dims+b = d v_a / d x_b"};
-    const sluice_field_spec correction = {
-        "kernel_correction", SLUICE_TYPE_REAL, s->dims * s->dims, "1", SLUICE_READ, 0, NULL, 0,
-        "kernel gradient correction matrix L, component a*dims+b = L_ab"};
+    const sluice_field_spec gradient =
+        SLUICE_SPEC_VELOCITY_GRADIENT(s->dims, SLUICE_READ | SLUICE_READ_NEIGHBOUR);
+    const sluice_field_spec correction = SLUICE_SPEC_KERNEL_CORRECTION(s->dims, SLUICE_READ);
     if ((s->form == FORM_TENSOR && api->declare_field(host, &gradient) != SLUICE_OK) ||
         (s->renormalise && api->declare_field(host, &correction) != SLUICE_OK)) {
         free(s);
@@ -144,16 +134,11 @@ static int ts_create(const sluice_api *api, sluice_host *host, const void *confi
 static int ts_bind(void *state, sluice_host *host)
 {
     ts_state *s = state;
-    static const char *const names[] = {"velocity", "mass", "density", "eddy_viscosity",
-                                        "acceleration"};
-    sluice_field f[5];
-    if (sluice_util_fields(s->api, host, names, f, 5) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"mass", &s->mass}, {"density", &s->density},
+        {"eddy_viscosity", &s->eddy_viscosity}, {"acceleration", &s->acceleration}};
+    if (sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->mass = f[1];
-    s->density = f[2];
-    s->eddy_viscosity = f[3];
-    s->acceleration = f[4];
     if (s->form == FORM_TENSOR &&
         s->api->field(host, "velocity_gradient", &s->gradient) != SLUICE_OK)
         return SLUICE_ERROR;

@@ -13,7 +13,7 @@
  *    exact for every linear velocity field wherever L_i exists (M_i L_i^T = I).
  * Writes the field velocity_gradient, component a*dims + b = d v_a / d x_b, for
  * fluid particles (wall particles keep zero). */
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct vg_config {
     int renormalise;
@@ -34,13 +34,9 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
-     SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
-     "velocity"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY(SLUICE_READ_NEIGHBOUR),
 };
 
 static int vg_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
@@ -51,18 +47,12 @@ static int vg_create(const sluice_api *api, sluice_host *host, const void *confi
         return SLUICE_ERROR;
     s->api = api;
     s->renormalise = c->renormalise;
-    sluice_real dims;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) {
+    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
-    s->dims = (uint32_t)dims;
-    const sluice_field_spec gradient = {
-        "velocity_gradient", SLUICE_TYPE_REAL, s->dims * s->dims, "s^-1", SLUICE_WRITE,
-        SLUICE_FIELD_OUTPUT, NULL, 0, "velocity gradient, component a*dims+b = d v_a / d x_b"};
-    const sluice_field_spec correction = {
-        "kernel_correction", SLUICE_TYPE_REAL, s->dims * s->dims, "1", SLUICE_READ, 0, NULL, 0,
-        "kernel gradient correction matrix L, component a*dims+b = L_ab"};
+    const sluice_field_spec gradient = SLUICE_SPEC_VELOCITY_GRADIENT(s->dims, SLUICE_WRITE);
+    const sluice_field_spec correction = SLUICE_SPEC_KERNEL_CORRECTION(s->dims, SLUICE_READ);
     if (api->declare_field(host, &gradient) != SLUICE_OK ||
         (s->renormalise && api->declare_field(host, &correction) != SLUICE_OK)) {
         free(s);
@@ -75,14 +65,11 @@ static int vg_create(const sluice_api *api, sluice_host *host, const void *confi
 static int vg_bind(void *state, sluice_host *host)
 {
     vg_state *s = state;
-    static const char *const names[] = {"velocity", "mass", "density", "velocity_gradient"};
-    sluice_field f[4];
-    if (sluice_util_fields(s->api, host, names, f, 4) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"mass", &s->mass}, {"density", &s->density},
+        {"velocity_gradient", &s->gradient}};
+    if (sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->mass = f[1];
-    s->density = f[2];
-    s->gradient = f[3];
     if (s->renormalise && s->api->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;
@@ -97,18 +84,9 @@ static void vg_destroy(void *state)
 static inline void vg_pairs(const vg_state *s, const sluice_view *v, const sluice_pair_batch *b,
                             const uint32_t dims, const int renormalise)
 {
-    const sluice_real *vel[3], *vj[3];
-    for (uint32_t d = 0; d < dims; d++) {
+    const sluice_real *vel[3];
+    for (uint32_t d = 0; d < dims; d++)
         vel[d] = sluice_real_column(v, s->velocity, d);
-        vj[d] = b->gathered[s->velocity.column + (int32_t)d];
-    }
-    const sluice_real *restrict vxj = vj[0], *restrict vyj = vj[1];
-    const sluice_real *restrict vzj = dims == 3 ? vj[2] : vj[1];
-    const sluice_real *restrict mj = b->gathered[s->mass.column];
-    const sluice_real *restrict rhoj = b->gathered[s->density.column];
-    const sluice_real *restrict F = b->kernel_gradient;
-    const sluice_real *restrict rx = b->offset[0], *restrict ry = b->offset[1];
-    const sluice_real *restrict rz = dims == 3 ? b->offset[2] : b->offset[1];
     sluice_real *out[9];
     const sluice_real *L[9];
     for (uint32_t c = 0; c < dims * dims; c++) {
@@ -117,27 +95,10 @@ static inline void vg_pairs(const vg_state *s, const sluice_view *v, const sluic
     }
     for (sluice_index t = 0; t < b->target_count; t++) {
         const sluice_index i = b->target[t];
-        const sluice_real vxi = vel[0][i], vyi = vel[1][i], vzi = dims == 3 ? vel[2][i] : 0;
+        const sluice_real vi[3] = {vel[0][i], vel[1][i], dims == 3 ? vel[2][i] : 0};
         /* g_ab = sum_j V_j (v_j - v_i)_a (r_ij F_ij)_b */
-        sluice_real gxx = 0, gxy = 0, gxz = 0, gyx = 0, gyy = 0, gyz = 0, gzx = 0, gzy = 0,
-                    gzz = 0;
-        for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
-            const sluice_real w = mj[k] / rhoj[k] * F[k];
-            const sluice_real du = (vxj[k] - vxi) * w, dv = (vyj[k] - vyi) * w;
-            gxx += du * rx[k];
-            gxy += du * ry[k];
-            gyx += dv * rx[k];
-            gyy += dv * ry[k];
-            if (dims == 3) {
-                const sluice_real dw = (vzj[k] - vzi) * w;
-                gxz += du * rz[k];
-                gyz += dv * rz[k];
-                gzx += dw * rx[k];
-                gzy += dw * ry[k];
-                gzz += dw * rz[k];
-            }
-        }
-        const sluice_real g[9] = {gxx, gxy, gxz, gyx, gyy, gyz, gzx, gzy, gzz};
+        sluice_real g[9];
+        sluice_velocity_gradient_sum(b, t, dims, s->velocity, s->mass, s->density, vi, g);
         for (uint32_t a = 0; a < dims; a++)
             for (uint32_t c = 0; c < dims; c++) {
                 sluice_real value;

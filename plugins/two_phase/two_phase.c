@@ -70,7 +70,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 enum { PHASE_WATER = 0, PHASE_AIR = 1 };
 
@@ -137,15 +137,14 @@ static const sluice_param_spec phase_params[] = {
 };
 
 static const sluice_field_spec phase_fields[] = {
-    {"phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_WRITE, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "phase of the particle: 0 water, 1 air (set at the start)"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", 0, SLUICE_FIELD_RESTART, NULL, 0, "particle mass"},
-    {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_WRITE, SLUICE_FIELD_OUTPUT, NULL, 0,
-     "pressure from the equation of state of the particle's phase"},
-    {"sound_speed", SLUICE_TYPE_REAL, 1, "m s^-1", SLUICE_WRITE, 0, NULL, 0,
-     "local speed of sound c = sqrt(dp/drho) of the particle's phase"},
+    SLUICE_SPEC_PHASE_DOC(SLUICE_WRITE, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
+                          "phase of the particle: 0 water, 1 air (set at the start)"),
+    SLUICE_SPEC_DENSITY(SLUICE_READ),
+    SLUICE_SPEC_MASS(0),
+    SLUICE_SPEC_PRESSURE_DOC(SLUICE_WRITE, SLUICE_FIELD_OUTPUT,
+                             "pressure from the equation of state of the particle's phase"),
+    SLUICE_SPEC_SOUND_SPEED_DOC(SLUICE_WRITE,
+                                "local speed of sound c = sqrt(dp/drho) of the particle's phase"),
 };
 
 static void phase_destroy(void *state)
@@ -288,16 +287,10 @@ static int phase_create(const sluice_api *api, sluice_host *host, const void *co
 static int phase_bind(void *state, sluice_host *host)
 {
     two_phase_state *s = state;
-    static const char *const names[] = {"phase", "density", "pressure", "sound_speed", "mass"};
-    sluice_field f[5];
-    if (sluice_util_fields(s->api, host, names, f, 5) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->phase = f[0];
-    s->density = f[1];
-    s->pressure = f[2];
-    s->sound_speed = f[3];
-    s->mass = f[4];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"phase", &s->phase}, {"density", &s->density}, {"pressure", &s->pressure},
+        {"sound_speed", &s->sound_speed}, {"mass", &s->mass}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 /* Level of the air_above polyline at x (2D), or its one level. */
@@ -499,14 +492,10 @@ static const sluice_param_spec held_params[] = {
 };
 
 #define COHESION_FIELDS \
-    {"phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_READ, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, \
-     NULL, 0, "phase of the particle: 0 water, 1 air"}, \
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0, \
-     "particle mass"}, \
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", 0, \
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"}, \
-    {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0, \
-     "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
+    SLUICE_SPEC_PHASE(SLUICE_READ), \
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR), \
+    SLUICE_SPEC_VELOCITY(0), \
+    SLUICE_SPEC_ACCELERATION(SLUICE_ACCUMULATE),
 
 static const sluice_field_spec cohesion_fields[] = {COHESION_FIELDS};
 
@@ -575,15 +564,13 @@ static int cohesion_bind(void *state, sluice_host *host)
 {
     cohesion_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"phase", "mass", "acceleration", "cohesion_acceleration"};
-    sluice_field f[4];
-    if (sluice_util_fields(api, host, names, f, s->update_every ? 4 : 3) != SLUICE_OK)
+    const sluice_field_binding fields[] = {{"phase", &s->phase},
+                                           {"mass", &s->mass},
+                                           {"acceleration", &s->acceleration},
+                                           {"cohesion_acceleration", &s->held}};
+    /* the held acceleration only when it is updated every N steps */
+    if (sluice_util_bind(api, host, fields, s->update_every ? 4 : 3) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->phase = f[0];
-    s->mass = f[1];
-    s->acceleration = f[2];
-    if (s->update_every)
-        s->held = f[3];
     sluice_real rho_a, background;
     if (api->constant(host, "air_rest_density", &rho_a, 1) < 1 ||
         api->constant(host, "reference_pressure", &background, 1) < 1) {
@@ -750,7 +737,7 @@ typedef struct bubbles_config {
 
 typedef struct bubbles_state {
     const sluice_api *api;
-    sluice_real lifetime, interval, rho_a, span, max_compression;
+    sluice_real lifetime, rho_a, span, max_compression;
     int64_t check_every;
     const char *file;
     sluice_field phase, mass, isolation, density;
@@ -759,7 +746,8 @@ typedef struct bubbles_state {
     sluice_index capacity;
     /* bookkeeping, alike on every rank (reduced) and kept in checkpoints */
     double last_check, row_time, mass_total, mass_interval;
-    int64_t removed_total, removed_interval, isolated, written, logged;
+    int64_t removed_total, removed_interval, isolated, logged;
+    sluice_schedule rows; /* the next row is due at rows.count x rows.interval */
     int64_t compressed_total;
 } bubbles_state;
 
@@ -786,16 +774,13 @@ static const sluice_param_spec bubbles_params[] = {
 };
 
 static const sluice_field_spec bubbles_fields[] = {
-    {"phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_READ, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "phase of the particle: 0 water, 1 air"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
+    SLUICE_SPEC_PHASE(SLUICE_READ),
+    SLUICE_SPEC_MASS(SLUICE_READ),
     {"isolation_time", SLUICE_TYPE_REAL, 1, "s", SLUICE_READ | SLUICE_WRITE,
      SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
      "time an air particle has spent without another air particle within the kernel support "
      "(0 in the water; unresolved_bubbles)"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
-     NULL, 0, "density (max_compression)"},
+    SLUICE_SPEC_DENSITY_DOC(SLUICE_READ, "density (max_compression)"),
 };
 
 static int bubbles_create(const sluice_api *api, sluice_host *host, const void *config,
@@ -807,7 +792,7 @@ static int bubbles_create(const sluice_api *api, sluice_host *host, const void *
         return SLUICE_ERROR;
     s->api = api;
     s->lifetime = c->lifetime;
-    s->interval = c->interval;
+    s->rows = sluice_schedule_every(c->interval);
     s->check_every = c->check_every;
     s->max_compression = c->max_compression;
     s->file = c->file;
@@ -827,14 +812,11 @@ static int bubbles_bind(void *state, sluice_host *host)
 {
     bubbles_state *s = state;
     const sluice_api *api = s->api;
-    static const char *const names[] = {"phase", "mass", "isolation_time", "density"};
-    sluice_field f[4];
-    if (sluice_util_fields(api, host, names, f, 4) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"phase", &s->phase}, {"mass", &s->mass}, {"isolation_time", &s->isolation},
+        {"density", &s->density}};
+    if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->phase = f[0];
-    s->mass = f[1];
-    s->isolation = f[2];
-    s->density = f[3];
     if (api->constant(host, "air_rest_density", &s->rho_a, 1) < 1) {
         api->error(host, "needs the two_phase plugin, which sets the field 'phase' and publishes "
                          "'air_rest_density': load two_phase");
@@ -895,14 +877,11 @@ static int bubbles_row(bubbles_state *s, double time)
 
 static int bubbles_rows(bubbles_state *s, sluice_host *host, double time)
 {
-    const double tolerance = 1e-9 * s->interval;
-    if (time + tolerance < (double)s->written * s->interval)
+    if (!sluice_schedule_due(&s->rows, time))
         return SLUICE_OK;
     if (bubbles_row(s, time) != SLUICE_OK)
         return SLUICE_ERROR;
-    while ((double)s->written * s->interval <= time + tolerance)
-        s->written++;
-    s->api->request_time(host, (double)s->written * s->interval);
+    sluice_schedule_advance(&s->rows, s->api, host, time);
     return SLUICE_OK;
 }
 
@@ -1049,7 +1028,7 @@ static int bubbles_save(void *state, sluice_host *host)
 {
     const bubbles_state *s = state;
     const double values[4] = {s->last_check, s->row_time, s->mass_total, s->mass_interval};
-    const int64_t counts[5] = {s->removed_total, s->removed_interval, s->isolated, s->written,
+    const int64_t counts[5] = {s->removed_total, s->removed_interval, s->isolated, s->rows.count,
                                s->logged};
     if (s->api->state_write(host, "last_check,row_time,mass_total,mass_interval",
                             SLUICE_STATE_DOUBLE, 4, values) != SLUICE_OK ||
@@ -1085,7 +1064,7 @@ static int bubbles_load(void *state, sluice_host *host)
     s->removed_total = counts[0];
     s->removed_interval = counts[1];
     s->isolated = counts[2];
-    s->written = counts[3];
+    s->rows.count = counts[3];
     s->logged = counts[4];
     return SLUICE_OK;
 }

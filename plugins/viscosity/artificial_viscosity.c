@@ -12,7 +12,7 @@
  * is the water's and not c0_air / c0_water = 13.5 times it. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct av_config {
     sluice_real alpha, beta, speed_of_sound;
@@ -57,17 +57,11 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
-     SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
-     "velocity"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"sound_speed", SLUICE_TYPE_REAL, 1, "m s^-1", SLUICE_READ | SLUICE_READ_NEIGHBOUR, 0, NULL,
-     0, "local speed of sound"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0,
-     "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_SOUND_SPEED_DOC(SLUICE_READ | SLUICE_READ_NEIGHBOUR, "local speed of sound"),
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_ACCELERATION(SLUICE_ACCUMULATE),
 };
 
 /* declared only when the time-step limit is on */
@@ -100,21 +94,17 @@ static int av_create(const sluice_api *api, sluice_host *host, const void *confi
 static int av_bind(void *state, sluice_host *host)
 {
     av_state *s = state;
-    static const char *const names[] = {"velocity", "density",      "sound_speed",
-                                        "mass",     "acceleration", "viscous_mu_max"};
-    sluice_field f[6];
-    if (sluice_util_fields(s->api, host, names, f, s->limit ? 6 : 5) != SLUICE_OK)
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"density", &s->density},
+        {"sound_speed", &s->sound_speed}, {"mass", &s->mass},
+        {"acceleration", &s->acceleration}, {"viscous_mu_max", &s->mu_max}};
+    /* viscous_mu_max only with the time-step limit */
+    if (sluice_util_bind(s->api, host, fields, s->limit ? 6 : 5) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->density = f[1];
-    s->sound_speed = f[2];
-    s->mass = f[3];
-    s->acceleration = f[4];
     if (s->same_phase && sluice_util_phase_field(s->api, host, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
     if (!s->limit)
         return SLUICE_OK;
-    s->mu_max = f[5];
     if (sluice_util_constant(s->api, host, "courant_number", &s->courant) != SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;

@@ -34,7 +34,7 @@
  * it would break the pairwise symmetry that conserves momentum. */
 #include <math.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct laminar_config {
     sluice_real nu;
@@ -61,15 +61,10 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
-     SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
-     "velocity"},
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
-    {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_RESTART, NULL, 0,
-     "particle mass"},
-    {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0,
-     "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
+    SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_MASS(SLUICE_READ_NEIGHBOUR),
+    SLUICE_SPEC_ACCELERATION(SLUICE_ACCUMULATE),
 };
 
 static int laminar_create(const sluice_api *api, sluice_host *host, const void *config,
@@ -97,15 +92,10 @@ static int laminar_create(const sluice_api *api, sluice_host *host, const void *
 static int laminar_bind(void *state, sluice_host *host)
 {
     laminar_state *s = state;
-    static const char *const names[] = {"velocity", "density", "mass", "acceleration"};
-    sluice_field f[4];
-    if (sluice_util_fields(s->api, host, names, f, 4) != SLUICE_OK)
-        return SLUICE_ERROR;
-    s->velocity = f[0];
-    s->density = f[1];
-    s->mass = f[2];
-    s->acceleration = f[3];
-    return SLUICE_OK;
+    const sluice_field_binding fields[] = {
+        {"velocity", &s->velocity}, {"density", &s->density}, {"mass", &s->mass},
+        {"acceleration", &s->acceleration}};
+    return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
 }
 
 static void laminar_destroy(void *state)

@@ -25,7 +25,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 #include "wall_layers.h"
 
 typedef struct dbc_config {
@@ -81,8 +81,7 @@ static const sluice_param_spec params[] = {
 };
 
 static const sluice_field_spec fields[] = {
-    {"density", SLUICE_TYPE_REAL, 1, "kg m^-3", SLUICE_READ | SLUICE_WRITE,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "mass density"},
+    SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_WRITE),
 };
 
 static int dbc_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
@@ -122,10 +121,7 @@ static int dbc_create(const sluice_api *api, sluice_host *host, const void *conf
     if (s->moving_wall) {
         /* the moving wall's particles carry its velocity (continuity and
          * viscosity read it); written in the hooks, not during evaluation */
-        const sluice_field_spec velocity = {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM,
-                                            "m s^-1", 0,
-                                            SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
-                                            "velocity"};
+        const sluice_field_spec velocity = SLUICE_SPEC_VELOCITY(0);
         if (api->declare_field(host, &velocity) != SLUICE_OK) {
             free(s);
             return SLUICE_ERROR;

@@ -98,7 +98,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 #include "wall_layers.h"
 
 enum { SCHEME_GHOST = 0, SCHEME_MDBC = 1 };
@@ -239,25 +239,18 @@ static int mirror_create_common(const sluice_api *api, sluice_host *host, mirror
         sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK)
         return SLUICE_ERROR;
     s->dims = (uint32_t)dims;
-    const uint32_t out = SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART;
-    const sluice_field_spec density = {"density", SLUICE_TYPE_REAL, 1, "kg m^-3",
-                                       SLUICE_READ | SLUICE_WRITE, out, NULL, 0, "mass density"};
-    const sluice_field_spec mass = {"mass", SLUICE_TYPE_REAL, 1, "kg", SLUICE_READ,
-                                    SLUICE_FIELD_RESTART, NULL, 0, "particle mass"};
+    const sluice_field_spec density = SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_WRITE);
+    const sluice_field_spec mass = SLUICE_SPEC_MASS(SLUICE_READ);
     if (api->declare_field(host, &density) != SLUICE_OK ||
         api->declare_field(host, &mass) != SLUICE_OK)
         return SLUICE_ERROR;
     if (s->velocity_mode != VELOCITY_ZERO) {
-        const sluice_field_spec velocity = {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM,
-                                            "m s^-1", SLUICE_READ | SLUICE_WRITE, out, NULL, 0,
-                                            "velocity"};
+        const sluice_field_spec velocity = SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_WRITE);
         if (api->declare_field(host, &velocity) != SLUICE_OK)
             return SLUICE_ERROR;
     }
     if (s->scheme == SCHEME_GHOST) {
-        const sluice_field_spec pressure = {"pressure", SLUICE_TYPE_REAL, 1, "Pa", SLUICE_READ,
-                                            SLUICE_FIELD_OUTPUT, NULL, 0,
-                                            "pressure from the equation of state"};
+        const sluice_field_spec pressure = SLUICE_SPEC_PRESSURE(SLUICE_READ);
         if (api->declare_field(host, &pressure) != SLUICE_OK)
             return SLUICE_ERROR;
     }

@@ -74,7 +74,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 #include "wall_contact.h"
 
 typedef struct penalty_config {
@@ -165,11 +165,8 @@ static int penalty_create_common(const sluice_api *api, sluice_host *host, penal
     s->scheme = scheme;
     s->exclude = exclude;
     const sluice_field_spec fields[] = {
-        {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0,
-         "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
-        {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
-         s->mu > 0 ? SLUICE_READ : 0u, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
-         "velocity"},
+        SLUICE_SPEC_ACCELERATION(SLUICE_ACCUMULATE),
+        SLUICE_SPEC_VELOCITY(s->mu > 0 ? SLUICE_READ : 0u),
     };
     for (size_t f = 0; f < sizeof fields / sizeof fields[0]; f++)
         if (api->declare_field(host, &fields[f]) != SLUICE_OK) {

@@ -56,7 +56,7 @@
 #include <string.h>
 
 /* relative to this file, so that tests can include this header too */
-#include "../common/plugin_util.h"
+#include <sluice/plugin_util.h>
 
 #define CONTACT_MAX 32
 

@@ -22,7 +22,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include <sluice/plugin_util.h>
 
 typedef struct sluice_wall_layers {
     sluice_id first_id; /* id of the first particle added */

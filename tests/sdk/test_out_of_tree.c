@@ -20,7 +20,7 @@ START_TEST(template_plugin_builds_loads_and_acts)
     free(command);
     /* 2. build the template with pkg-config pointing at the staged .pc */
     ck_assert_int_ge(asprintf(&command,
-                              "pc=$(dirname $(find %s/stage -name sluice-plugin.pc | head -n 1)) && "
+                              "pc=$(dirname $(find %s/stage -name sluice.pc | head -n 1)) && "
                               "PKG_CONFIG_PATH=$pc make -s -C %s/tools/plugin-template OUT=%s "
                               ">%s/make.log 2>&1",
                               dir, test_source_dir(), dir, dir),
@@ -29,11 +29,21 @@ START_TEST(template_plugin_builds_loads_and_acts)
     free(command);
     /* the build must not have used the source tree's headers: check the flags */
     ck_assert_int_ge(asprintf(&command,
-                              "pc=$(dirname $(find %s/stage -name sluice-plugin.pc | head -n 1)) && "
-                              "PKG_CONFIG_PATH=$pc pkg-config --cflags sluice-plugin | grep -q %s/stage",
+                              "pc=$(dirname $(find %s/stage -name sluice.pc | head -n 1)) && "
+                              "PKG_CONFIG_PATH=$pc pkg-config --cflags sluice | grep -q %s/stage",
                               dir, dir),
                      0);
     ck_assert_msg(system(command) == 0, "pkg-config does not point into the installed tree");
+    free(command);
+    /* out-of-tree plugins get the in-tree plugins' flags and libm */
+    ck_assert_int_ge(asprintf(&command,
+                              "pc=$(dirname $(find %s/stage -name sluice.pc | head -n 1)) && "
+                              "PKG_CONFIG_PATH=$pc pkg-config --cflags sluice | "
+                              "grep -q -e '-fopenmp-simd.*-fno-trapping-math' && "
+                              "PKG_CONFIG_PATH=$pc pkg-config --libs sluice | grep -q -e '-lm'",
+                              dir),
+                     0);
+    ck_assert_msg(system(command) == 0, "pkg-config sluice lacks the plugin flags or -lm");
     free(command);
     /* 3. a scene that loads it */
     char *yaml = NULL;

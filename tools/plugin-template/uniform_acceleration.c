@@ -1,16 +1,14 @@
 /* A complete out-of-tree Sluice plugin: a uniform acceleration added to every
  * fluid particle (for example a pressure gradient driving a periodic channel).
  * Copy this directory, rename the component, and build it with `make`: it
- * needs only the installed headers (pkg-config sluice-plugin), never the core.
+ * needs only the installed SDK headers (pkg-config sluice), never the core.
  *
  * A plugin exports one function, sluice_plugin_entry(), returning a static
  * descriptor; SLUICE_DEFINE_LIBRARY writes it. The descriptor lists the
  * parameters (validated by the core from the scene's YAML before anything
  * runs), the fields the plugin reads and writes (so the core allocates them
  * and orders the plugins), and the callbacks. */
-#include <stdlib.h>
-
-#include <sluice/plugin.h>
+#include <sluice/plugin_util.h>
 
 /* Parameters arrive in this struct, filled by the core from the scene. */
 typedef struct config {
@@ -23,12 +21,12 @@ static const sluice_param_spec params[] = {
 };
 
 /* It adds to 'acceleration', the rate of 'velocity', for fluid particles:
- * the integrator picks it up from this declaration. */
+ * the integrator picks it up from this declaration. The SDK's standard
+ * declarations (sluice/field_specs.h) carry the units and flags every plugin
+ * gives these fields; the argument is this plugin's access. */
 static const sluice_field_spec fields[] = {
-    {"velocity", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1", 0,
-     SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "velocity"},
-    {"acceleration", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-2", SLUICE_ACCUMULATE, 0,
-     "velocity", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "time derivative of the velocity"},
+    SLUICE_SPEC_VELOCITY(0),
+    SLUICE_SPEC_ACCELERATION(SLUICE_ACCUMULATE),
 };
 
 typedef struct state {
@@ -41,14 +39,15 @@ typedef struct state {
 static int create(const sluice_api *api, sluice_host *host, const void *cfg, void **out)
 {
     const config *c = cfg;
-    state *s = calloc(1, sizeof *s);
-    if (!s) {
-        api->error(host, "out of memory");
+    state *s = sluice_util_state(api, host, sizeof *s); /* zeroed; reports out of memory */
+    if (!s)
         return SLUICE_ERROR;
-    }
     s->api = api;
     sluice_real dims = 0;
-    api->constant(host, "dimensions", &dims, 1); /* published by the core */
+    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) { /* the core's */
+        free(s);
+        return SLUICE_ERROR;
+    }
     s->dimensions = (uint32_t)dims;
     for (int d = 0; d < 3; d++)
         s->acceleration[d] = c->acceleration[d];

@@ -7,7 +7,7 @@
 
 #include <math.h>
 
-#include "plugin_util.h"
+#include "sluice/plugin_util.h"
 
 /* Value k of a list parameter given as one value for all gauges or one per
  * gauge; `absent` when the list is empty. */

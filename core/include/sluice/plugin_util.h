@@ -1,5 +1,22 @@
-/* Small inline helpers shared by Sluice's own plugins (header only: plugins
- * never link against the core or each other). */
+/* The plugin SDK: helpers for writing Sluice plugins, installed with
+ * sluice/plugin.h (pkg-config sluice). Header only (static inline): plugins
+ * never link against the core or each other, and nothing here holds state.
+ *
+ * This header has the small helpers (constants, field look-ups, state
+ * allocation, named scalars in checkpoints) and includes the focused ones:
+ *
+ * - sluice/field_specs.h: the standard declarations of velocity, mass,
+ *   density, pressure, acceleration, density_rate and other shared fields;
+ * - sluice/output_schedule.h: output at regular intervals of simulated time
+ *   (gauges, writers), with its checkpoint;
+ * - sluice/integrator_util.h: what every integrator binds (positions,
+ *   velocities, rate pairs, stored copies) and the position update;
+ * - sluice/kernel_sums.h: kernel sums shared by pair terms (the velocity
+ *   gradient);
+ * - sluice/phase_filter.h: the `phase` parameter of gauges in two-phase
+ *   scenes;
+ * - sluice/gauge_column.h: columns of sample points (per-gauge list
+ *   parameters, the free surface of a kernel sum). */
 #ifndef SLUICE_PLUGIN_UTIL_H
 #define SLUICE_PLUGIN_UTIL_H
 
@@ -11,7 +28,7 @@
 
 #include "sluice/plugin.h"
 
-/* Reads a scalar constant; reports an error naming `who` when absent. */
+/* Reads a scalar constant; reports an error when no plugin publishes it. */
 static inline int sluice_util_constant(const sluice_api *api, sluice_host *host, const char *name,
                                        sluice_real *value)
 {
@@ -24,12 +41,44 @@ static inline int sluice_util_constant(const sluice_api *api, sluice_host *host,
     return SLUICE_OK;
 }
 
+/* The core constant `dimensions` (2 or 3), as a count; reports an error when
+ * absent (never, from create on). */
+static inline int sluice_util_dimensions(const sluice_api *api, sluice_host *host, uint32_t *dims)
+{
+    sluice_real value;
+    if (sluice_util_constant(api, host, "dimensions", &value) != SLUICE_OK)
+        return SLUICE_ERROR;
+    *dims = (uint32_t)value;
+    return SLUICE_OK;
+}
+
 /* Resolves several fields at once: names[i] -> fields[i]. */
 static inline int sluice_util_fields(const sluice_api *api, sluice_host *host,
                                      const char *const *names, sluice_field *fields, int count)
 {
     for (int i = 0; i < count; i++)
         if (api->field(host, names[i], &fields[i]) != SLUICE_OK)
+            return SLUICE_ERROR;
+    return SLUICE_OK;
+}
+
+/* A field handle to look up by name in bind():
+ *
+ *     const sluice_field_binding fields[] = {
+ *         {"density", &s->density}, {"pressure", &s->pressure}};
+ *     return sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields));
+ */
+typedef struct sluice_field_binding {
+    const char *name;
+    sluice_field *field;
+} sluice_field_binding;
+
+/* Resolves every binding (api->field, which reports an unknown name). */
+static inline int sluice_util_bind(const sluice_api *api, sluice_host *host,
+                                   const sluice_field_binding *bindings, size_t count)
+{
+    for (size_t i = 0; i < count; i++)
+        if (api->field(host, bindings[i].name, bindings[i].field) != SLUICE_OK)
             return SLUICE_ERROR;
     return SLUICE_OK;
 }
@@ -122,5 +171,13 @@ static inline int sluice_util_load_int(const sluice_api *api, sluice_host *host,
 {
     return api->state_read(host, name, SLUICE_STATE_INT64, 1, value);
 }
+
+/* The focused headers (each also includes this one). */
+#include "sluice/field_specs.h"
+#include "sluice/gauge_column.h"
+#include "sluice/integrator_util.h"
+#include "sluice/kernel_sums.h"
+#include "sluice/output_schedule.h"
+#include "sluice/phase_filter.h"
 
 #endif

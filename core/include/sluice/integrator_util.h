@@ -11,7 +11,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "plugin_util.h"
+#include "sluice/plugin_util.h"
 
 typedef struct sluice_integrand {
     uint32_t dims;

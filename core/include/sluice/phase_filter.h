@@ -7,7 +7,8 @@
 #ifndef SLUICE_PHASE_FILTER_H
 #define SLUICE_PHASE_FILTER_H
 
-#include "plugin_util.h"
+#include "sluice/field_specs.h"
+#include "sluice/plugin_util.h"
 
 enum { SLUICE_PHASE_ALL = 0, SLUICE_PHASE_WATER = 1, SLUICE_PHASE_AIR = 2 };
 
@@ -20,8 +21,8 @@ enum { SLUICE_PHASE_ALL = 0, SLUICE_PHASE_WATER = 1, SLUICE_PHASE_AIR = 2 };
 /* Declares the read of `phase` when the filter needs it. */
 static inline int sluice_phase_declare(const sluice_api *api, sluice_host *host, int filter)
 {
-    static const sluice_field_spec phase = {"phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_READ, 0,
-                                            NULL, 0, "phase of a fluid particle: 0 water, 1 air"};
+    static const sluice_field_spec phase =
+        SLUICE_SPEC_PHASE_DOC(SLUICE_READ, 0, "phase of a fluid particle: 0 water, 1 air");
     return filter == SLUICE_PHASE_ALL ? SLUICE_OK : api->declare_field(host, &phase);
 }
 
