@@ -25,11 +25,7 @@ static const sluice_param_spec params[] = {
      0, 0, "Pa", "p0, the pressure at the rest density", NULL, 0},
 };
 
-static const sluice_field_spec fields[] = {
-    SLUICE_SPEC_DENSITY(SLUICE_READ),
-    SLUICE_SPEC_PRESSURE(SLUICE_WRITE),
-    SLUICE_SPEC_SOUND_SPEED(SLUICE_WRITE),
-};
+static const sluice_field_spec fields[] = {SLUICE_SPECS_EQUATION_OF_STATE};
 
 static int linear_create(const sluice_api *api, sluice_host *host, const void *config,
                          void **state)
@@ -43,8 +39,7 @@ static int linear_create(const sluice_api *api, sluice_host *host, const void *c
     s->c2 = s->c * s->c;
     s->p0 = c->reference_pressure;
     if (sluice_util_constant(api, host, "rest_density", &s->rho0) != SLUICE_OK ||
-        api->publish_constant(host, "speed_of_sound", &s->c, 1, "m s^-1") != SLUICE_OK ||
-        api->publish_constant(host, "reference_pressure", &s->p0, 1, "Pa") != SLUICE_OK) {
+        sluice_util_publish_eos(api, host, s->c, s->p0) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }

@@ -59,11 +59,7 @@ static const sluice_param_spec params[] = {
      0, 0, NULL, "drop the mu^2 terms in expansion (mu < 0), as LS-DYNA does", NULL, 0},
 };
 
-static const sluice_field_spec fields[] = {
-    SLUICE_SPEC_DENSITY(SLUICE_READ),
-    SLUICE_SPEC_PRESSURE(SLUICE_WRITE),
-    SLUICE_SPEC_SOUND_SPEED(SLUICE_WRITE),
-};
+static const sluice_field_spec fields[] = {SLUICE_SPECS_EQUATION_OF_STATE};
 
 static int polynomial_create(const sluice_api *api, sluice_host *host, const void *config,
                              void **state)
@@ -106,8 +102,7 @@ static int polynomial_create(const sluice_api *api, sluice_host *host, const voi
         return SLUICE_ERROR;
     }
     const sluice_real c0 = sqrt(s->a1 / s->rho0);
-    if (api->publish_constant(host, "speed_of_sound", &c0, 1, "m s^-1") != SLUICE_OK ||
-        api->publish_constant(host, "reference_pressure", &s->a0, 1, "Pa") != SLUICE_OK) {
+    if (sluice_util_publish_eos(api, host, c0, s->a0) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }

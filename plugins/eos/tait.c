@@ -37,11 +37,7 @@ static const sluice_param_spec params[] = {
      NULL, 0},
 };
 
-static const sluice_field_spec fields[] = {
-    SLUICE_SPEC_DENSITY(SLUICE_READ),
-    SLUICE_SPEC_PRESSURE(SLUICE_WRITE),
-    SLUICE_SPEC_SOUND_SPEED(SLUICE_WRITE),
-};
+static const sluice_field_spec fields[] = {SLUICE_SPECS_EQUATION_OF_STATE};
 
 static int tait_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
 {
@@ -60,8 +56,7 @@ static int tait_create(const sluice_api *api, sluice_host *host, const void *con
     s->B = s->c0 * s->c0 * s->rho0 / s->gamma;
     s->background = c->background_pressure;
     s->seven = s->gamma == 7;
-    if (api->publish_constant(host, "speed_of_sound", &s->c0, 1, "m s^-1") != SLUICE_OK ||
-        api->publish_constant(host, "reference_pressure", &s->background, 1, "Pa") != SLUICE_OK) {
+    if (sluice_util_publish_eos(api, host, s->c0, s->background) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }

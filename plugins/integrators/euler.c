@@ -30,7 +30,6 @@ typedef struct euler_config {
 
 typedef struct euler_state {
     const sluice_api *api;
-    uint32_t dims;
     int form;
     sluice_integrand in;
     double dt;
@@ -57,10 +56,6 @@ static int euler_create(const sluice_api *api, sluice_host *host, const void *co
         return SLUICE_ERROR;
     s->api = api;
     s->form = c->form;
-    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
-        free(s);
-        return SLUICE_ERROR;
-    }
     *state = s;
     return SLUICE_OK;
 }
@@ -68,7 +63,7 @@ static int euler_create(const sluice_api *api, sluice_host *host, const void *co
 static int euler_bind(void *state, sluice_host *host)
 {
     euler_state *s = state;
-    return sluice_integrand_bind(&s->in, s->api, host, s->dims, NULL);
+    return sluice_integrand_bind(&s->in, s->api, host, NULL);
 }
 
 static void euler_destroy(void *state)

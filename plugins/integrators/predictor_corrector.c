@@ -61,7 +61,6 @@ static const sluice_param_spec params[] = {
 
 typedef struct pc_state {
     const sluice_api *api;
-    uint32_t dims;
     int mode;
     int64_t rates_ready; /* the rate fields hold the last step's evaluation */
     sluice_field position_start; /* x^n */
@@ -84,10 +83,6 @@ static int pc_create(const sluice_api *api, sluice_host *host, const void *confi
         return SLUICE_ERROR;
     s->api = api;
     s->mode = c->mode;
-    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
-        free(s);
-        return SLUICE_ERROR;
-    }
     *state = s;
     return SLUICE_OK;
 }
@@ -97,7 +92,7 @@ static int pc_bind(void *state, sluice_host *host)
     pc_state *s = state;
     if (s->api->field(host, "position_previous", &s->position_start) != SLUICE_OK)
         return SLUICE_ERROR;
-    return sluice_integrand_bind(&s->in, s->api, host, s->dims,
+    return sluice_integrand_bind(&s->in, s->api, host,
                                  "value at the start of the step (predictor-corrector)");
 }
 
@@ -141,7 +136,7 @@ static void predictor(void *context, const sluice_view *v, sluice_index begin, s
     const pc_state *s = context;
     const sluice_real half = (sluice_real)(0.5 * s->dt);
     /* keep x^n and q^n */
-    for (uint32_t d = 0; d < s->dims; d++)
+    for (uint32_t d = 0; d < s->in.dims; d++)
         memcpy(sluice_real_column(v, s->position_start, d) + begin,
                sluice_real_column(v, s->in.position, d) + begin,
                (size_t)(end - begin) * sizeof(sluice_real));

@@ -11,7 +11,6 @@
 
 typedef struct symplectic_state {
     const sluice_api *api;
-    uint32_t dims;
     sluice_integrand in; /* stored: the value at the start of the step */
     double dt;
 } symplectic_state;
@@ -28,10 +27,6 @@ static int symplectic_create(const sluice_api *api, sluice_host *host, const voi
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
-    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
-        free(s);
-        return SLUICE_ERROR;
-    }
     *state = s;
     return SLUICE_OK;
 }
@@ -39,7 +34,7 @@ static int symplectic_create(const sluice_api *api, sluice_host *host, const voi
 static int symplectic_bind(void *state, sluice_host *host)
 {
     symplectic_state *s = state;
-    return sluice_integrand_bind(&s->in, s->api, host, s->dims,
+    return sluice_integrand_bind(&s->in, s->api, host,
                                  "value at the start of the step (symplectic integrator)");
 }
 

@@ -43,7 +43,6 @@ typedef struct verlet_config {
 
 typedef struct verlet_state {
     const sluice_api *api;
-    uint32_t dims;
     int64_t euler_every;
     sluice_integrand in;       /* stored: q^{n-1} of every rate */
     int64_t steps;             /* steps taken */
@@ -73,10 +72,6 @@ static int verlet_create(const sluice_api *api, sluice_host *host, const void *c
         return SLUICE_ERROR;
     s->api = api;
     s->euler_every = c->euler_every;
-    if (sluice_util_dimensions(api, host, &s->dims) != SLUICE_OK) {
-        free(s);
-        return SLUICE_ERROR;
-    }
     *state = s;
     return SLUICE_OK;
 }
@@ -84,8 +79,7 @@ static int verlet_create(const sluice_api *api, sluice_host *host, const void *c
 static int verlet_bind(void *state, sluice_host *host)
 {
     verlet_state *s = state;
-    return sluice_integrand_bind(&s->in, s->api, host, s->dims,
-                                 "value one step back (Verlet integrator)");
+    return sluice_integrand_bind(&s->in, s->api, host, "value one step back (Verlet integrator)");
 }
 
 static void verlet_destroy(void *state)
@@ -106,7 +100,7 @@ static void move(const verlet_state *s, const sluice_view *v, sluice_index begin
         return;
     const sluice_real half_dt2 = (sluice_real)(0.5 * s->dt * s->dt);
     const uint8_t *restrict kind = v->kind;
-    for (uint32_t d = 0; d < s->dims; d++) {
+    for (uint32_t d = 0; d < s->in.dims; d++) {
         sluice_real *restrict x = sluice_real_column(v, s->in.position, d);
         const sluice_real *restrict a = sluice_real_column(v, s->in.acceleration, d);
         for (sluice_index i = begin; i < end; i++)

@@ -45,6 +45,19 @@ START_TEST(template_plugin_builds_loads_and_acts)
                      0);
     ck_assert_msg(system(command) == 0, "pkg-config sluice lacks the plugin flags or -lm");
     free(command);
+    /* every installed SDK header compiles on its own with the package's flags */
+    ck_assert_int_ge(asprintf(&command,
+                              "pc=$(dirname $(find %s/stage -name sluice.pc | head -n 1)) && "
+                              "inc=$(dirname $(find %s/stage -name plugin_util.h | head -n 1)) && "
+                              "for h in $inc/*.h; do echo \"#include <sluice/${h##*/}>\" | "
+                              "${CC:-cc} $(PKG_CONFIG_PATH=$pc pkg-config --cflags sluice) "
+                              "-Wall -Wextra -Werror -x c -c -o /dev/null - || exit 1; "
+                              "done >%s/headers.log 2>&1",
+                              dir, dir, dir),
+                     0);
+    ck_assert_msg(system(command) == 0,
+                  "an installed header does not compile alone: see %s/headers.log", dir);
+    free(command);
     /* 3. a scene that loads it */
     char *yaml = NULL;
     ck_assert_int_ge(asprintf(&yaml,

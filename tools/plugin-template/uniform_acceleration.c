@@ -43,12 +43,10 @@ static int create(const sluice_api *api, sluice_host *host, const void *cfg, voi
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
-    sluice_real dims = 0;
-    if (sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK) { /* the core's */
+    if (sluice_util_dimensions(api, host, &s->dimensions) != SLUICE_OK) { /* the core's */
         free(s);
         return SLUICE_ERROR;
     }
-    s->dimensions = (uint32_t)dims;
     for (int d = 0; d < 3; d++)
         s->acceleration[d] = c->acceleration[d];
     *out = s;

@@ -87,6 +87,12 @@
     SLUICE_SPEC_PHASE_DOC(access, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,                  \
                           "phase of the particle: 0 water, 1 air")
 
+/* The fields of an equation of state: it reads the density and writes the
+ * pressure and the sound speed. */
+#define SLUICE_SPECS_EQUATION_OF_STATE                                                            \
+    SLUICE_SPEC_DENSITY(SLUICE_READ), SLUICE_SPEC_PRESSURE(SLUICE_WRITE),                      \
+        SLUICE_SPEC_SOUND_SPEED(SLUICE_WRITE)
+
 /* Matrices of dims x dims components (row-major), declared in create() once
  * the dimension count is known (sluice_util_dimensions). */
 #define SLUICE_SPEC_VELOCITY_GRADIENT(dims, access)                                               \

@@ -25,14 +25,15 @@ typedef struct sluice_integrand {
     sluice_field *stored;      /* "<state>_previous" of every rate, when asked for */
 } sluice_integrand;
 
-/* Binds everything; with stored_doc non-NULL also declares the stored copies
- * (documented by stored_doc, in the units of their field). */
+/* Binds everything (in bind()); with stored_doc non-NULL also declares the
+ * stored copies (documented by stored_doc, in the units of their field).
+ * in->dims is the scene's dimension count. */
 static inline int sluice_integrand_bind(sluice_integrand *in, const sluice_api *api,
-                                        sluice_host *host, uint32_t dims, const char *stored_doc)
+                                        sluice_host *host, const char *stored_doc)
 {
     memset(in, 0, sizeof *in);
-    in->dims = dims;
-    if (api->field(host, "position", &in->position) != SLUICE_OK ||
+    if (sluice_util_dimensions(api, host, &in->dims) != SLUICE_OK ||
+        api->field(host, "position", &in->position) != SLUICE_OK ||
         api->field(host, "velocity", &in->velocity) != SLUICE_OK)
         return SLUICE_ERROR;
     in->has_transport =

@@ -52,6 +52,19 @@ static inline int sluice_util_dimensions(const sluice_api *api, sluice_host *hos
     return SLUICE_OK;
 }
 
+/* What every equation of state publishes in create(): `speed_of_sound`
+ * (m s^-1, the reference sound speed of time-step limits and artificial
+ * viscosity) and `reference_pressure` (Pa, its pressure at the rest density,
+ * which the hydrostatic start inverts). */
+static inline int sluice_util_publish_eos(const sluice_api *api, sluice_host *host,
+                                          sluice_real speed_of_sound,
+                                          sluice_real reference_pressure)
+{
+    if (api->publish_constant(host, "speed_of_sound", &speed_of_sound, 1, "m s^-1") != SLUICE_OK)
+        return SLUICE_ERROR;
+    return api->publish_constant(host, "reference_pressure", &reference_pressure, 1, "Pa");
+}
+
 /* Resolves several fields at once: names[i] -> fields[i]. */
 static inline int sluice_util_fields(const sluice_api *api, sluice_host *host,
                                      const char *const *names, sluice_field *fields, int count)
