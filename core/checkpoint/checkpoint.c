@@ -25,7 +25,7 @@
  *    bytes (a restart continues a table only if the file there starts with
  *    them: another run's table in the directory is started anew);
  *  - /plugins/<component>/: the arrays a component stored with
- *    api->state_write in its save_state callback.
+ *    api->state->state_write in its save_state callback.
  *
  * The file is built in memory (HDF5's core driver) and reaches the disk
  * through sluice_write_file_atomic: a killed run never leaves a half-written
@@ -1263,7 +1263,7 @@ static int state_access(sluice_host *host, const char *name, int type, int writi
     const char *who = sim->instances[host->instance].name;
     if ((sim->state_group < 0 && !(sim->state_absent && !writing)) ||
         sim->state_instance != host->instance || sim->state_writing != writing) {
-        sluice_sim_fail(sim, "plugin '%s': api->state_%s outside its own %s callback", who,
+        sluice_sim_fail(sim, "plugin '%s': api->state->state_%s outside its own %s callback", who,
                         writing ? "write" : "read", writing ? "save_state" : "load_state");
         return SLUICE_ERROR;
     }
@@ -1288,7 +1288,7 @@ static int state_write(sluice_host *host, const char *name, sluice_state_type st
     if (state_access(host, name, type, 1) != SLUICE_OK)
         return SLUICE_ERROR;
     if (count > 0 && !data) {
-        sluice_sim_fail(sim, "plugin '%s': api->state_write('%s') without data",
+        sluice_sim_fail(sim, "plugin '%s': api->state->state_write('%s') without data",
                         sim->instances[host->instance].name, name);
         return SLUICE_ERROR;
     }

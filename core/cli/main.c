@@ -20,7 +20,7 @@ static void usage(FILE *out)
             "  sluice run SCENE.yaml --out DIR [--variant NAME] [--set key=value ...]\n"
             "             [--threads N] [--restart CHECKPOINT.h5] [--progress | --no-progress]\n"
             "             [--quiet]\n"
-            "  sluice check SCENE.yaml [--variant NAME] [--set key=value ...]\n"
+            "  sluice check SCENE.yaml [--variant NAME] [--set key=value ...] [--schedule]\n"
             "  sluice inspect [PLUGIN] [--markdown]\n"
             "  sluice version\n"
             "\n"
@@ -29,6 +29,8 @@ static void usage(FILE *out)
             "plugin_path, SLUICE_PLUGIN_PATH, then next to the program.\n"
             "--variant applies one of the scene's named variants (its top-level 'variants':\n"
             "keys removed and set) before the --set overrides; 'sluice check SCENE' lists them.\n"
+            "--schedule prints the evaluation schedule: prepare, passes in order, on-demand\n"
+            "terms, integrated fields (run.json holds it too).\n"
             "--restart continues the run of SCENE from a checkpoint (DIR/checkpoint_*.h5,\n"
             "written every checkpoint.interval s and when SIGINT or SIGTERM stops a run).\n"
             "Exit status: 0 success, 2 bad input, 3 the run went unstable, 4 other failure,\n"
@@ -39,7 +41,7 @@ typedef struct arguments {
     const char *scene, *out, *plugin, *restart, *variant;
     const char **sets;
     size_t set_count;
-    int threads, progress, quiet, markdown;
+    int threads, progress, quiet, markdown, schedule;
 } arguments;
 
 static int parse(int argc, char **argv, int first, arguments *a, int allow_out)
@@ -104,6 +106,8 @@ static int parse(int argc, char **argv, int first, arguments *a, int allow_out)
             a->progress = 0;
         } else if (strcmp(arg, "--quiet") == 0 || strcmp(arg, "-q") == 0) {
             a->quiet = 1;
+        } else if (!allow_out && strcmp(arg, "--schedule") == 0) {
+            a->schedule = 1;
         } else if (arg[0] == '-' && arg[1]) {
             fprintf(stderr, "sluice: error: unknown option '%s'\n", arg);
             return -1;
@@ -248,6 +252,8 @@ static int command_check(int argc, char **argv)
     printf("%s: valid %uD scene%s, %u particles (%u fluid, %u wall%s), end time %g s\n", a.scene,
            v->dimensions, variant, v->count, kinds[SLUICE_KIND_FLUID], kinds[SLUICE_KIND_WALL],
            open, sluice_sim_end_time(sim));
+    if (a.schedule)
+        sluice_sim_write_schedule(sim, stdout, 0);
     /* the base scene was checked: list its variants */
     if (!sluice_sim_variant(sim) && sluice_sim_scene_variant(sim, 0, NULL)) {
         const char *name, *description;

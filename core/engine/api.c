@@ -26,7 +26,7 @@ static int across_ranks_component(const sluice_sim *sim, uint32_t instance)
     if (instance >= sim->instance_count)
         return 0;
     const sluice_instance *in = &sim->instances[instance];
-    return in->library->abi_minor >= 8 && (in->component->flags & SLUICE_COMPONENT_ACROSS_RANKS);
+    return (in->component->flags & SLUICE_COMPONENT_ACROSS_RANKS) != 0;
 }
 
 static void host_message(sluice_host *host, sluice_severity severity, const char *format,
@@ -186,7 +186,7 @@ int sluice_sim_add_particles(sluice_sim *sim, uint8_t kind, const sluice_real *p
 
 /* Output and point passes across ranks: only for a component written for
  * them (SLUICE_COMPONENT_ACROSS_RANKS, 1.8), which combines its ranks'
- * figures with api->reduce; any other is refused, never left to write one
+ * figures with api->ranks->reduce; any other is refused, never left to write one
  * rank's part as if it were the whole. */
 static int across_ranks_only(sluice_host *host, const char *what)
 {
@@ -197,7 +197,7 @@ static int across_ranks_only(sluice_host *host, const char *what)
         return SLUICE_OK;
     api_error(host, "%s in a run across %d ranks needs a component written for it (flag "
                     "SLUICE_COMPONENT_ACROSS_RANKS: it combines its ranks' figures with "
-                    "api->reduce; docs/plugin-abi.md)",
+                    "api->ranks->reduce; docs/plugin-abi.md)",
               what, sim->comm.size);
     return SLUICE_ERROR;
 }
@@ -209,7 +209,7 @@ static int api_add_particles(sluice_host *host, uint8_t kind, const sluice_real 
     /* while the scene loads, every rank builds every particle; the split
      * into slabs comes after */
     if (sim->phase == SLUICE_PHASE_RUN &&
-        across_ranks_only(host, "adding particles (api->add_particles)") != SLUICE_OK)
+        across_ranks_only(host, "adding particles (api->particles->add_particles)") != SLUICE_OK)
         return SLUICE_ERROR;
     if (sim->phase < SLUICE_PHASE_INITIALISE) {
         api_error(host, "adds particles before initialise(); add them in initialise() or later");
@@ -256,7 +256,7 @@ static int api_remove_particles(sluice_host *host, const sluice_index *indices, 
 {
     sluice_sim *sim = host->sim;
     if (sim->phase == SLUICE_PHASE_RUN &&
-        across_ranks_only(host, "removing particles (api->remove_particles)") != SLUICE_OK)
+        across_ranks_only(host, "removing particles (api->particles->remove_particles)") != SLUICE_OK)
         return SLUICE_ERROR;
     if (check_indices(host, "removes particles", indices, count) != SLUICE_OK)
         return SLUICE_ERROR;
@@ -344,9 +344,23 @@ static void api_release(void *memory)
     free(memory);
 }
 
-static int api_evaluate(sluice_host *host)
+static int api_evaluate(sluice_host *host, double stage_time, uint32_t stage)
 {
-    return sluice_sim_evaluate(host->sim);
+    sluice_sim *sim = host->sim;
+    if (!isfinite(stage_time)) {
+        sluice_sim_fail(sim, "plugin '%s': api->evaluation->evaluate at a stage time that is "
+                             "not finite",
+                        sluice_sim_instance_name(sim, host->instance));
+        return SLUICE_ERROR;
+    }
+    sim->in_stage = 1;
+    sim->stage_time = stage_time;
+    sim->stage = stage;
+    sluice_sim_refresh_view(sim);
+    const int status = sluice_sim_evaluate(sim);
+    sim->in_stage = 0;
+    sluice_sim_refresh_view(sim);
+    return status;
 }
 
 typedef struct limit_call {
@@ -419,7 +433,7 @@ static void api_request_time(sluice_host *host, double t)
 static int api_output_path(sluice_host *host, const char *name, char *buffer, size_t size)
 {
     sluice_sim *sim = host->sim;
-    if (across_ranks_only(host, "writing output files (api->output_path)") != SLUICE_OK)
+    if (across_ranks_only(host, "writing output files (api->output->output_path)") != SLUICE_OK)
         return SLUICE_ERROR;
     if (!sim->output_directory) {
         if (size)
@@ -490,7 +504,7 @@ static int api_field_info(sluice_host *host, uint32_t index, sluice_field_spec *
 static sluice_table *api_table_open(sluice_host *host, const char *file_name, const char *header)
 {
     sluice_sim *sim = host->sim;
-    if (across_ranks_only(host, "writing tables (api->table_open)") != SLUICE_OK)
+    if (across_ranks_only(host, "writing tables (api->output->table_open)") != SLUICE_OK)
         return NULL;
     if (!file_name || !*file_name || strchr(file_name, '/')) {
         api_error(host, "table file name '%s' must be a plain file name in the run directory",
@@ -560,7 +574,7 @@ static int api_table_row(sluice_table *table, const double *values, uint32_t cou
 
 static int api_write_file_atomic(sluice_host *host, const char *path, const void *data, size_t size)
 {
-    if (across_ranks_only(host, "writing files (api->write_file_atomic)") != SLUICE_OK)
+    if (across_ranks_only(host, "writing files (api->output->write_file_atomic)") != SLUICE_OK)
         return SLUICE_ERROR;
     if (host->sim->comm.rank != 0)
         return SLUICE_OK; /* across ranks, rank 0 writes the file */
@@ -572,7 +586,7 @@ static int api_write_file_atomic(sluice_host *host, const char *path, const void
     return SLUICE_OK;
 }
 
-/* api->wall_distance's cells over the domain, about a kernel support (2h)
+/* api->walls->wall_distance's cells over the domain, about a kernel support (2h)
  * wide, built at the first call: from a component's init, or from within a
  * pass, where the first thread to arrive builds them (with the threads of a
  * nested team: one) and the others wait. When the build runs out of memory
@@ -610,7 +624,7 @@ static int api_pair_pass(sluice_host *host)
     sluice_sim *sim = host->sim;
     sluice_instance *in = &sim->instances[host->instance];
     if (!in->on_demand) {
-        api_error(host, "calls api->pair_pass but is not flagged SLUICE_COMPONENT_ON_DEMAND");
+        api_error(host, "calls api->evaluation->pair_pass but is not flagged SLUICE_COMPONENT_ON_DEMAND");
         return SLUICE_ERROR;
     }
     if (sluice_sim_update_neighbours(sim) != SLUICE_OK || sluice_sim_refresh_halo(sim) != SLUICE_OK)
@@ -641,7 +655,7 @@ static int api_density_from_pressure(sluice_host *host, sluice_index n,
 {
     const sluice_instance *eos = sluice_sim_equation_of_state(host->sim);
     if (!eos) {
-        api_error(host, "needs the inverse of the equation of state (api->density_from_pressure), "
+        api_error(host, "needs the inverse of the equation of state (api->evaluation->density_from_pressure), "
                         "but no loaded plugin provides an equation of state with one (load one, "
                         "e.g. tait)");
         return SLUICE_ERROR;
@@ -649,7 +663,7 @@ static int api_density_from_pressure(sluice_host *host, sluice_index n,
     if (n == 0)
         return SLUICE_OK;
     if (!pressure || !density) {
-        api_error(host, "api->density_from_pressure called with a NULL array");
+        api_error(host, "api->evaluation->density_from_pressure called with a NULL array");
         return SLUICE_ERROR;
     }
     eos->component->density_from_pressure(eos->state, n, pressure, density);
@@ -692,10 +706,10 @@ static int api_point_pass(sluice_host *host, const sluice_real *points, sluice_i
                           uint32_t kinds, sluice_point_fn fn, void *context)
 {
     sluice_sim *sim = host->sim;
-    if (across_ranks_only(host, "a point pass (api->point_pass)") != SLUICE_OK)
+    if (across_ranks_only(host, "a point pass (api->evaluation->point_pass)") != SLUICE_OK)
         return SLUICE_ERROR;
     if (!fn || (count > 0 && !points)) {
-        api_error(host, "api->point_pass called without points or without a callback");
+        api_error(host, "api->evaluation->point_pass called without points or without a callback");
         return SLUICE_ERROR;
     }
     if (count == 0)
@@ -713,7 +727,7 @@ static int api_point_pass_local(sluice_host *host, const sluice_real *points, sl
 {
     sluice_sim *sim = host->sim;
     if (!fn || (count > 0 && !points)) {
-        api_error(host, "api->point_pass_local called without points or without a callback");
+        api_error(host, "api->evaluation->point_pass_local called without points or without a callback");
         return SLUICE_ERROR;
     }
     /* collective across ranks, whatever this rank's count */
@@ -724,8 +738,8 @@ static int api_point_pass_local(sluice_host *host, const sluice_real *points, sl
         !sim->instances[host->instance].local_points) {
         /* the halo refreshes the fields of such a component (ranks.c) */
         sluice_sim_fail(sim,
-                        "plugin '%s' calls api->point_pass_local without having called "
-                        "api->request_point_margin (in create, bind or initialise; 0 when its "
+                        "plugin '%s' calls api->evaluation->point_pass_local without having called "
+                        "api->evaluation->request_point_margin (in create, bind or initialise; 0 when its "
                         "points lie at its particles)",
                         sluice_sim_instance_name(sim, host->instance));
         return SLUICE_ERROR;
@@ -741,7 +755,7 @@ static int api_point_pass_local(sluice_host *host, const sluice_real *points, sl
                 sluice_sim_fail(sim,
                                 "step %lld: plugin '%s' interpolates at (%.6g, %.6g, %.6g) m on "
                                 "rank %d, %.6g m outside the rank's box, beyond the %.6g m it "
-                                "requested (api->request_point_margin)",
+                                "requested (api->evaluation->request_point_margin)",
                                 (long long)sim->step, sluice_sim_instance_name(sim, host->instance), p[0],
                                 p[1], p[2], sim->comm.rank, outside, (double)sim->point_margin);
                 return SLUICE_ERROR;
@@ -758,12 +772,12 @@ static int api_request_point_margin(sluice_host *host, sluice_real margin)
 {
     sluice_sim *sim = host->sim;
     if (host->instance == SLUICE_CORE_INSTANCE || sim->phase > SLUICE_PHASE_INITIALISE) {
-        api_error(host, "api->request_point_margin is for a component's create(), bind() or "
+        api_error(host, "api->evaluation->request_point_margin is for a component's create(), bind() or "
                         "initialise()");
         return SLUICE_ERROR;
     }
     if (!(margin >= 0) || !isfinite(margin)) {
-        api_error(host, "api->request_point_margin: the margin %g m is not finite and >= 0",
+        api_error(host, "api->evaluation->request_point_margin: the margin %g m is not finite and >= 0",
                   (double)margin);
         return SLUICE_ERROR;
     }
@@ -777,16 +791,16 @@ static int api_request_reach(sluice_host *host, sluice_real radius)
 {
     sluice_sim *sim = host->sim;
     if (host->instance == SLUICE_CORE_INSTANCE || sim->creating != (int64_t)host->instance) {
-        api_error(host, "api->request_reach is for a component's create()");
+        api_error(host, "api->evaluation->request_reach is for a component's create()");
         return SLUICE_ERROR;
     }
     sluice_instance *in = &sim->instances[host->instance];
     if (!in->component->pair) {
-        api_error(host, "api->request_reach: '%s' has no pair term", in->name);
+        api_error(host, "api->evaluation->request_reach: '%s' has no pair term", in->name);
         return SLUICE_ERROR;
     }
     if (!(radius > 0) || !isfinite(radius)) {
-        api_error(host, "api->request_reach: the radius %g m is not positive and finite",
+        api_error(host, "api->evaluation->request_reach: the radius %g m is not positive and finite",
                   (double)radius);
         return SLUICE_ERROR;
     }
@@ -798,18 +812,18 @@ static int api_restrict_reach(sluice_host *host, const char *field, uint32_t val
 {
     sluice_sim *sim = host->sim;
     if (host->instance == SLUICE_CORE_INSTANCE || sim->creating != (int64_t)host->instance) {
-        api_error(host, "api->restrict_reach is for a component's create()");
+        api_error(host, "api->evaluation->restrict_reach is for a component's create()");
         return SLUICE_ERROR;
     }
     sluice_instance *in = &sim->instances[host->instance];
     if (!(in->reach > 0)) {
-        api_error(host, "api->restrict_reach: '%s' did not request a reach "
-                        "(api->request_reach comes first)",
+        api_error(host, "api->evaluation->restrict_reach: '%s' did not request a reach "
+                        "(api->evaluation->request_reach comes first)",
                   in->name);
         return SLUICE_ERROR;
     }
     if (!field || !field[0] || strlen(field) >= sizeof in->reach_field || value > 255) {
-        api_error(host, "api->restrict_reach: needs a field name (under %zu characters) and a "
+        api_error(host, "api->evaluation->restrict_reach: needs a field name (under %zu characters) and a "
                         "value from 0 to 255",
                   sizeof in->reach_field);
         return SLUICE_ERROR;
@@ -877,7 +891,7 @@ static int api_ranks(sluice_host *host, sluice_ranks *out)
  * load_state, where the checkpoint library lends its store. */
 static int no_state_store(sluice_host *host, int writing)
 {
-    sluice_sim_fail(host->sim, "plugin '%s': api->state_%s outside its own %s callback",
+    sluice_sim_fail(host->sim, "plugin '%s': api->state->state_%s outside its own %s callback",
                     sluice_sim_instance_name(host->sim, host->instance), writing ? "write" : "read",
                     writing ? "save_state" : "load_state");
     return SLUICE_ERROR;
@@ -907,54 +921,46 @@ static int64_t api_state_length(sluice_host *host, const char *name)
     return store->length(host, name);
 }
 
+static const sluice_api_messages messages_table = {
+    sizeof(sluice_api_messages), api_error, api_warning, api_info,
+};
+
+static const sluice_api_fields fields_table = {
+    sizeof(sluice_api_fields), api_declare_field, api_field, api_field_count, api_field_info,
+    api_rate_count, api_rate, api_publish_constant, api_constant,
+};
+
+static const sluice_api_particles particles_table = {
+    sizeof(sluice_api_particles), api_view, api_add_particles, api_remove_particles,
+    api_set_kind, api_removed_count, api_parallel_for,
+};
+
+static const sluice_api_walls walls_table = {
+    sizeof(sluice_api_walls), api_wall_count, api_wall, api_wall_layer_points, api_release,
+    api_wall_distance, api_wall_nearest,
+};
+
+static const sluice_api_evaluation evaluation_table = {
+    sizeof(sluice_api_evaluation), api_evaluate, api_time_step, api_request_time,
+    api_pair_pass, api_point_pass, api_point_pass_local, api_request_point_margin,
+    api_request_reach, api_restrict_reach, api_density_from_pressure,
+};
+
+static const sluice_api_output output_table = {
+    sizeof(sluice_api_output), api_output_path, api_resolved_scene, api_plugin_count,
+    api_plugin, api_table_open, api_table_row, api_write_file_atomic,
+};
+
+static const sluice_api_state state_table = {
+    sizeof(sluice_api_state), api_state_write, api_state_read, api_state_length,
+};
+
+static const sluice_api_ranks ranks_table = {
+    sizeof(sluice_api_ranks), api_reduce, api_ranks, api_owns,
+};
+
 const sluice_api sluice_sim_api_table = {
-    sizeof(sluice_api),
-    SLUICE_ABI_MAJOR,
-    SLUICE_ABI_MINOR,
-    api_error,
-    api_warning,
-    api_info,
-    api_declare_field,
-    api_field,
-    api_publish_constant,
-    api_constant,
-    api_rate_count,
-    api_rate,
-    api_view,
-    api_add_particles,
-    api_wall_count,
-    api_wall,
-    api_wall_layer_points,
-    api_release,
-    api_evaluate,
-    api_time_step,
-    api_parallel_for,
-    api_request_time,
-    api_output_path,
-    api_resolved_scene,
-    api_plugin_count,
-    api_plugin,
-    api_field_count,
-    api_field_info,
-    api_table_open,
-    api_table_row,
-    api_write_file_atomic,
-    api_wall_distance,
-    api_pair_pass,
-    api_density_from_pressure,
-    api_wall_nearest,
-    api_point_pass,
-    api_remove_particles,
-    api_set_kind,
-    api_removed_count,
-    api_state_write,
-    api_state_read,
-    api_state_length,
-    api_request_reach,
-    api_restrict_reach,
-    api_reduce,
-    api_ranks,
-    api_owns,
-    api_point_pass_local,
-    api_request_point_margin,
+    sizeof(sluice_api), SLUICE_ABI_MAJOR, SLUICE_ABI_MINOR,
+    &messages_table, &fields_table, &particles_table, &walls_table,
+    &evaluation_table, &output_table, &state_table, &ranks_table,
 };

@@ -79,8 +79,8 @@ int sluice_sim_split_ranks(sluice_sim *sim)
     };
     /* the halo holds every particle a pass of this rank's particles may
      * reach: the support, or the longest reach of a term beyond it
-     * (api->request_reach), from points up to the largest point margin
-     * outside the box (api->point_pass_local), plus the neighbour skin */
+     * (api->evaluation->request_reach), from points up to the largest point margin
+     * outside the box (api->evaluation->point_pass_local), plus the neighbour skin */
     double reach = (double)sim->grid.support;
     for (uint32_t k = 0; k < sim->instance_count; k++)
         if ((double)sim->instances[k].reach > reach)

@@ -198,7 +198,7 @@ int sluice_sim_refresh_halo(sluice_sim *sim)
     return SLUICE_OK;
 }
 
-/* The pass of api->point_pass and api->point_pass_local, once the
+/* The pass of api->evaluation->point_pass and api->evaluation->point_pass_local, once the
  * neighbour search is up to date (with_halo: the halo's particles are pairs
  * too). */
 int sluice_sim_run_point_pass(sluice_sim *sim, const sluice_host *host, const sluice_real *points,

@@ -71,11 +71,21 @@ int sluice_sim_declare(sluice_sim *sim, uint32_t instance, const sluice_field_sp
                spec->name);
         return -1;
     }
-    if (sim->phase > SLUICE_PHASE_BIND) {
+    if (sim->phase > SLUICE_PHASE_BIND ||
+        (sim->phase == SLUICE_PHASE_BIND && spec->rate_of)) {
+        /* the integrated fields are fixed when the integrator is created
+         * (after every other component's create()), and the schedule and the
+         * particle store when bind() ends: a rate declared later would be
+         * accepted and silently never integrated */
         sluice_sim_report(sim, instance,
-               "plugin '%s' declares field '%s' after binding; declare fields in create() or "
-               "bind()",
-               who, spec->name);
+                          spec->rate_of
+                              ? "plugin '%s' declares the rate field '%s' after create(); "
+                                "declare rates statically (the component's `fields`) or in "
+                                "create()"
+                              : "plugin '%s' declares field '%s' after bind(); declare fields "
+                                "statically, in create(), or (a field that depends on another "
+                                "plugin's) in bind()",
+                          who, spec->name);
         return -1;
     }
     uint32_t components =

@@ -83,6 +83,8 @@ void sluice_sim_refresh_view(sluice_sim *sim)
     v->time = sim->time;
     v->dt = sim->dt;
     v->step = sim->step;
+    v->stage_time = sim->in_stage ? sim->stage_time : sim->time;
+    v->stage = sim->in_stage ? sim->stage : 0;
 }
 
 void sluice_sim_request_time(sluice_sim *sim, double t)

@@ -259,7 +259,7 @@ static int check_roles(sluice_sim *sim)
 }
 
 /* Every wall handled by a loaded wall scheme (the only one, or the one it
- * names), published as api->wall, with its bounding box. */
+ * names), published as api->walls->wall, with its bounding box. */
 static int place_walls(sluice_sim *sim)
 {
     sluice_scene *scene = &sim->scene;
@@ -380,12 +380,88 @@ static int publish_core(sluice_sim *sim)
     return errors;
 }
 
+/* What each kind of component must publish in create() (docs/plugin-abi.md,
+ * "What each kind of component provides"): an equation of state (a
+ * component with density_from_pressure) publishes the speed of sound the
+ * time step and the diffusion terms read and the pressure at rest density
+ * the hydrostatic start adds to rho0 g depth. (A kernel's kernel_support is
+ * checked where the support is computed.) Returns the errors reported. */
+static int check_published(sluice_sim *sim)
+{
+    static const char *const eos_constants[] = {"speed_of_sound", "reference_pressure"};
+    int errors = 0;
+    for (uint32_t k = 0; k < sim->instance_count; k++) {
+        const sluice_instance *in = &sim->instances[k];
+        if (!in->component->density_from_pressure)
+            continue;
+        for (size_t c = 0; c < SLUICE_COUNT(eos_constants); c++) {
+            int published = 0;
+            for (uint32_t e = 0; e < sim->constant_count; e++)
+                published |= sim->constants[e].publisher == k &&
+                             strcmp(sim->constants[e].name, eos_constants[c]) == 0;
+            if (!published) {
+                sluice_sim_report(sim, k,
+                                  "equation of state '%s' did not publish the constant '%s' in "
+                                  "create(); an equation of state publishes 'speed_of_sound' "
+                                  "(m/s) and 'reference_pressure' (Pa, the pressure at rest "
+                                  "density; sluice_util_publish_eos)",
+                                  in->name, eos_constants[c]);
+                errors++;
+            }
+        }
+    }
+    return errors;
+}
+
 /* Static field declarations, then every component's create(); the kernel's
  * support and the integrated rates once all exist. */
+/* One component's create(): SLUICE_OK, or an error reported with one
+ * message naming the plugin, its library, versions and file. */
+static int create_one(sluice_sim *sim, uint32_t k)
+{
+    sluice_instance *in = &sim->instances[k];
+    sim->creating = k;
+    sim->pending[0] = '\0';
+    size_t reported = sim->diag ? sluice_diag_error_count(sim->diag) : 0;
+    int rc = in->component->create(&sluice_sim_api_table, &in->host, in->config, &in->state);
+    sim->creating = -1;
+    if (rc != SLUICE_OK && !sim->pending[0] && sim->diag &&
+        sluice_diag_error_count(sim->diag) > reported) {
+        /* the core already said why (e.g. a constant published twice) */
+        return SLUICE_ERROR;
+    }
+    if (rc != SLUICE_OK || sim->pending[0]) {
+        sluice_sim_report(sim, k,
+                          "plugin '%s' (library '%s' %s, plugin ABI %u.%u, this sluice %u.%u; %s) "
+                          "failed to initialise: %s",
+                          in->name, in->library->name ? in->library->name : "?",
+                          library_version(in), in->library->abi_major, in->library->abi_minor,
+                          SLUICE_ABI_MAJOR, SLUICE_ABI_MINOR, in->path,
+                          sim->pending[0] ? sim->pending : "its create function returned an error");
+        if (rc == SLUICE_OK)
+            in->created = 1; /* destroy what it made */
+        return SLUICE_ERROR;
+    }
+    in->created = 1;
+    return SLUICE_OK;
+}
+
+static uint32_t rate_fields(const sluice_sim *sim)
+{
+    uint32_t n = 0;
+    for (uint32_t f = 0; f < sim->field_count; f++)
+        n += sim->fields[f].rate_of != NULL;
+    return n;
+}
+
+/* Static field declarations, then every component's create() in scene
+ * order, the integrator last: once every other component exists, the
+ * integrated fields are known (api->fields->rate_count / rate), and the
+ * integrator declares what it stores per integrated field in its create().
+ * Then the kernel's support and what each kind of component publishes. */
 static int create_components(sluice_sim *sim)
 {
     int errors = 0;
-    /* static declarations, then create */
     sim->phase = SLUICE_PHASE_CREATE;
     for (uint32_t k = 0; k < sim->instance_count; k++) {
         const sluice_component *c = sim->instances[k].component;
@@ -395,47 +471,33 @@ static int create_components(sluice_sim *sim)
     }
     if (errors)
         return errors;
-    for (uint32_t k = 0; k < sim->instance_count; k++) {
-        sluice_instance *in = &sim->instances[k];
-        sim->creating = k;
-        sim->pending[0] = '\0';
-        size_t reported = sim->diag ? sluice_diag_error_count(sim->diag) : 0;
-        int rc = in->component->create(&sluice_sim_api_table, &in->host, in->config, &in->state);
-        sim->creating = -1;
-        if (rc != SLUICE_OK && !sim->pending[0] && sim->diag &&
-            sluice_diag_error_count(sim->diag) > reported) {
-            /* the core already said why (e.g. a constant published twice) */
-            return errors + 1;
-        }
-        if (rc != SLUICE_OK || sim->pending[0]) {
-            /* one message: the plugin, its library, versions and path, and why */
-            sluice_sim_report(sim, k,
-                   "plugin '%s' (library '%s' %s, plugin ABI %u.%u, this sluice %u.%u; %s) failed "
-                   "to initialise: %s",
-                   in->name, in->library->name ? in->library->name : "?", library_version(in),
-                   in->library->abi_major, in->library->abi_minor, SLUICE_ABI_MAJOR,
-                   SLUICE_ABI_MINOR, in->path,
-                   sim->pending[0] ? sim->pending : "its create function returned an error");
-            if (rc == SLUICE_OK)
-                in->created = 1; /* destroy what it made */
-            return errors + 1;
-        }
-        in->created = 1;
+    const uint32_t integrator = (uint32_t)sim->integrator;
+    for (uint32_t k = 0; k < sim->instance_count; k++)
+        if (k != integrator && create_one(sim, k) != SLUICE_OK)
+            return 1;
+    if (sluice_sim_build_rates(sim) != 0)
+        return 1;
+    const uint32_t rates = rate_fields(sim);
+    if (create_one(sim, integrator) != SLUICE_OK)
+        return 1;
+    if (rate_fields(sim) != rates) {
+        sluice_sim_report(sim, integrator,
+                          "integrator '%s' declares a field that is the rate of another in its "
+                          "create(); rates are declared by the terms that compute them",
+                          sim->instances[integrator].name);
+        return 1;
     }
     sluice_real support_ratio = 0;
-    if (sluice_sim_get_constant(sim, "kernel_support", &support_ratio, 1) != 1 || !(support_ratio > 0)) {
+    if (sluice_sim_get_constant(sim, "kernel_support", &support_ratio, 1) != 1 ||
+        !(support_ratio > 0)) {
         sluice_sim_report(sim, (uint32_t)sim->kernel,
-               "kernel '%s' did not publish its support radius (constant 'kernel_support', in "
-               "units of h)",
-               sim->instances[sim->kernel].name);
-        return errors + 1;
+                          "kernel '%s' did not publish its support radius (constant "
+                          "'kernel_support', in units of h)",
+                          sim->instances[sim->kernel].name);
+        return 1;
     }
     sim->support = support_ratio * sim->smoothing_length;
-    /* integrated fields are known once every plugin is created (integrators
-     * read them in bind) */
-    if (sluice_sim_build_rates(sim) != 0)
-        return errors + 1;
-    return errors;
+    return check_published(sim);
 }
 
 /* Every component's bind(), the core's field handles and the schedule. */

@@ -114,20 +114,19 @@ static int compare_strings(const void *a, const void *b)
     return strcmp(*(char *const *)a, *(char *const *)b);
 }
 
-/* Size of sluice_component in the ABI minor a library was built for: the
- * members appended in later minors are absent from its descriptors, so its
- * component array has that stride. */
-static size_t component_size(uint16_t minor)
+/* The stride of a library's component array: sizeof(sluice_component) as the
+ * library was built (its descriptor says). A library built before members
+ * were appended has the shorter stride; those members read as absent in the
+ * copy the core keeps (registry.c, the loop below). */
+static size_t component_size(const sluice_library *lib)
 {
-    return minor >= 5   ? sizeof(sluice_component)
-           : minor >= 3 ? offsetof(sluice_component, save_state)
-                        : offsetof(sluice_component, prepare);
+    return lib->component_size;
 }
 
 static const sluice_component *component_at(const sluice_library *lib, uint32_t i)
 {
     return (const sluice_component *)(const void *)((const char *)lib->components +
-                                                    (size_t)i * component_size(lib->abi_minor));
+                                                    (size_t)i * component_size(lib));
 }
 
 static const char *check_library(const sluice_library *lib, char **why)
@@ -159,6 +158,14 @@ static const char *check_library(const sluice_library *lib, char **why)
     }
     if (lib->component_count == 0 || !lib->components) {
         *why = format("has a descriptor that lists no components");
+        return "descriptor";
+    }
+    if (lib->component_size < offsetof(sluice_component, load_state) + sizeof(void (*)(void))) {
+        *why = format("has a descriptor whose component size (%u bytes) is smaller than ABI "
+                      "2.0's sluice_component (%zu bytes): was it built with "
+                      "SLUICE_DEFINE_LIBRARY?",
+                      lib->component_size, offsetof(sluice_component, load_state) +
+                                               sizeof(void (*)(void)));
         return "descriptor";
     }
     for (uint32_t i = 0; i < lib->component_count; i++) {
@@ -252,7 +259,7 @@ int sluice_registry_add_file(sluice_registry *registry, const char *path)
             sluice_component *copy = calloc(1, sizeof *copy);
             if (!copy)
                 return -1;
-            memcpy(copy, component_at(lib, i), component_size(lib->abi_minor));
+            memcpy(copy, component_at(lib, i), component_size(lib) < sizeof *copy ? component_size(lib) : sizeof *copy);
             sluice_component_entry *c = &comps[registry->component_count++];
             c->component = copy;
             c->library = index;

@@ -342,7 +342,9 @@ static int write_run_json(sluice_sim *sim, int status)
         json_string(f, in->path);
         fprintf(f, "}");
     }
-    fprintf(f, "\n  ]\n}\n");
+    fprintf(f, "\n  ],\n  \"schedule\": ");
+    sluice_sim_write_schedule(sim, f, 1);
+    fprintf(f, "\n}\n");
     if (fclose(f) != 0) {
         free(text);
         return -1;
@@ -361,11 +363,9 @@ int sluice_sim_end(sluice_sim *sim, int status)
     sim->wall_seconds = sluice_wall_clock() - sim->wall_start;
     for (uint32_t k = 0; k < sim->instance_count; k++) {
         sluice_instance *in = &sim->instances[k];
-        /* SLUICE_FINISH_INTERRUPTED is 1.5: older plugins see a complete run */
-        int finish_status = status == SLUICE_RUN_COMPLETE ? SLUICE_FINISH_COMPLETE
-                            : status != SLUICE_RUN_INTERRUPTED ? SLUICE_FINISH_FAILED
-                            : in->library->abi_minor >= 5      ? SLUICE_FINISH_INTERRUPTED
-                                                               : SLUICE_FINISH_COMPLETE;
+        int finish_status = status == SLUICE_RUN_COMPLETE      ? SLUICE_FINISH_COMPLETE
+                            : status == SLUICE_RUN_INTERRUPTED ? SLUICE_FINISH_INTERRUPTED
+                                                               : SLUICE_FINISH_FAILED;
         if (in->component->finish && in->component->finish(in->state, &in->host, finish_status) != SLUICE_OK) {
             sluice_sim_fail(sim, "plugin '%s' failed to finish its output", in->name);
             if (status == SLUICE_RUN_COMPLETE || status == SLUICE_RUN_INTERRUPTED)

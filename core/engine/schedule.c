@@ -150,7 +150,7 @@ uint32_t *sluice_sim_initialise_order(const sluice_sim *sim)
     return order;
 }
 
-/* The reach pass's selection (api->restrict_reach): a uint8 field of one
+/* The reach pass's selection (api->evaluation->restrict_reach): a uint8 field of one
  * component that the instance declared it reads. 0, or 1 with the error
  * reported. */
 static int reach_selection(sluice_sim *sim, uint32_t v, sluice_pair_pass *pass)
@@ -403,7 +403,7 @@ static int build_passes(sluice_sim *sim, const int *slot, int max_slot, int *err
             continue;
         }
         /* the terms within the support share one pass; a term that reaches
-         * beyond it (api->request_reach) gets a pass of its own, after */
+         * beyond it (api->evaluation->request_reach) gets a pass of its own, after */
         uint32_t terms = 0;
         for (uint32_t v = 0; v < n; v++)
             terms += is_evaluation(sim->instances[v].component) && slot[v] == s &&
@@ -444,7 +444,7 @@ static int build_passes(sluice_sim *sim, const int *slot, int max_slot, int *err
 }
 
 /* The accumulated columns, zeroed before every evaluation, and the passes of
- * the on-demand pair terms (run through api->pair_pass). Returns 0 or -1 out
+ * the on-demand pair terms (run through api->evaluation->pair_pass). Returns 0 or -1 out
  * of memory. */
 static int build_accumulators_and_on_demand(sluice_sim *sim, int *errors)
 {
@@ -463,7 +463,7 @@ static int build_accumulators_and_on_demand(sluice_sim *sim, int *errors)
                 sim->accumulate_columns[sim->accumulate_count++] =
                     (uint32_t)field->column + comp;
     }
-    /* on-demand pair terms: a pass of their own, run through api->pair_pass */
+    /* on-demand pair terms: a pass of their own, run through api->evaluation->pair_pass */
     for (uint32_t v = 0; v < n; v++) {
         sluice_instance *in = &sim->instances[v];
         if (!(in->component->flags & SLUICE_COMPONENT_ON_DEMAND))
@@ -538,4 +538,93 @@ int sluice_sim_build_rates(sluice_sim *sim)
         }
     }
     return 0;
+}
+
+/* ------------------------------------------------------ the schedule, written -- */
+
+static const char *term_name(const sluice_sim *sim, const sluice_pair_term *term)
+{
+    for (uint32_t v = 0; v < sim->instance_count; v++)
+        if (sim->instances[v].state == term->state &&
+            sim->instances[v].component == term->component)
+            return sim->instances[v].name;
+    return "?";
+}
+
+static void write_name(FILE *out, const char *name, int json, int first)
+{
+    if (json)
+        fprintf(out, "%s\"%s\"", first ? "" : ", ", name);
+    else
+        fprintf(out, "%s%s", first ? "" : ", ", name);
+}
+
+static void write_pair_pass(const sluice_sim *sim, const sluice_pair_pass *p, FILE *out,
+                            int json)
+{
+    fputs(json ? "{\"kind\": \"pair\", \"components\": [" : "pair pass: ", out);
+    for (uint32_t t = 0; t < p->term_count; t++)
+        write_name(out, term_name(sim, &p->terms[t]), json, t == 0);
+    if (json) {
+        fprintf(out, "], \"reach_m\": %.9g}", (double)p->reach);
+    } else if (p->reach > 0) {
+        fprintf(out, " (reach %.6g m", (double)p->reach);
+        if (p->select_column >= 0)
+            fprintf(out, ", only particles with %u in column %d", p->select_value,
+                    p->select_column);
+        fputc(')', out);
+    }
+}
+
+/* The evaluation schedule as the core runs it: the components that prepare
+ * every evaluation, the passes in order (a particle pass per particle term,
+ * the pair terms of a pass fused into one traversal, reach passes), the
+ * on-demand pair terms and the integrated fields; as text (sluice check
+ * --schedule) or as a JSON object (run.json "schedule"). */
+void sluice_sim_write_schedule(const sluice_sim *sim, FILE *out, int json)
+{
+    fputs(json ? "{\"prepare\": [" : "evaluation schedule (docs/plugin-abi.md, \"A step\"):\n  prepare: ", out);
+    for (uint32_t k = 0; k < sim->prepare_count; k++)
+        write_name(out, sim->instances[sim->prepare[k]].name, json, k == 0);
+    if (!json && sim->prepare_count == 0)
+        fputs("(none)", out);
+    fputs(json ? "], \"passes\": [" : "\n", out);
+    for (uint32_t p = 0; p < sim->pass_count; p++) {
+        const sluice_pass *pass = &sim->passes[p];
+        if (json && p)
+            fputs(", ", out);
+        if (!json)
+            fprintf(out, "  %u. ", p + 1);
+        if (pass->is_pair)
+            write_pair_pass(sim, &pass->pair, out, json);
+        else if (json)
+            fprintf(out, "{\"kind\": \"particle\", \"components\": [\"%s\"]}",
+                    sim->instances[pass->instance].name);
+        else
+            fprintf(out, "particle pass: %s", sim->instances[pass->instance].name);
+        if (!json)
+            fputc('\n', out);
+    }
+    fputs(json ? "], \"on_demand\": [" : "  on demand (api->evaluation->pair_pass): ", out);
+    int first = 1;
+    for (uint32_t v = 0; v < sim->instance_count; v++)
+        if (sim->instances[v].on_demand) {
+            write_name(out, sim->instances[v].name, json, first);
+            first = 0;
+        }
+    if (!json && first)
+        fputs("(none)", out);
+    fputs(json ? "], \"integrated\": [" : "\n  integrated: ", out);
+    for (uint32_t r = 0; r < sim->rate_count; r++) {
+        const sluice_rate *rate = &sim->rates[r];
+        if (json)
+            fprintf(out, "%s{\"state\": \"%s\", \"rate\": \"%s\", \"kinds\": %u}", r ? ", " : "",
+                    rate->state_name, rate->rate_name, rate->kinds);
+        else
+            fprintf(out, "%s%s <- %s", r ? ", " : "", rate->state_name, rate->rate_name);
+    }
+    if (!json && sim->rate_count == 0)
+        fputs("(none)", out);
+    fprintf(out, json ? "], \"integrator\": \"%s\"}" : " (integrator '%s')\n",
+            sim->instances[sim->integrator].name);
 }

@@ -98,6 +98,11 @@ uint64_t sluice_sim_particle_total(const sluice_sim *sim);
 /* The messages of the last failure (watchdog, plugin error), or "". */
 const char *sluice_sim_failure(const sluice_sim *sim);
 
+/* The evaluation schedule (prepare, passes in order, on-demand terms,
+ * integrated fields), as text or (json != 0) as a JSON object; run.json
+ * holds the latter as "schedule". */
+void sluice_sim_write_schedule(const sluice_sim *sim, FILE *out, int json);
+
 /* Lists every plugin on the search path (sluice inspect). */
 int sluice_inspect(FILE *out, const char *component, int markdown);
 

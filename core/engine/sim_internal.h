@@ -63,7 +63,7 @@ typedef struct sluice_instance {
     char reach_field[64];        /* 1.7: the reach pass's particles: this uint8 field... */
     uint32_t reach_value;        /* ...holds this value ("" : every particle) */
     int local_points;            /* 1.9: requested a point margin (reads its fields at
-                                    other particles in api->point_pass_local) */
+                                    other particles in api->evaluation->point_pass_local) */
 } sluice_instance;
 
 typedef struct sluice_pass {
@@ -97,7 +97,7 @@ static inline uint64_t sluice_table_hash_bytes(uint64_t hash, const char *data, 
     return hash;
 }
 
-/* Where api->state_write / state_read / state_length go: the checkpoint
+/* Where api->state->state_write / state_read / state_length go: the checkpoint
  * library (core/checkpoint/) sets it around a component's save_state or
  * load_state call; NULL otherwise. The engine itself writes no files. */
 typedef struct sluice_state_store {
@@ -129,7 +129,7 @@ struct sluice_sim {
     int64_t creating;  /* instance inside create(), or -1: its errors are held in
                           pending and reported as one message naming the plugin */
     char pending[2048];
-    omp_lock_t message_lock; /* api->error may be called from parallel terms */
+    omp_lock_t message_lock; /* api->messages->error may be called from parallel terms */
     sluice_phase phase;
     int check_only;
 
@@ -145,7 +145,7 @@ struct sluice_sim {
     uint32_t rate_count;
     sluice_wall *walls;
     sluice_real *wall_bounds; /* 6 per wall: min xyz, max xyz (wall_nearest) */
-    /* api->wall_distance's cells, built at its first call (a scene whose
+    /* api->walls->wall_distance's cells, built at its first call (a scene whose
      * plugins never ask pays nothing); wall_distance_built is set once
      * they are (or once their build failed: the queries then ask every
      * element, the same numbers) */
@@ -165,7 +165,7 @@ struct sluice_sim {
     sluice_comm comm;         /* the ranks of a distributed run (one by default) */
     sluice_halo_lists halo;   /* this rank's slab and halo (ranks.h) */
     sluice_ranks_run ranks_run; /* the decomposition's view of the run (decomposition.c) */
-    sluice_real point_margin; /* 1.9: the largest api->request_point_margin, m */
+    sluice_real point_margin; /* 1.9: the largest api->evaluation->request_point_margin, m */
     sluice_pass *passes;
     uint32_t pass_count;
     uint32_t *prepare; /* instances with a prepare callback, scene order */
@@ -175,6 +175,11 @@ struct sluice_sim {
 
     /* time */
     double time, dt, dt_limit, end;
+    /* the evaluation under way (api->evaluation->evaluate): the time its
+     * state stands at and its index within the step (view.stage_time, stage) */
+    int in_stage;
+    double stage_time;
+    uint32_t stage;
     int64_t step;
     double *requests;
     size_t request_count, request_capacity;
@@ -201,7 +206,7 @@ struct sluice_sim {
     int progress, quiet;
     double last_progress;
     int evaluating;   /* inside an evaluation or a pass: particles may not come or go */
-    uint64_t removed; /* particles removed since the start (api->remove_particles) */
+    uint64_t removed; /* particles removed since the start (api->particles->remove_particles) */
 
     /* checkpoints (core/checkpoint/) */
     sluice_sim_services services;
@@ -212,7 +217,7 @@ struct sluice_sim {
     size_t checkpoint_file_count;
     int restarted;                /* state restored from a checkpoint (begin() does not call
                                      the after_step hooks again) */
-    int64_t state_group;          /* HDF5 group of api->state_write/read, or -1 */
+    int64_t state_group;          /* HDF5 group of api->state->state_write/read, or -1 */
     uint32_t state_instance;      /* the component whose save_state/load_state runs */
     int state_writing;
     int state_absent;             /* load_state of a plugin the checkpoint holds no state of */
@@ -289,7 +294,7 @@ extern const sluice_api sluice_sim_api_table;
 
 /* files.c */
 int sluice_sim_make_directory(const char *path, char *error, size_t size);
-/* Appends one row to a table's file (api->table_row). */
+/* Appends one row to a table's file (api->output->table_row). */
 int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t length);
 
 /* watchdog.c */

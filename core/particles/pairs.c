@@ -555,7 +555,7 @@ static sluice_index fill_reach(const sluice_pair_pass *pass, const sluice_grid *
     return np;
 }
 
-/* A pass of terms that reach beyond the support (api->request_reach), from
+/* A pass of terms that reach beyond the support (api->evaluation->request_reach), from
  * the pass's own list (built on the first evaluation after each grid
  * build). */
 static int pair_pass_run_reach(sluice_pair_engine *engine, const sluice_pair_pass *pass,

@@ -45,9 +45,9 @@ typedef struct sluice_pair_pass {
     int needs_kernel[SLUICE_KIND_COUNT];
     /* 0: pairs within the kernel support, from the Verlet list; > 0: pairs
      * within this radius (m, beyond the support), found through the cell
-     * grid, with no kernel values (api->request_reach) */
+     * grid, with no kernel values (api->evaluation->request_reach) */
     sluice_real reach;
-    /* reach passes (api->restrict_reach): only particles whose uint8
+    /* reach passes (api->evaluation->restrict_reach): only particles whose uint8
      * column `select_column` holds `select_value`, as targets and as
      * neighbours; -1: every particle */
     int32_t select_column;

@@ -121,7 +121,7 @@ sluice_real sluice_wall_signed_distance_among(const sluice_wall_geometry *wall,
 /* Over several walls: the unsigned distance from p to the nearest element
  * (HUGE_VAL without elements), and the elements within `limit` of p (their
  * count; when wall_out is not NULL also the elements, by wall then element).
- * The watchdog's cells (wall_watch.c) and api->wall_distance's
+ * The watchdog's cells (wall_watch.c) and api->walls->wall_distance's
  * (wall_distance.c) build their candidate lists with them. */
 double sluice_walls_nearest_distance(const sluice_wall_geometry *const *walls, size_t wall_count,
                                      const sluice_real p[3]);

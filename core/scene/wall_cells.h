@@ -1,5 +1,5 @@
 /* A grid of cells over a box, each cell with a list of wall elements: the
- * structure the watchdog's wall check (wall_watch.h) and api->wall_distance
+ * structure the watchdog's wall check (wall_watch.h) and api->walls->wall_distance
  * (wall_distance.h) both stand on.
  *
  * A cell's list holds the elements that can be nearest to some point of the

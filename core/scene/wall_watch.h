@@ -1,7 +1,7 @@
 /* The watchdog's wall check: which fluid particles have gone through a wall.
  *
  * A particle is "behind" a wall when its signed distance to the nearest wall
- * of the scene (the rule of api->wall_nearest: the wall at the smallest
+ * of the scene (the rule of api->walls->wall_nearest: the wall at the smallest
  * unsigned distance, its sign from the pseudo-normal of the closest feature;
  * points past an open end of a wall are never behind) is below zero. Asking
  * every wall element for every particle after every step would cost a
@@ -40,7 +40,7 @@ int sluice_wall_watch_init(sluice_wall_watch *watch, uint32_t dimensions,
                            double depth);
 void sluice_wall_watch_free(sluice_wall_watch *watch);
 
-/* The signed distance of p to the nearest wall, as api->wall_nearest computes
+/* The signed distance of p to the nearest wall, as api->walls->wall_nearest computes
  * it (exactly: the same value), when p is in a near or behind cell; +HUGE_VAL
  * in a front cell (farther than `depth` on the fluid side) and for points past
  * an open end (*beyond_end = 1). *wall and *element name the nearest element

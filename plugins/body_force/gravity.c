@@ -38,7 +38,7 @@ static int gravity_create(const sluice_api *api, sluice_host *host, const void *
     }
     for (int d = 0; d < 3; d++)
         s->g[d] = c->acceleration[d];
-    if (api->publish_constant(host, "gravity", s->g, s->dims, "m s^-2") != SLUICE_OK) {
+    if (api->fields->publish_constant(host, "gravity", s->g, s->dims, "m s^-2") != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
@@ -49,7 +49,7 @@ static int gravity_create(const sluice_api *api, sluice_host *host, const void *
 static int gravity_bind(void *state, sluice_host *host)
 {
     gravity_state *s = state;
-    return s->api->field(host, "acceleration", &s->acceleration);
+    return s->api->fields->field(host, "acceleration", &s->acceleration);
 }
 
 static void gravity_destroy(void *state)

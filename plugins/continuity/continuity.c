@@ -97,7 +97,7 @@ static int continuity_create(const sluice_api *api, sluice_host *host, const voi
     s->rest_walls = c->wall_velocity == 1;
     s->transport = c->transport;
     if (s->transport && s->renormalise) {
-        api->error(host, "transport_velocity and renormalise together are not implemented: "
+        api->messages->error(host, "transport_velocity and renormalise together are not implemented: "
                          "choose one");
         free(s);
         return SLUICE_ERROR;
@@ -107,7 +107,7 @@ static int continuity_create(const sluice_api *api, sluice_host *host, const voi
             "transport_velocity_correction", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m s^-1",
             SLUICE_READ | SLUICE_READ_NEIGHBOUR, 0, NULL, 0,
             "what the particles move with beyond their velocity"};
-        if (api->declare_field(host, &shift) != SLUICE_OK) {
+        if (api->fields->declare_field(host, &shift) != SLUICE_OK) {
             free(s);
             return SLUICE_ERROR;
         }
@@ -115,7 +115,7 @@ static int continuity_create(const sluice_api *api, sluice_host *host, const voi
     /* only what the chosen form reads is declared (and gathered) */
     if (s->form == FORM_VOLUME) {
         const sluice_field_spec density = SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_READ_NEIGHBOUR);
-        if (api->declare_field(host, &density) != SLUICE_OK) {
+        if (api->fields->declare_field(host, &density) != SLUICE_OK) {
             free(s);
             return SLUICE_ERROR;
         }
@@ -128,7 +128,7 @@ static int continuity_create(const sluice_api *api, sluice_host *host, const voi
         }
         const sluice_field_spec correction = SLUICE_SPEC_KERNEL_CORRECTION_DOC(
             dims, SLUICE_READ, "kernel-gradient correction matrix L_i");
-        if (api->declare_field(host, &correction) != SLUICE_OK) {
+        if (api->fields->declare_field(host, &correction) != SLUICE_OK) {
             free(s);
             return SLUICE_ERROR;
         }
@@ -145,9 +145,9 @@ static int continuity_bind(void *state, sluice_host *host)
         {"density_rate", &s->density_rate}};
     if (sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (s->renormalise && s->api->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
+    if (s->renormalise && s->api->fields->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (s->transport && s->api->field(host, "transport_velocity_correction", &s->shift) !=
+    if (s->transport && s->api->fields->field(host, "transport_velocity_correction", &s->shift) !=
                             SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;

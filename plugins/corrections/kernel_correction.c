@@ -56,7 +56,7 @@ static int kc_create(const sluice_api *api, sluice_host *host, const void *confi
 {
     const kc_config *c = config;
     if (!(c->regular_above > c->singular_below)) {
-        api->error(host, "regular_above (%g) must be larger than singular_below (%g)",
+        api->messages->error(host, "regular_above (%g) must be larger than singular_below (%g)",
                    (double)c->regular_above, (double)c->singular_below);
         return SLUICE_ERROR;
     }
@@ -78,7 +78,7 @@ static int kc_create(const sluice_api *api, sluice_host *host, const void *confi
             "renormalisation matrix L = [sum_j V_j grad_i W_ij (x) (x_j - x_i)]^-1, row-major"),
     };
     for (int f = 0; f < 3; f++)
-        if (api->declare_field(host, &fields[f]) != SLUICE_OK) {
+        if (api->fields->declare_field(host, &fields[f]) != SLUICE_OK) {
             free(s);
             return SLUICE_ERROR;
         }

@@ -29,11 +29,11 @@
  *
  * The result persists through the density: the equation of state recomputes
  * the pressure from the density at every evaluation, so the density is set
- * to EOS^-1(p~) (api->density_from_pressure, ABI 1.2). Particle masses are not
- * touched. Before filtering, the hook runs one evaluation (api->evaluate) so
+ * to EOS^-1(p~) (api->evaluation->density_from_pressure, ABI 1.2). Particle masses are not
+ * touched. Before filtering, the hook runs one evaluation (api->evaluation->evaluate) so
  * that the pressure filtered is that of the current density, not the one of
  * the integrator's last (mid-step) evaluation: one more evaluation every
- * `every` steps. The pair callback is on demand (api->pair_pass), fluid
+ * `every` steps. The pair callback is on demand (api->evaluation->pair_pass), fluid
  * targets, fluid neighbours. */
 #include <math.h>
 
@@ -50,7 +50,7 @@ typedef struct ps_state {
     sluice_real rho0, gravity_magnitude, up[3], across[2][3], bin_width, half_spacing;
     sluice_field density, mass, pressure, hydrostatic, smoothed;
     /* work arrays of the hook, grown as needed */
-    double *levels; /* double: combined over MPI ranks with api->reduce */
+    double *levels; /* double: combined over MPI ranks with api->ranks->reduce */
     size_t level_capacity;
     sluice_index *fluid;
     sluice_real *buffer; /* 2 per fluid particle: pressure, density */
@@ -146,10 +146,10 @@ static int ps_bind(void *state, sluice_host *host)
     if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
     /* the smoothed pressure persists through the equation of state's inverse */
-    if (api->density_from_pressure(host, 0, NULL, NULL) != SLUICE_OK)
+    if (api->evaluation->density_from_pressure(host, 0, NULL, NULL) != SLUICE_OK)
         return SLUICE_ERROR;
     sluice_real g[3] = {0, 0, 0};
-    api->constant(host, "gravity", g, 3); /* absent: no hydrostatic part */
+    api->fields->constant(host, "gravity", g, 3); /* absent: no hydrostatic part */
     ps_axes(s, g);
     return SLUICE_OK;
 }
@@ -299,7 +299,7 @@ static int ps_hydrostatic(ps_state *s, sluice_host *host, const sluice_view *v)
      * columns); the identity on one rank */
     double extent[5] = {-(double)lo[0], -(double)lo[1], (double)hi[0], (double)hi[1],
                         fluid > 0 ? 1.0 : 0.0};
-    if (api->reduce(host, extent, 5, SLUICE_REDUCE_MAX) != SLUICE_OK)
+    if (api->ranks->reduce(host, extent, 5, SLUICE_REDUCE_MAX) != SLUICE_OK)
         return SLUICE_ERROR;
     if (extent[4] == 0)
         return SLUICE_OK;
@@ -311,7 +311,7 @@ static int ps_hydrostatic(ps_state *s, sluice_host *host, const sluice_view *v)
     for (int a = 0; a < axes; a++) {
         const double span = floor((double)((hi[a] - lo[a]) / s->bin_width)) + 1;
         if (!(span >= 1 && span < 1e8)) {
-            api->error(host, "the fluid spans %g m across gravity: too many free-surface columns "
+            api->messages->error(host, "the fluid spans %g m across gravity: too many free-surface columns "
                              "of width h = %g m (or a non-finite position)",
                        (double)(hi[a] - lo[a]), (double)s->bin_width);
             return SLUICE_ERROR;
@@ -323,7 +323,7 @@ static int ps_hydrostatic(ps_state *s, sluice_host *host, const sluice_view *v)
     if (total > s->level_capacity) {
         double *grown = realloc(s->levels, total * sizeof *grown);
         if (!grown) {
-            api->error(host, "out of memory (%zu free-surface columns)", total);
+            api->messages->error(host, "out of memory (%zu free-surface columns)", total);
             return SLUICE_ERROR;
         }
         s->levels = grown;
@@ -344,7 +344,7 @@ static int ps_hydrostatic(ps_state *s, sluice_host *host, const sluice_view *v)
     }
     /* each column's highest particle over the ranks (collective) */
     if (total > UINT32_MAX ||
-        api->reduce(host, s->levels, (uint32_t)total, SLUICE_REDUCE_MAX) != SLUICE_OK)
+        api->ranks->reduce(host, s->levels, (uint32_t)total, SLUICE_REDUCE_MAX) != SLUICE_OK)
         return SLUICE_ERROR;
     const sluice_real weight = s->rho0 * s->gravity_magnitude;
     for (sluice_index i = 0; i < n; i++) {
@@ -362,18 +362,18 @@ static int ps_after_step(void *state, sluice_host *host)
 {
     ps_state *s = state;
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     if (v->step <= 0 || v->step % s->every != 0)
         return SLUICE_OK;
     /* the pressure of the current density (the last evaluation was mid-step) */
-    if (api->evaluate(host) != SLUICE_OK)
+    if (api->evaluation->evaluate(host, api->particles->view(host)->time, 0) != SLUICE_OK)
         return SLUICE_ERROR;
-    v = api->view(host);
+    v = api->particles->view(host);
     if (ps_hydrostatic(s, host, v) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (api->pair_pass(host) != SLUICE_OK)
+    if (api->evaluation->pair_pass(host) != SLUICE_OK)
         return SLUICE_ERROR;
-    v = api->view(host); /* fields move with the particles if the pass re-sorted them */
+    v = api->particles->view(host); /* fields move with the particles if the pass re-sorted them */
     const sluice_index n = v->count;
     if (n > s->fluid_capacity) {
         sluice_index *fluid = realloc(s->fluid, (size_t)n * sizeof *fluid);
@@ -383,7 +383,7 @@ static int ps_after_step(void *state, sluice_host *host)
         if (buffer)
             s->buffer = buffer;
         if (!fluid || !buffer) {
-            api->error(host, "out of memory (%u particles)", n);
+            api->messages->error(host, "out of memory (%u particles)", n);
             return SLUICE_ERROR;
         }
         s->fluid_capacity = n;
@@ -397,7 +397,7 @@ static int ps_after_step(void *state, sluice_host *host)
             s->fluid[count++] = i;
         }
     sluice_real *density_new = s->buffer + n;
-    if (api->density_from_pressure(host, count, s->buffer, density_new) != SLUICE_OK)
+    if (api->evaluation->density_from_pressure(host, count, s->buffer, density_new) != SLUICE_OK)
         return SLUICE_ERROR;
     sluice_real *density = sluice_real_column(v, s->density, 0);
     sluice_real *pressure = sluice_real_column(v, s->pressure, 0);

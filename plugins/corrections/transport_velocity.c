@@ -84,7 +84,7 @@ static int transport_create(const sluice_api *api, sluice_host *host, const void
     s->min_kernel_sum = c->min_kernel_sum;
     /* published for the air's cohesion (two_phase), whose attraction the
      * ordering has to outweigh */
-    if (api->publish_constant(host, "transport_background_pressure", &s->background_pressure, 1,
+    if (api->fields->publish_constant(host, "transport_background_pressure", &s->background_pressure, 1,
                               "Pa") != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
@@ -113,7 +113,7 @@ static void transport_destroy(void *state)
 static int transport_before_step(void *state, sluice_host *host)
 {
     transport_state *s = state;
-    s->dt = s->api->view(host)->dt;
+    s->dt = s->api->particles->view(host)->dt;
     return SLUICE_OK;
 }
 

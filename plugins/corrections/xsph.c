@@ -92,14 +92,14 @@ static int xsph_create(const sluice_api *api, sluice_host *host, const void *con
     s->form = c->form;
     /* an optional parameter that is absent reads 0, which its range excludes */
     if (c->form == FORM_POSITION && c->phi > 0) {
-        api->error(host, "phi = %g is the coefficient of form velocity_smoothing, which this "
+        api->messages->error(host, "phi = %g is the coefficient of form velocity_smoothing, which this "
                          "scene does not use; form position takes epsilon (default 0.3)",
                    (double)c->phi);
         free(s);
         return SLUICE_ERROR;
     }
     if (c->form == FORM_VELOCITY_SMOOTHING && c->epsilon > 0) {
-        api->error(host, "epsilon = %g is the coefficient of form position, which this scene "
+        api->messages->error(host, "epsilon = %g is the coefficient of form position, which this scene "
                          "does not use; form velocity_smoothing takes phi (default 0.01)",
                    (double)c->epsilon);
         free(s);

@@ -89,8 +89,8 @@ static int delta_bind(void *state, sluice_host *host)
     s->coefficient *= 2 * c0;
     if (s->form == FORM_FOURTAKAS) {
         sluice_real g[3] = {0, 0, 0}, rho0;
-        if (s->api->constant(host, "gravity", g, 3) == 0) {
-            s->api->error(host, "form fourtakas removes the hydrostatic density difference and "
+        if (s->api->fields->constant(host, "gravity", g, 3) == 0) {
+            s->api->messages->error(host, "form fourtakas removes the hydrostatic density difference and "
                                 "needs gravity: load the gravity plugin or use form "
                                 "molteni_colagrossi");
             return SLUICE_ERROR;
@@ -109,7 +109,7 @@ static int delta_bind(void *state, sluice_host *host)
     if (s->two_phase) {
         sluice_real c_air, rho_air;
         if (s->phase.type != SLUICE_TYPE_UINT8 || s->phase.components != 1) {
-            s->api->error(host, "the field 'phase' must be uint8 with one component (0 water, "
+            s->api->messages->error(host, "the field 'phase' must be uint8 with one component (0 water, "
                                 "1 air)");
             return SLUICE_ERROR;
         }

@@ -76,14 +76,14 @@ static int polynomial_create(const sluice_api *api, sluice_host *host, const voi
     s->inverse_rho0 = 1 / s->rho0;
     sluice_real c2 = c->c2;
     if (c->c2 > 0 && c->speed_of_sound > 0) {
-        api->error(host, "give either c2 or speed_of_sound (which sets c2 = c0^2 rho0), not both");
+        api->messages->error(host, "give either c2 or speed_of_sound (which sets c2 = c0^2 rho0), not both");
         free(s);
         return SLUICE_ERROR;
     }
     if (c->speed_of_sound > 0)
         c2 = c->speed_of_sound * c->speed_of_sound * s->rho0;
     if (!(c2 > 0)) {
-        api->error(host, "needs c2 > 0 or speed_of_sound: the bulk modulus sets the speed of "
+        api->messages->error(host, "needs c2 > 0 or speed_of_sound: the bulk modulus sets the speed of "
                          "sound and the time step");
         free(s);
         return SLUICE_ERROR;
@@ -95,7 +95,7 @@ static int polynomial_create(const sluice_api *api, sluice_host *host, const voi
     s->a3 = c->c4;
     s->cutoff = c->tension_cutoff;
     if (!(s->a1 > 0)) {
-        api->error(host, "dp/drho at the rest density, (C2 + C6 E) / rho0, must be positive "
+        api->messages->error(host, "dp/drho at the rest density, (C2 + C6 E) / rho0, must be positive "
                          "(it is %g m^2 s^-2)",
                    (double)(s->a1 / s->rho0));
         free(s);

@@ -17,7 +17,7 @@
  *             energy of the barotropic equation of state,
  *                 de = p / rho^2 drho,   e(rho0) = 0.
  *             The gauge does not know the form p(rho) of the scene's equation
- *             of state, only its inverse R(p) = rho (api->density_from_pressure,
+ *             of state, only its inverse R(p) = rho (api->evaluation->density_from_pressure,
  *             which every equation of state provides for the hydrostatic
  *             start). Integrating by parts with rho = R(q):
  *                 e(rho) = int_{p_ref}^{p} (1/R(q) - 1/rho) dq
@@ -50,7 +50,7 @@
  * Across MPI ranks (ABI 1.8, SLUICE_COMPONENT_ACROSS_RANKS): each rank sums
  * K, P, U and the fluid mass over its own particles and finds its lowest
  * -g . x_i (+inf without fluid); the gauge adds the sums and takes the
- * minimum over the ranks (two api->reduce calls) before it forms E, the
+ * minimum over the ranks (two api->ranks->reduce calls) before it forms E, the
  * drift and the initial E_0, P_0, S, so these and the checkpointed state are
  * the same on every rank; rank 0 writes the row. Whether a row is written
  * (here and in finish()) depends only on the time, so every rank reduces at
@@ -122,11 +122,11 @@ static int energy_bind(void *state, sluice_host *host)
     energy_state *s = state;
     const sluice_api *api = s->api;
     sluice_real g[3] = {0, 0, 0};
-    if (api->constant(host, "gravity", g, 3) > 0)
+    if (api->fields->constant(host, "gravity", g, 3) > 0)
         for (uint32_t d = 0; d < 3; d++)
             s->g[d] = g[d];
     sluice_real p_ref[3] = {0, 0, 0};
-    if (api->constant(host, "reference_pressure", p_ref, 3) > 0)
+    if (api->fields->constant(host, "reference_pressure", p_ref, 3) > 0)
         s->p_ref = p_ref[0];
     const sluice_field_binding fields[] = {
         {"mass", &s->mass}, {"velocity", &s->velocity}};
@@ -136,7 +136,7 @@ static int energy_bind(void *state, sluice_host *host)
     if (s->elastic) {
         /* a density without an equation of state has no elastic energy to
          * speak of: refuse (the call reports it) */
-        if (api->density_from_pressure(host, 0, NULL, NULL) != SLUICE_OK)
+        if (api->evaluation->density_from_pressure(host, 0, NULL, NULL) != SLUICE_OK)
             return SLUICE_ERROR;
         s->has_pressure = sluice_util_optional_field(api, host, "pressure", &s->pressure);
     }
@@ -159,7 +159,7 @@ static void energy_destroy(void *state)
 static int energy_initialise(void *state, sluice_host *host)
 {
     energy_state *s = state;
-    s->table = s->api->table_open(host, s->file,
+    s->table = s->api->output->table_open(host, s->file,
                                   "time,kinetic,potential,elastic,total,drift,fluid_mass");
     return s->table ? SLUICE_OK : SLUICE_ERROR;
 }
@@ -173,7 +173,7 @@ static int grow(energy_state *s, sluice_host *host, sluice_index n)
     for (int k = 0; k < 5; k++) {
         sluice_real *grown = realloc(*arrays[k], (size_t)capacity * sizeof **arrays[k]);
         if (!grown) {
-            s->api->error(host, "out of memory (%u particles)", (unsigned)capacity);
+            s->api->messages->error(host, "out of memory (%u particles)", (unsigned)capacity);
             return SLUICE_ERROR;
         }
         *arrays[k] = grown;
@@ -208,8 +208,8 @@ static int elastic_energy(energy_state *s, sluice_host *host, const sluice_view 
                                          (double)s->rho0 * 1.0);
             k++;
         }
-    if (api->density_from_pressure(host, n, s->p, s->r) != SLUICE_OK ||
-        api->density_from_pressure(host, n, s->pp, s->rp) != SLUICE_OK)
+    if (api->evaluation->density_from_pressure(host, n, s->p, s->r) != SLUICE_OK ||
+        api->evaluation->density_from_pressure(host, n, s->pp, s->rp) != SLUICE_OK)
         return SLUICE_ERROR;
     for (int iteration = 0; iteration < 50; iteration++) {
         double worst = 0;
@@ -227,7 +227,7 @@ static int elastic_energy(energy_state *s, sluice_host *host, const sluice_view 
         }
         if (!(worst > 1e-14 * (double)s->rho0))
             break;
-        if (api->density_from_pressure(host, n, s->p, s->r) != SLUICE_OK)
+        if (api->evaluation->density_from_pressure(host, n, s->p, s->r) != SLUICE_OK)
             return SLUICE_ERROR;
     }
     /* int_{p_ref}^{p} (1/R(q) - 1/rho) dq, 5-point Gauss-Legendre */
@@ -239,14 +239,14 @@ static int elastic_energy(energy_state *s, sluice_host *host, const sluice_view 
     double *integral = NULL;
     integral = calloc((size_t)n, sizeof *integral);
     if (!integral) {
-        api->error(host, "out of memory (%u particles)", (unsigned)n);
+        api->messages->error(host, "out of memory (%u particles)", (unsigned)n);
         return SLUICE_ERROR;
     }
     for (int j = 0; j < 5; j++) {
         for (k = 0; k < n; k++)
             s->pp[k] = (sluice_real)(0.5 * (p_ref + (double)s->p[k]) +
                                     0.5 * ((double)s->p[k] - p_ref) * node[j]);
-        if (api->density_from_pressure(host, n, s->pp, s->r) != SLUICE_OK) {
+        if (api->evaluation->density_from_pressure(host, n, s->pp, s->r) != SLUICE_OK) {
             free(integral);
             return SLUICE_ERROR;
         }
@@ -271,7 +271,7 @@ static int elastic_energy(energy_state *s, sluice_host *host, const sluice_view 
 /* One row for the current state. */
 static int energy_row(energy_state *s, sluice_host *host)
 {
-    const sluice_view *v = s->api->view(host);
+    const sluice_view *v = s->api->particles->view(host);
     const sluice_real *mass = sluice_real_column(v, s->mass, 0);
     double kinetic = 0, potential = 0, fluid_mass = 0, lowest = INFINITY;
     for (sluice_index i = 0; i < v->count; i++) {
@@ -294,8 +294,8 @@ static int energy_row(energy_state *s, sluice_host *host)
     /* over the ranks (collective; the identity on one rank), before anything
      * is formed from them */
     double sums[4] = {kinetic, potential, elastic, fluid_mass};
-    if (s->api->reduce(host, sums, 4, SLUICE_REDUCE_SUM) != SLUICE_OK ||
-        s->api->reduce(host, &lowest, 1, SLUICE_REDUCE_MIN) != SLUICE_OK)
+    if (s->api->ranks->reduce(host, sums, 4, SLUICE_REDUCE_SUM) != SLUICE_OK ||
+        s->api->ranks->reduce(host, &lowest, 1, SLUICE_REDUCE_MIN) != SLUICE_OK)
         return SLUICE_ERROR;
     kinetic = sums[0];
     potential = sums[1];
@@ -311,7 +311,7 @@ static int energy_row(energy_state *s, sluice_host *host)
     const double total = kinetic + relative + elastic;
     const double drift = s->scale > 0 ? (total - s->total0) / s->scale : NAN;
     const double row[7] = {v->time, kinetic, relative, elastic, total, drift, fluid_mass};
-    if (s->api->table_row(s->table, row, 7) != SLUICE_OK)
+    if (s->api->output->table_row(s->table, row, 7) != SLUICE_OK)
         return SLUICE_ERROR;
     s->last_row_time = v->time;
     return SLUICE_OK;
@@ -320,7 +320,7 @@ static int energy_row(energy_state *s, sluice_host *host)
 static int energy_after_step(void *state, sluice_host *host)
 {
     energy_state *s = state;
-    const sluice_view *v = s->api->view(host);
+    const sluice_view *v = s->api->particles->view(host);
     if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     if (energy_row(s, host) != SLUICE_OK)
@@ -337,7 +337,7 @@ static int energy_finish(void *state, sluice_host *host, int status)
     (void)status;
     if (!s->table || !s->have_initial)
         return SLUICE_OK;
-    const sluice_view *v = s->api->view(host);
+    const sluice_view *v = s->api->particles->view(host);
     if (!(v->time > s->last_row_time + sluice_schedule_tolerance(&s->rows)))
         return SLUICE_OK;
     return energy_row(s, host);
@@ -349,7 +349,7 @@ static int energy_save(void *state, sluice_host *host)
     const energy_state *s = state;
     const double values[5] = {s->potential0, s->total0, s->scale, s->last_row_time,
                               (double)s->have_initial};
-    if (s->api->state_write(host, "potential0,total0,scale,last_row_time,have_initial",
+    if (s->api->state->state_write(host, "potential0,total0,scale,last_row_time,have_initial",
                             SLUICE_STATE_DOUBLE, 5, values) != SLUICE_OK)
         return SLUICE_ERROR;
     return sluice_schedule_save(&s->rows, s->api, host, "rows_written");
@@ -359,7 +359,7 @@ static int energy_load(void *state, sluice_host *host)
 {
     energy_state *s = state;
     double values[5];
-    if (s->api->state_read(host, "potential0,total0,scale,last_row_time,have_initial",
+    if (s->api->state->state_read(host, "potential0,total0,scale,last_row_time,have_initial",
                            SLUICE_STATE_DOUBLE, 5, values) != SLUICE_OK ||
         sluice_schedule_load(&s->rows, s->api, host, "rows_written") != SLUICE_OK)
         return SLUICE_ERROR;

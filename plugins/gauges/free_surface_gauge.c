@@ -26,13 +26,13 @@
  * In a two-phase scene `phase: water` sums over the water only, so that the
  * surface is the water's, not the top of the air (phase_filter.h).
  *
- * Cost: one api->point_pass over every sample of every column per output row;
+ * Cost: one api->evaluation->point_pass over every sample of every column per output row;
  * the samples are bounded (MAX_SAMPLES; the scene is refused beyond it).
  * Columns: time, eta_x<k> (m) for k = 0, 1, ... in the order of `positions`.
  *
  * Across MPI ranks (ABI 1.8, SLUICE_COMPONENT_ACROSS_RANKS): each rank's
  * point pass sums over its own particles only, so the gauge adds the ranks'
- * kernel sums of every sample (one api->reduce) before it looks for the
+ * kernel sums of every sample (one api->ranks->reduce) before it looks for the
  * threshold crossing; rank 0 writes the row. The rows are the one-rank rows
  * up to the order of the sums. */
 #include <math.h>
@@ -119,7 +119,7 @@ static int fs_create(const sluice_api *api, sluice_host *host, const void *confi
 {
     const fs_config *c = config;
     if (c->positions.count == 0) {
-        api->error(host, "'positions' is empty: list the x of at least one gauge (m)");
+        api->messages->error(host, "'positions' is empty: list the x of at least one gauge (m)");
         return SLUICE_ERROR;
     }
     fs_state *s = sluice_util_state(api, host, sizeof *s);
@@ -134,8 +134,8 @@ static int fs_create(const sluice_api *api, sluice_host *host, const void *confi
     }
     s->dims = (uint32_t)dims;
     const uint32_t up = s->dims - 1; /* the vertical axis */
-    const int have_domain = api->constant(host, "domain_min", lo, 3) == s->dims &&
-                            api->constant(host, "domain_max", hi, 3) == s->dims;
+    const int have_domain = api->fields->constant(host, "domain_min", lo, 3) == s->dims &&
+                            api->fields->constant(host, "domain_max", hi, 3) == s->dims;
     s->columns = c->positions.count;
     s->threshold = c->threshold;
     s->rows = sluice_schedule_every(c->interval);
@@ -153,25 +153,25 @@ static int fs_create(const sluice_api *api, sluice_host *host, const void *confi
         return SLUICE_ERROR;
     }
     if (s->dims == 3 && c->lateral.count == 0) {
-        api->error(host, "needs 'lateral' in 3D: the y of each gauge (one value for all or one "
+        api->messages->error(host, "needs 'lateral' in 3D: the y of each gauge (one value for all or one "
                          "per position; z is vertical)");
         free(s);
         return SLUICE_ERROR;
     }
     if (s->dims == 2 && c->lateral.count > 0) {
-        api->error(host, "'lateral' (the y of each gauge) is for 3D scenes; in 2D give only "
+        api->messages->error(host, "'lateral' (the y of each gauge) is for 3D scenes; in 2D give only "
                          "'positions'");
         free(s);
         return SLUICE_ERROR;
     }
     if ((c->bottom.count == 0 || c->top.count == 0) && !have_domain) {
-        api->error(host, "needs 'bottom' and 'top' (the core does not publish the domain)");
+        api->messages->error(host, "needs 'bottom' and 'top' (the core does not publish the domain)");
         free(s);
         return SLUICE_ERROR;
     }
     s->first = calloc((size_t)s->columns + 1, sizeof *s->first);
     if (!s->first) {
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         fs_destroy(s);
         return SLUICE_ERROR;
     }
@@ -181,7 +181,7 @@ static int fs_create(const sluice_api *api, sluice_host *host, const void *confi
         const double b = (double)sluice_gauge_list_value(&c->bottom, k, lo[up]);
         const double t = (double)sluice_gauge_list_value(&c->top, k, hi[up]);
         if (!(t > b)) {
-            api->error(host, "gauge %u at x = %g m: top %g m is not above bottom %g m", k,
+            api->messages->error(host, "gauge %u at x = %g m: top %g m is not above bottom %g m", k,
                        (double)c->positions.values[k], t, b);
             fs_destroy(s);
             return SLUICE_ERROR;
@@ -191,7 +191,7 @@ static int fs_create(const sluice_api *api, sluice_host *host, const void *confi
         const double intervals = ceil((t - b) / step * (1 - 1e-12));
         total += (size_t)(intervals < 1 ? 1 : intervals) + 1;
         if (!(intervals < MAX_SAMPLES) || total > MAX_SAMPLES) {
-            api->error(host, "the sample columns hold more than %u points (sample_spacing %g dx "
+            api->messages->error(host, "the sample columns hold more than %u points (sample_spacing %g dx "
                              "= %g m); narrow bottom/top or raise sample_spacing",
                        MAX_SAMPLES, (double)c->sample_spacing, step);
             fs_destroy(s);
@@ -203,7 +203,7 @@ static int fs_create(const sluice_api *api, sluice_host *host, const void *confi
     s->sum = calloc(total, sizeof *s->sum);
     s->row = calloc((size_t)s->columns + 1, sizeof *s->row);
     if (!s->points || !s->sum || !s->row) {
-        api->error(host, "out of memory (%zu samples)", total);
+        api->messages->error(host, "out of memory (%zu samples)", total);
         fs_destroy(s);
         return SLUICE_ERROR;
     }
@@ -226,8 +226,8 @@ static int fs_create(const sluice_api *api, sluice_host *host, const void *confi
 static int fs_bind(void *state, sluice_host *host)
 {
     fs_state *s = state;
-    if (s->api->field(host, "density", &s->density) != SLUICE_OK ||
-        s->api->field(host, "mass", &s->mass) != SLUICE_OK ||
+    if (s->api->fields->field(host, "density", &s->density) != SLUICE_OK ||
+        s->api->fields->field(host, "mass", &s->mass) != SLUICE_OK ||
         sluice_phase_bind(s->api, host, s->phase_filter, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;
@@ -239,13 +239,13 @@ static int fs_initialise(void *state, sluice_host *host)
     size_t size = 16 + 24 * (size_t)s->columns;
     char *header = malloc(size);
     if (!header) {
-        s->api->error(host, "out of memory");
+        s->api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     size_t used = (size_t)snprintf(header, size, "time");
     for (sluice_index k = 0; k < s->columns; k++)
         used += (size_t)snprintf(header + used, size - used, ",eta_x%u", k);
-    s->table = s->api->table_open(host, s->file, header);
+    s->table = s->api->output->table_open(host, s->file, header);
     free(header);
     return s->table ? SLUICE_OK : SLUICE_ERROR;
 }
@@ -284,22 +284,22 @@ static int fs_after_step(void *state, sluice_host *host)
 {
     fs_state *s = state;
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     const sluice_index total = s->first[s->columns];
-    if (api->point_pass(host, s->points, total, SLUICE_KIND_MASK(SLUICE_KIND_FLUID), kernel_sums,
+    if (api->evaluation->point_pass(host, s->points, total, SLUICE_KIND_MASK(SLUICE_KIND_FLUID), kernel_sums,
                         s) != SLUICE_OK)
         return SLUICE_ERROR;
     /* across ranks each rank summed its own particles: add the ranks' sums
      * (collective; the identity on one rank) before the threshold */
-    if (api->reduce(host, s->sum, total, SLUICE_REDUCE_SUM) != SLUICE_OK)
+    if (api->ranks->reduce(host, s->sum, total, SLUICE_REDUCE_SUM) != SLUICE_OK)
         return SLUICE_ERROR;
-    v = api->view(host);
+    v = api->particles->view(host);
     s->row[0] = v->time;
     for (sluice_index k = 0; k < s->columns; k++)
         s->row[1 + k] = surface(s, k);
-    if (api->table_row(s->table, s->row, s->columns + 1) != SLUICE_OK)
+    if (api->output->table_row(s->table, s->row, s->columns + 1) != SLUICE_OK)
         return SLUICE_ERROR;
     sluice_schedule_advance(&s->rows, api, host, v->time);
     return SLUICE_OK;

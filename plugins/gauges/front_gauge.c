@@ -4,7 +4,7 @@
  *
  * Across MPI ranks (ABI 1.8, SLUICE_COMPONENT_ACROSS_RANKS): each rank finds
  * the largest x of its own fluid particles (-inf without any) and the gauge
- * takes the maximum over the ranks (api->reduce) before rank 0 writes the
+ * takes the maximum over the ranks (api->ranks->reduce) before rank 0 writes the
  * row, which is exactly the one-rank row. */
 #include <math.h>
 
@@ -49,7 +49,7 @@ static int front_create(const sluice_api *api, sluice_host *host, const void *co
 static int front_initialise(void *state, sluice_host *host)
 {
     front_state *s = state;
-    s->table = s->api->table_open(host, s->file, "time,x_front");
+    s->table = s->api->output->table_open(host, s->file, "time,x_front");
     return s->table ? SLUICE_OK : SLUICE_ERROR;
 }
 
@@ -61,7 +61,7 @@ static void front_destroy(void *state)
 static int front_after_step(void *state, sluice_host *host)
 {
     front_state *s = state;
-    const sluice_view *v = s->api->view(host);
+    const sluice_view *v = s->api->particles->view(host);
     if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     double front = -INFINITY;
@@ -69,10 +69,10 @@ static int front_after_step(void *state, sluice_host *host)
         if (v->kind[i] == SLUICE_KIND_FLUID && (double)v->position[0][i] > front)
             front = (double)v->position[0][i];
     /* the largest over the ranks (collective; the identity on one rank) */
-    if (s->api->reduce(host, &front, 1, SLUICE_REDUCE_MAX) != SLUICE_OK)
+    if (s->api->ranks->reduce(host, &front, 1, SLUICE_REDUCE_MAX) != SLUICE_OK)
         return SLUICE_ERROR;
     double row[2] = {v->time, front - (double)s->origin};
-    if (s->api->table_row(s->table, row, 2) != SLUICE_OK)
+    if (s->api->output->table_row(s->table, row, 2) != SLUICE_OK)
         return SLUICE_ERROR;
     sluice_schedule_advance(&s->rows, s->api, host, v->time);
     return SLUICE_OK;

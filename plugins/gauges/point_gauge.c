@@ -25,7 +25,7 @@
  *
  * Across MPI ranks (ABI 1.8, SLUICE_COMPONENT_ACROSS_RANKS): each rank's
  * point pass sums over its own particles only, so the gauge adds the ranks'
- * sums (every numerator and denominator of every point, one api->reduce)
+ * sums (every numerator and denominator of every point, one api->ranks->reduce)
  * before it divides or compares with min_kernel_sum; rank 0 writes the row.
  * The rows are the one-rank rows up to the order of the sums. */
 #include <math.h>
@@ -145,12 +145,12 @@ static int gauge_create(const sluice_api *api, sluice_host *host, const void *co
     if (s->field_text)
         memcpy(s->field_text, c->fields, text_length + 1);
     if (!s->points || !s->field_text) {
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         gauge_destroy(s);
         return SLUICE_ERROR;
     }
     if (s->count == 0) {
-        api->error(host, "needs at least one point");
+        api->messages->error(host, "needs at least one point");
         gauge_destroy(s);
         return SLUICE_ERROR;
     }
@@ -162,7 +162,7 @@ static int gauge_create(const sluice_api *api, sluice_host *host, const void *co
         if (!*p)
             break;
         if (s->field_count == MAX_FIELDS) {
-            api->error(host, "lists more than %d fields", MAX_FIELDS);
+            api->messages->error(host, "lists more than %d fields", MAX_FIELDS);
             gauge_destroy(s);
             return SLUICE_ERROR;
         }
@@ -171,14 +171,14 @@ static int gauge_create(const sluice_api *api, sluice_host *host, const void *co
             p++;
     }
     if (s->field_count == 0) {
-        api->error(host, "lists no field");
+        api->messages->error(host, "lists no field");
         gauge_destroy(s);
         return SLUICE_ERROR;
     }
     for (uint32_t f = 0; f < s->field_count; f++) {
         s->is_air[f] = strcmp(s->names[f], air_fraction_name) == 0;
         if (s->is_air[f] && s->air_fraction) {
-            api->error(host, "fields: '%s' is listed twice", air_fraction_name);
+            api->messages->error(host, "fields: '%s' is listed twice", air_fraction_name);
             gauge_destroy(s);
             return SLUICE_ERROR;
         }
@@ -192,8 +192,8 @@ static int gauge_bind(void *state, sluice_host *host)
 {
     gauge_state *s = state;
     const sluice_api *api = s->api;
-    if (api->field(host, "density", &s->density) != SLUICE_OK ||
-        api->field(host, "mass", &s->mass) != SLUICE_OK ||
+    if (api->fields->field(host, "density", &s->density) != SLUICE_OK ||
+        api->fields->field(host, "mass", &s->mass) != SLUICE_OK ||
         sluice_phase_bind(api, host, s->phase_filter, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
     s->air_phase.column = -1;
@@ -201,7 +201,7 @@ static int gauge_bind(void *state, sluice_host *host)
         /* the phase written by two_phase (looked up, not declared: a missing
          * provider is reported here, naming the parameter) */
         if (!sluice_util_optional_field(api, host, "phase", &s->air_phase)) {
-            api->error(host,
+            api->messages->error(host,
                        "fields: '%s' needs the field 'phase' (0 water, 1 air) of the two_phase "
                        "plugin, which this scene does not load (load two_phase, or remove %s "
                        "from fields)",
@@ -209,7 +209,7 @@ static int gauge_bind(void *state, sluice_host *host)
             return SLUICE_ERROR;
         }
         if (s->air_phase.type != SLUICE_TYPE_UINT8 || s->air_phase.components != 1) {
-            api->error(host, "fields: '%s' needs 'phase' as one uint8 per particle (0 water, 1 "
+            api->messages->error(host, "fields: '%s' needs 'phase' as one uint8 per particle (0 water, 1 "
                              "air), as two_phase declares it",
                        air_fraction_name);
             return SLUICE_ERROR;
@@ -226,13 +226,13 @@ static int gauge_bind(void *state, sluice_host *host)
         }
         sluice_field field;
         if (!sluice_util_optional_field(api, host, s->names[f], &field)) {
-            api->error(host, "field '%s' is not declared by any loaded plugin (`sluice inspect` "
+            api->messages->error(host, "field '%s' is not declared by any loaded plugin (`sluice inspect` "
                              "lists each plugin's fields)",
                        s->names[f]);
             return SLUICE_ERROR;
         }
         if (field.type != SLUICE_TYPE_REAL) {
-            api->error(host, "field '%s' is not a real field", s->names[f]);
+            api->messages->error(host, "field '%s' is not a real field", s->names[f]);
             return SLUICE_ERROR;
         }
         s->real[s->real_count++] = field;
@@ -242,13 +242,13 @@ static int gauge_bind(void *state, sluice_host *host)
     }
     s->stride = 1 + s->real_values + (s->air_fraction ? 2 : 0);
     if ((uint64_t)s->count * s->stride > UINT32_MAX) {
-        api->error(host, "%u points x %u sums are too many", (unsigned)s->count, s->stride);
+        api->messages->error(host, "%u points x %u sums are too many", (unsigned)s->count, s->stride);
         return SLUICE_ERROR;
     }
     s->sums = calloc((size_t)s->count * s->stride, sizeof *s->sums);
     s->row = calloc((size_t)s->count * s->value_count + 1, sizeof *s->row);
     if (!s->sums || !s->row) {
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     return SLUICE_OK;
@@ -260,7 +260,7 @@ static int gauge_initialise(void *state, sluice_host *host)
     size_t size = 16, used = 0;
     char *header = malloc(size);
     if (!header) {
-        s->api->error(host, "out of memory");
+        s->api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     static const char axes[] = "xyz";
@@ -281,7 +281,7 @@ static int gauge_initialise(void *state, sluice_host *host)
                     char *grown = realloc(header, size);
                     if (!grown) {
                         free(header);
-                        s->api->error(host, "out of memory");
+                        s->api->messages->error(host, "out of memory");
                         return SLUICE_ERROR;
                     }
                     header = grown;
@@ -290,7 +290,7 @@ static int gauge_initialise(void *state, sluice_host *host)
                 used += (size_t)n;
             }
         }
-    s->table = s->api->table_open(host, s->file, header);
+    s->table = s->api->output->table_open(host, s->file, header);
     free(header);
     return s->table ? SLUICE_OK : SLUICE_ERROR;
 }
@@ -361,22 +361,22 @@ static int gauge_after_step(void *state, sluice_host *host)
 {
     gauge_state *s = state;
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     /* pressure and the other derived fields of the current state */
-    if (api->evaluate(host) != SLUICE_OK)
+    if (api->evaluation->evaluate(host, api->particles->view(host)->time, 0) != SLUICE_OK)
         return SLUICE_ERROR;
     const uint32_t stride = s->stride;
     memset(s->sums, 0, (size_t)s->count * stride * sizeof *s->sums);
-    if (api->point_pass(host, s->points, s->count, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+    if (api->evaluation->point_pass(host, s->points, s->count, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
                         s->air_fraction ? accumulate_air : accumulate, s) != SLUICE_OK)
         return SLUICE_ERROR;
     /* across ranks each rank summed its own particles: add the ranks' sums
      * (collective; the identity on one rank) before any division */
-    if (api->reduce(host, s->sums, s->count * stride, SLUICE_REDUCE_SUM) != SLUICE_OK)
+    if (api->ranks->reduce(host, s->sums, s->count * stride, SLUICE_REDUCE_SUM) != SLUICE_OK)
         return SLUICE_ERROR;
-    v = api->view(host);
+    v = api->particles->view(host);
     s->row[0] = v->time;
     size_t column = 1;
     const double min_sum = (double)s->min_kernel_sum;
@@ -394,7 +394,7 @@ static int gauge_after_step(void *state, sluice_host *host)
                 s->row[column++] = inside ? sum[s->slot[f] + c] / sum[0] : NAN;
         }
     }
-    if (api->table_row(s->table, s->row, (uint32_t)column) != SLUICE_OK)
+    if (api->output->table_row(s->table, s->row, (uint32_t)column) != SLUICE_OK)
         return SLUICE_ERROR;
     sluice_schedule_advance(&s->rows, api, host, v->time);
     return SLUICE_OK;

@@ -58,14 +58,14 @@
  * 2D only: in 3D a section would be a width-averaged surface integral (not
  * implemented; the scene is refused). The state is the integrated one
  * (position, velocity, mass, density): no evaluation is needed. Cost: one
- * api->point_pass over all samples per output row (bounded by MAX_SAMPLES).
+ * api->evaluation->point_pass over all samples per output row (bounded by MAX_SAMPLES).
  * Columns: time, then for each section k: d_x<k> (m), q_x<k> (m^2 s^-1),
  * U_x<k> (m s^-1), Fr_x<k> (1), and with `forces` M_x<k> (N m^-1),
  * P_x<k> (N m^-1).
  *
  * Across MPI ranks (ABI 1.8, SLUICE_COMPONENT_ACROSS_RANKS): each rank's
  * point pass sums over its own particles only, so the gauge adds the ranks'
- * sums of every sample (one api->reduce) before it divides,
+ * sums of every sample (one api->ranks->reduce) before it divides,
  * compares with the threshold or integrates; rank 0 writes the row. The rows
  * are the one-rank rows up to the order of the sums. */
 #include <math.h>
@@ -158,7 +158,7 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
 {
     const sg_config *c = config;
     if (c->positions.count == 0) {
-        api->error(host, "'positions' is empty: list the x of at least one section (m)");
+        api->messages->error(host, "'positions' is empty: list the x of at least one section (m)");
         return SLUICE_ERROR;
     }
     sluice_real dims, dx, lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
@@ -166,23 +166,23 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
         sluice_util_constant(api, host, "spacing", &dx) != SLUICE_OK)
         return SLUICE_ERROR;
     if (dims != 2) {
-        api->error(host, "measures 2D sections only (a 3D section would need a width average)");
+        api->messages->error(host, "measures 2D sections only (a 3D section would need a width average)");
         return SLUICE_ERROR;
     }
     const int have_domain =
-        api->constant(host, "domain_min", lo, 3) == 2 && api->constant(host, "domain_max", hi, 3) == 2;
+        api->fields->constant(host, "domain_min", lo, 3) == 2 && api->fields->constant(host, "domain_max", hi, 3) == 2;
     const sluice_index n = c->positions.count;
     if (sluice_gauge_check_list(api, host, "bed_elevation", &c->bed_elevation, n, "sections") !=
             SLUICE_OK ||
         sluice_gauge_check_list(api, host, "top", &c->top, n, "sections") != SLUICE_OK)
         return SLUICE_ERROR;
     if (c->bed_elevation.count == 0) {
-        api->error(host, "'bed_elevation' is empty: give one value for all sections or one per "
+        api->messages->error(host, "'bed_elevation' is empty: give one value for all sections or one per "
                          "section (m)");
         return SLUICE_ERROR;
     }
     if (c->top.count == 0 && !have_domain) {
-        api->error(host, "needs 'top' (the core does not publish the domain)");
+        api->messages->error(host, "needs 'top' (the core does not publish the domain)");
         return SLUICE_ERROR;
     }
     sg_state *s = sluice_util_state(api, host, sizeof *s);
@@ -201,14 +201,14 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
         return SLUICE_ERROR;
     }
     static const sluice_field_spec pressure = SLUICE_SPEC_PRESSURE_DOC(SLUICE_READ, 0, "pressure");
-    if (s->forces && api->declare_field(host, &pressure) != SLUICE_OK) {
+    if (s->forces && api->fields->declare_field(host, &pressure) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
     s->first = calloc((size_t)s->sections + 1, sizeof *s->first);
     s->bed = malloc((size_t)s->sections * sizeof *s->bed);
     if (!s->first || !s->bed) {
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         sg_destroy(s);
         return SLUICE_ERROR;
     }
@@ -219,7 +219,7 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
         const double t = (double)sluice_gauge_list_value(&c->top, k, hi[1]);
         s->bed[k] = (sluice_real)b;
         if (!(t > b)) {
-            api->error(host, "section %u at x = %g m: top %g m is not above the bed %g m", k,
+            api->messages->error(host, "section %u at x = %g m: top %g m is not above the bed %g m", k,
                        (double)c->positions.values[k], t, b);
             sg_destroy(s);
             return SLUICE_ERROR;
@@ -227,7 +227,7 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
         const double intervals = ceil((t - b) / step * (1 - 1e-12));
         total += (size_t)(intervals < 1 ? 1 : intervals) + 1;
         if (!(intervals < MAX_SAMPLES) || total > MAX_SAMPLES) {
-            api->error(host, "the sample columns hold more than %u points (sample_spacing %g dx "
+            api->messages->error(host, "the sample columns hold more than %u points (sample_spacing %g dx "
                              "= %g m); lower top or raise sample_spacing",
                        MAX_SAMPLES, (double)c->sample_spacing, step);
             sg_destroy(s);
@@ -239,7 +239,7 @@ static int sg_create(const sluice_api *api, sluice_host *host, const void *confi
     s->sums = calloc(SUMS * total, sizeof *s->sums);
     s->row = calloc((size_t)s->columns * s->sections + 1, sizeof *s->row);
     if (!s->points || !s->sums || !s->row) {
-        api->error(host, "out of memory (%zu samples)", total);
+        api->messages->error(host, "out of memory (%zu samples)", total);
         sg_destroy(s);
         return SLUICE_ERROR;
     }
@@ -270,21 +270,21 @@ static int sg_bind(void *state, sluice_host *host)
         return SLUICE_ERROR;
     s->pressure.column = -1;
     if (s->forces) {
-        if (api->field(host, "pressure", &s->pressure) != SLUICE_OK)
+        if (api->fields->field(host, "pressure", &s->pressure) != SLUICE_OK)
             return SLUICE_ERROR;
         sluice_real p_ref = 0;
-        if (api->constant(host, "reference_pressure", &p_ref, 1) == 1)
+        if (api->fields->constant(host, "reference_pressure", &p_ref, 1) == 1)
             s->reference_pressure = (double)p_ref;
     }
     sluice_real g[3] = {0, 0, 0};
-    if (api->constant(host, "gravity", g, 3) < 2) {
-        api->error(host, "needs the constant 'gravity' for the Froude number: load the gravity "
+    if (api->fields->constant(host, "gravity", g, 3) < 2) {
+        api->messages->error(host, "needs the constant 'gravity' for the Froude number: load the gravity "
                          "plugin");
         return SLUICE_ERROR;
     }
     s->g = -(double)g[1];
     if (!(s->g > 0)) {
-        api->error(host, "gravity (%g, %g) m s^-2 has no downward (-y) component: no Froude "
+        api->messages->error(host, "gravity (%g, %g) m s^-2 has no downward (-y) component: no Froude "
                          "number",
                    (double)g[0], (double)g[1]);
         return SLUICE_ERROR;
@@ -298,7 +298,7 @@ static int sg_initialise(void *state, sluice_host *host)
     size_t size = 16 + 96 * (size_t)s->sections;
     char *header = malloc(size);
     if (!header) {
-        s->api->error(host, "out of memory");
+        s->api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     size_t used = (size_t)snprintf(header, size, "time");
@@ -308,7 +308,7 @@ static int sg_initialise(void *state, sluice_host *host)
         if (s->forces)
             used += (size_t)snprintf(header + used, size - used, ",M_x%u,P_x%u", k, k);
     }
-    s->table = s->api->table_open(host, s->file, header);
+    s->table = s->api->output->table_open(host, s->file, header);
     free(header);
     return s->table ? SLUICE_OK : SLUICE_ERROR;
 }
@@ -414,26 +414,26 @@ static int sg_after_step(void *state, sluice_host *host)
 {
     sg_state *s = state;
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     const sluice_index total = s->first[s->sections];
     /* with forces: the pressure of the current state (one evaluation, as
      * point_gauge), not of the step's last stage */
-    if (s->forces && api->evaluate(host) != SLUICE_OK)
+    if (s->forces && api->evaluation->evaluate(host, api->particles->view(host)->time, 0) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (api->point_pass(host, s->points, total, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+    if (api->evaluation->point_pass(host, s->points, total, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
                         section_sums, s) != SLUICE_OK)
         return SLUICE_ERROR;
     /* across ranks each rank summed its own particles: add the ranks' sums
      * (collective; the identity on one rank) before any division */
-    if (api->reduce(host, s->sums, (uint32_t)(SUMS * total), SLUICE_REDUCE_SUM) != SLUICE_OK)
+    if (api->ranks->reduce(host, s->sums, (uint32_t)(SUMS * total), SLUICE_REDUCE_SUM) != SLUICE_OK)
         return SLUICE_ERROR;
-    v = api->view(host);
+    v = api->particles->view(host);
     s->row[0] = v->time;
     for (sluice_index k = 0; k < s->sections; k++)
         measure(s, k, s->row + 1 + (size_t)s->columns * k);
-    if (api->table_row(s->table, s->row, s->columns * s->sections + 1) != SLUICE_OK)
+    if (api->output->table_row(s->table, s->row, s->columns * s->sections + 1) != SLUICE_OK)
         return SLUICE_ERROR;
     sluice_schedule_advance(&s->rows, api, host, v->time);
     return SLUICE_OK;

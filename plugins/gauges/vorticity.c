@@ -21,11 +21,11 @@
  *  - renormalise true: (grad^_i W_ij)_b = sum_c L_i,bc (r_ij F_ij)_c with L_i
  *    = M_i^-1 from the field kernel_correction (plugin kernel_correction):
  *    exact for every linear velocity field wherever L_i = M_i^-1 (also at the
- *    free surface); one evaluation (api->evaluate) before each computation
+ *    free surface); one evaluation (api->evaluation->evaluate) before each computation
  *    brings L to the current positions.
  *
  * Cost: nothing per step. The pair callback is on demand
- * (SLUICE_COMPONENT_ON_DEMAND): the after-step hook runs it (api->pair_pass)
+ * (SLUICE_COMPONENT_ON_DEMAND): the after-step hook runs it (api->evaluation->pair_pass)
  * at t = 0, interval, 2 interval, ... (the core ends steps on these times),
  * and in finish() on the final state when that was not computed yet (in a
  * failed run, when the final state has no valid neighbour list the
@@ -99,8 +99,8 @@ static int vort_create(const sluice_api *api, sluice_host *host, const void *con
         s->dims == 3 ? "vorticity curl v (x, y, z) of fluid particles at the last computation"
                      : "vorticity dv/dx - du/dy of fluid particles at the last computation"};
     const sluice_field_spec correction = SLUICE_SPEC_KERNEL_CORRECTION(s->dims, SLUICE_READ);
-    if (api->declare_field(host, &vorticity) != SLUICE_OK ||
-        (s->renormalise && api->declare_field(host, &correction) != SLUICE_OK)) {
+    if (api->fields->declare_field(host, &vorticity) != SLUICE_OK ||
+        (s->renormalise && api->fields->declare_field(host, &correction) != SLUICE_OK)) {
         free(s);
         return SLUICE_ERROR;
     }
@@ -117,20 +117,20 @@ static int vort_bind(void *state, sluice_host *host)
         {"vorticity", &s->vorticity}};
     if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (s->renormalise && api->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
+    if (s->renormalise && api->fields->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
         return SLUICE_ERROR;
     /* hooks run in scene order: the writer must come after this plugin */
-    const uint32_t count = api->plugin_count(host);
+    const uint32_t count = api->output->plugin_count(host);
     int64_t writer = -1;
     for (uint32_t k = 0; k < count; k++) {
         sluice_plugin_info info;
-        if (api->plugin(host, k, &info) != SLUICE_OK || !info.component)
+        if (api->output->plugin(host, k, &info) != SLUICE_OK || !info.component)
             continue;
         if (strcmp(info.component, "hdf5") == 0 && writer < 0)
             writer = k;
         if (strcmp(info.component, "vorticity") == 0) {
             if (writer >= 0) {
-                api->error(host, "is listed after the writer 'hdf5' in the scene's plugins; "
+                api->messages->error(host, "is listed after the writer 'hdf5' in the scene's plugins; "
                                  "after-step hooks run in scene order, so 'hdf5' would write "
                                  "the vorticity of the previous output time: list 'vorticity' "
                                  "before 'hdf5'");
@@ -242,11 +242,11 @@ static int compute(vort_state *s, sluice_host *host)
 {
     const sluice_api *api = s->api;
     /* L_i of the current positions (written during the evaluation) */
-    if (s->renormalise && api->evaluate(host) != SLUICE_OK)
+    if (s->renormalise && api->evaluation->evaluate(host, api->particles->view(host)->time, 0) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (api->pair_pass(host) != SLUICE_OK)
+    if (api->evaluation->pair_pass(host) != SLUICE_OK)
         return SLUICE_ERROR;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     s->computed = 1;
     s->computed_step = v->step;
     s->computed_time = v->time;
@@ -257,12 +257,12 @@ static int vort_after_step(void *state, sluice_host *host)
 {
     vort_state *s = state;
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     if (!sluice_schedule_due(&s->schedule, v->time))
         return SLUICE_OK;
     if (compute(s, host) != SLUICE_OK)
         return SLUICE_ERROR;
-    v = api->view(host);
+    v = api->particles->view(host);
     sluice_schedule_advance(&s->schedule, api, host, v->time);
     return SLUICE_OK;
 }
@@ -273,7 +273,7 @@ static int vort_finish(void *state, sluice_host *host, int status)
 {
     vort_state *s = state;
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     if (s->computed && s->computed_step == v->step && s->computed_time == v->time)
         return SLUICE_OK;
     if (status != SLUICE_FINISH_FAILED)
@@ -281,13 +281,13 @@ static int vort_finish(void *state, sluice_host *host, int status)
     /* a failed run: its state may have no valid neighbour list */
     if (compute(s, host) == SLUICE_OK)
         return SLUICE_OK;
-    v = api->view(host);
+    v = api->particles->view(host);
     for (uint32_t c = 0; c < s->components; c++) {
         sluice_real *omega = sluice_real_column(v, s->vorticity, c);
         for (sluice_index i = 0; i < v->count; i++)
             omega[i] = v->kind[i] == SLUICE_KIND_WALL ? 0 : (sluice_real)NAN;
     }
-    api->warning(host, "the final state of the failed run has no vorticity (nan)");
+    api->messages->warning(host, "the final state of the failed run has no vorticity (nan)");
     return SLUICE_OK;
 }
 

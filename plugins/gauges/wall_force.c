@@ -31,7 +31,7 @@
  * The gauge evaluates the current state first (as point_gauge), so the
  * pressure is the sampled state's, at t = 0 too. 2D only (3D walls are
  * triangles; not implemented: refused). Across MPI ranks each rank sums its
- * own particles, the gauge adds the ranks' sums (one api->reduce) before it
+ * own particles, the gauge adds the ranks' sums (one api->ranks->reduce) before it
  * divides; rank 0 writes the row. */
 #include <math.h>
 #include <stdio.h>
@@ -145,7 +145,7 @@ static int wf_create(const sluice_api *api, sluice_host *host, const void *confi
         sluice_util_constant(api, host, "spacing", &dx) != SLUICE_OK)
         return SLUICE_ERROR;
     if (dims != 2) {
-        api->error(host, "measures 2D walls only (3D walls are triangles: not implemented)");
+        api->messages->error(host, "measures 2D walls only (3D walls are triangles: not implemented)");
         return SLUICE_ERROR;
     }
     wf_state *s = sluice_util_state(api, host, sizeof *s);
@@ -162,7 +162,7 @@ static int wf_create(const sluice_api *api, sluice_host *host, const void *confi
                         c->box_max[1] != 0;
     if (has_box) {
         if (!(c->box_max[0] > c->box_min[0] && c->box_max[1] > c->box_min[1])) {
-            api->error(host, "box_max (%g, %g) m must exceed box_min (%g, %g) m in x and y "
+            api->messages->error(host, "box_max (%g, %g) m must exceed box_min (%g, %g) m in x and y "
                              "(give both, or neither for the whole walls)",
                        (double)c->box_max[0], (double)c->box_max[1], (double)c->box_min[0],
                        (double)c->box_min[1]);
@@ -180,7 +180,7 @@ static int wf_create(const sluice_api *api, sluice_host *host, const void *confi
     if (s->wall_text)
         memcpy(s->wall_text, list, strlen(list) + 1);
     if (!s->wall_text) {
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         free(s);
         return SLUICE_ERROR;
     }
@@ -191,13 +191,13 @@ static int wf_create(const sluice_api *api, sluice_host *host, const void *confi
         char *name = trim(next);
         if (*name) {
             if (s->wanted_count == MAX_WALLS) {
-                api->error(host, "'walls' lists more than %d names", MAX_WALLS);
+                api->messages->error(host, "'walls' lists more than %d names", MAX_WALLS);
                 wf_destroy(s);
                 return SLUICE_ERROR;
             }
             s->wanted[s->wanted_count++] = name;
         } else if (comma || s->wanted_count > 0) {
-            api->error(host, "'walls' has an empty name: list names separated by commas");
+            api->messages->error(host, "'walls' has an empty name: list names separated by commas");
             wf_destroy(s);
             return SLUICE_ERROR;
         }
@@ -222,7 +222,7 @@ static int wf_bind(void *state, sluice_host *host)
     if (sluice_phase_bind(api, host, s->phase_filter, &s->phase) != SLUICE_OK)
         return SLUICE_ERROR;
     sluice_real p_ref = 0;
-    if (api->constant(host, "reference_pressure", &p_ref, 1) == 1)
+    if (api->fields->constant(host, "reference_pressure", &p_ref, 1) == 1)
         s->reference_pressure = (double)p_ref;
     return SLUICE_OK;
 }
@@ -239,17 +239,17 @@ static int wf_initialise(void *state, sluice_host *host)
     wf_state *s = state;
     const sluice_api *api = s->api;
     sluice_real g[3] = {0, 0, 0}, rho0 = 1000;
-    api->constant(host, "gravity", g, 3);
+    api->fields->constant(host, "gravity", g, 3);
     if (sluice_util_constant(api, host, "rest_density", &rho0) != SLUICE_OK)
         return SLUICE_ERROR;
-    const uint32_t walls = api->wall_count(host);
+    const uint32_t walls = api->walls->wall_count(host);
     int found[MAX_WALLS] = {0};
     size_t total = 0;
     for (int pass = 0; pass < 2; pass++) {
         size_t n = 0;
         s->wall_count = 0;
         for (uint32_t w = 0; w < walls; w++) {
-            const sluice_wall *wall = api->wall(host, w);
+            const sluice_wall *wall = api->walls->wall(host, w);
             if (!wall)
                 continue;
             const char *name = wall->name ? wall->name : "";
@@ -262,7 +262,7 @@ static int wf_initialise(void *state, sluice_host *host)
                 found[k] = 1;
             }
             if (s->wall_count == MAX_WALLS) {
-                api->error(host, "measures at most %d walls: name the ones wanted in 'walls'",
+                api->messages->error(host, "measures at most %d walls: name the ones wanted in 'walls'",
                            MAX_WALLS);
                 return SLUICE_ERROR;
             }
@@ -289,7 +289,7 @@ static int wf_initialise(void *state, sluice_host *host)
                     continue;
                 const double pieces_real = ceil(length / s->spacing * (1 - 1e-12));
                 if (!(pieces_real < MAX_SAMPLES)) {
-                    api->error(host, "wall '%s' would need more than %u sample points",
+                    api->messages->error(host, "wall '%s' would need more than %u sample points",
                                s->column_name[slot], MAX_SAMPLES);
                     return SLUICE_ERROR;
                 }
@@ -316,7 +316,7 @@ static int wf_initialise(void *state, sluice_host *host)
                         s->owner[n] = slot;
                     }
                     if (++n > MAX_SAMPLES) {
-                        api->error(host, "more than %u sample points: raise sample_spacing or "
+                        api->messages->error(host, "more than %u sample points: raise sample_spacing or "
                                          "measure fewer walls",
                                    MAX_SAMPLES);
                         return SLUICE_ERROR;
@@ -327,16 +327,16 @@ static int wf_initialise(void *state, sluice_host *host)
         if (pass == 0) {
             for (uint32_t k = 0; k < s->wanted_count; k++)
                 if (!found[k]) {
-                    api->error(host, "no wall is named '%s' (geometry.walls[].name)",
+                    api->messages->error(host, "no wall is named '%s' (geometry.walls[].name)",
                                s->wanted[k]);
                     return SLUICE_ERROR;
                 }
             if (s->wall_count == 0) {
-                api->error(host, "the scene has no walls to measure");
+                api->messages->error(host, "the scene has no walls to measure");
                 return SLUICE_ERROR;
             }
             if (n == 0) {
-                api->error(host, "no part of the measured walls lies in the box [%g, %g] x "
+                api->messages->error(host, "no part of the measured walls lies in the box [%g, %g] x "
                                  "[%g, %g] m",
                            s->box_min[0], s->box_max[0], s->box_min[1], s->box_max[1]);
                 return SLUICE_ERROR;
@@ -348,7 +348,7 @@ static int wf_initialise(void *state, sluice_host *host)
             s->sums = calloc(2 * total, sizeof *s->sums);
             s->row = calloc(3 * (size_t)s->wall_count + 1, sizeof *s->row);
             if (!s->points || !s->geometry || !s->owner || !s->sums || !s->row) {
-                api->error(host, "out of memory (%zu sample points)", total);
+                api->messages->error(host, "out of memory (%zu sample points)", total);
                 return SLUICE_ERROR;
             }
         }
@@ -357,14 +357,14 @@ static int wf_initialise(void *state, sluice_host *host)
     size_t size = 16 + 3 * (80 + 8) * (size_t)s->wall_count;
     char *header = malloc(size);
     if (!header) {
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     size_t used = (size_t)snprintf(header, size, "time");
     for (uint32_t k = 0; k < s->wall_count; k++)
         used += (size_t)snprintf(header + used, size - used, ",Fx_%s,Fy_%s,wet_%s",
                                  s->column_name[k], s->column_name[k], s->column_name[k]);
-    s->table = api->table_open(host, s->file, header);
+    s->table = api->output->table_open(host, s->file, header);
     free(header);
     return s->table ? SLUICE_OK : SLUICE_ERROR;
 }
@@ -400,20 +400,20 @@ static int wf_after_step(void *state, sluice_host *host)
 {
     wf_state *s = state;
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     /* the pressure of the current state */
-    if (api->evaluate(host) != SLUICE_OK)
+    if (api->evaluation->evaluate(host, api->particles->view(host)->time, 0) != SLUICE_OK)
         return SLUICE_ERROR;
     memset(s->sums, 0, 2 * (size_t)s->count * sizeof *s->sums);
-    if (api->point_pass(host, s->points, s->count, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+    if (api->evaluation->point_pass(host, s->points, s->count, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
                         wall_sums, s) != SLUICE_OK)
         return SLUICE_ERROR;
     /* across ranks: add the ranks' sums before any division (collective) */
-    if (api->reduce(host, s->sums, (uint32_t)(2 * s->count), SLUICE_REDUCE_SUM) != SLUICE_OK)
+    if (api->ranks->reduce(host, s->sums, (uint32_t)(2 * s->count), SLUICE_REDUCE_SUM) != SLUICE_OK)
         return SLUICE_ERROR;
-    v = api->view(host);
+    v = api->particles->view(host);
     memset(s->row, 0, (3 * (size_t)s->wall_count + 1) * sizeof *s->row);
     s->row[0] = v->time;
     for (sluice_index i = 0; i < s->count; i++) {
@@ -427,7 +427,7 @@ static int wf_after_step(void *state, sluice_host *host)
         out[1] += p_wall * q[1];
         out[2] += q[2];
     }
-    if (api->table_row(s->table, s->row, 3 * s->wall_count + 1) != SLUICE_OK)
+    if (api->output->table_row(s->table, s->row, 3 * s->wall_count + 1) != SLUICE_OK)
         return SLUICE_ERROR;
     sluice_schedule_advance(&s->rows, api, host, v->time);
     return SLUICE_OK;

@@ -1,6 +1,6 @@
 /* Wall monitor: how the fluid sits against the walls, for comparing wall
  * schemes. At every `interval`, for each fluid particle, the signed distance
- * d to the nearest wall of the scene (api->wall_nearest; d < 0 behind a wall,
+ * d to the nearest wall of the scene (api->walls->wall_nearest; d < 0 behind a wall,
  * ignoring points past an open end of a polyline) gives:
  *   crossed        fluid particles behind a wall now;
  *   crossed_total  distinct particles (ids) seen behind a wall at any sample
@@ -19,7 +19,7 @@
  * Across MPI ranks (ABI 1.8, SLUICE_COMPONENT_ACROSS_RANKS): each rank
  * measures its own fluid particles. The gauge takes the smallest gap over the
  * ranks before it selects the first layer (which depends on it), then adds
- * the ranks' counts and layer sums; two api->reduce calls per sample. The
+ * the ranks' counts and layer sums; two api->ranks->reduce calls per sample. The
  * ids newly seen behind a wall are gathered from every rank in the same
  * reduction (each rank fills its own slots of a zeroed array, id + 1 as an
  * exact double, and the sum is the concatenation), so every rank keeps the
@@ -54,7 +54,7 @@ typedef struct monitor_state {
     uint8_t *behind;
     sluice_id *fresh; /* this sample's ids behind a wall not yet in crossed_ids */
     sluice_index capacity;
-    /* across ranks (api->ranks, at the first sample): this rank and how many */
+    /* across ranks (api->ranks->ranks, at the first sample): this rank and how many */
     int ranks_known;
     uint32_t rank, rank_count;
     double *gather; /* the reduction's array */
@@ -109,11 +109,11 @@ static void monitor_destroy(void *state)
 static int monitor_initialise(void *state, sluice_host *host)
 {
     monitor_state *s = state;
-    if (s->api->wall_count(host) == 0) {
-        s->api->error(host, "the scene has no walls to monitor");
+    if (s->api->walls->wall_count(host) == 0) {
+        s->api->messages->error(host, "the scene has no walls to monitor");
         return SLUICE_ERROR;
     }
-    s->table = s->api->table_open(host, s->file,
+    s->table = s->api->output->table_open(host, s->file,
                                   "time,crossed,crossed_total,gap_min,gap_layer,near_wall");
     return s->table ? SLUICE_OK : SLUICE_ERROR;
 }
@@ -135,7 +135,7 @@ static void distances(void *context, const sluice_view *v, sluice_index begin, s
         sluice_real p[3] = {v->position[0][i], v->position[1][i],
                             v->dimensions == 3 ? v->position[2][i] : 0};
         sluice_wall_point w;
-        if (s->api->wall_nearest(job->host, p, -1, &w) != SLUICE_OK)
+        if (s->api->walls->wall_nearest(job->host, p, -1, &w) != SLUICE_OK)
             continue;
         /* past an open end a particle is on neither side of the wall: its
          * gap is its distance from the end */
@@ -179,18 +179,18 @@ static int monitor_after_step(void *state, sluice_host *host)
 {
     monitor_state *s = state;
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     if (!sluice_schedule_due(&s->rows, v->time))
         return SLUICE_OK;
     if (!s->ranks_known) {
         /* collective: every rank samples first at the same step */
         sluice_ranks ranks;
-        if (api->ranks(host, &ranks) != SLUICE_OK)
+        if (api->ranks->ranks(host, &ranks) != SLUICE_OK)
             return SLUICE_ERROR;
         s->rank = (uint32_t)ranks.rank;
         s->rank_count = ranks.count > 0 ? (uint32_t)ranks.count : 1;
         s->ranks_known = 1;
-        v = api->view(host);
+        v = api->particles->view(host);
     }
     if (v->count > s->capacity) {
         double *d = realloc(s->distance, (size_t)v->count * sizeof *d);
@@ -203,13 +203,13 @@ static int monitor_after_step(void *state, sluice_host *host)
         if (f)
             s->fresh = f;
         if (!d || !b || !f) {
-            api->error(host, "out of memory");
+            api->messages->error(host, "out of memory");
             return SLUICE_ERROR;
         }
         s->capacity = v->count;
     }
     distance_job job = {s, host};
-    api->parallel_for(host, v->count, distances, &job);
+    api->particles->parallel_for(host, v->count, distances, &job);
     double gap_min = INFINITY;
     sluice_index crossed = 0, near = 0, first_bad = v->count, fresh = 0;
     for (sluice_index i = 0; i < v->count; i++) {
@@ -231,7 +231,7 @@ static int monitor_after_step(void *state, sluice_host *host)
      * gap, which the first layer below depends on, and the largest number of
      * new ids of a rank (as its negative), which sizes the gathering */
     double smallest[2] = {gap_min, -(double)fresh};
-    if (api->reduce(host, smallest, 2, SLUICE_REDUCE_MIN) != SLUICE_OK)
+    if (api->ranks->reduce(host, smallest, 2, SLUICE_REDUCE_MIN) != SLUICE_OK)
         return SLUICE_ERROR;
     gap_min = smallest[0];
     const size_t slots = (size_t)-smallest[1];
@@ -252,13 +252,13 @@ static int monitor_after_step(void *state, sluice_host *host)
      * over the ranks holds every rank's ids exactly */
     const size_t length = 4 + (size_t)s->rank_count * slots;
     if (length > UINT32_MAX) {
-        api->error(host, "%zu particles newly behind walls on a rank: too many to gather", slots);
+        api->messages->error(host, "%zu particles newly behind walls on a rank: too many to gather", slots);
         return SLUICE_ERROR;
     }
     if (length > s->gather_capacity) {
         double *grown = realloc(s->gather, length * sizeof *grown);
         if (!grown) {
-            api->error(host, "out of memory");
+            api->messages->error(host, "out of memory");
             return SLUICE_ERROR;
         }
         s->gather = grown;
@@ -272,17 +272,17 @@ static int monitor_after_step(void *state, sluice_host *host)
     gather[3] = (double)crossed;
     for (sluice_index k = 0; k < fresh; k++) {
         if (!((double)s->fresh[k] < ID_LIMIT)) {
-            api->error(host, "particle id %llu is too large to gather across ranks",
+            api->messages->error(host, "particle id %llu is too large to gather across ranks",
                        (unsigned long long)s->fresh[k]);
             return SLUICE_ERROR;
         }
         gather[4 + (size_t)s->rank * slots + k] = (double)s->fresh[k] + 1;
     }
-    if (api->reduce(host, gather, (uint32_t)length, SLUICE_REDUCE_SUM) != SLUICE_OK)
+    if (api->ranks->reduce(host, gather, (uint32_t)length, SLUICE_REDUCE_SUM) != SLUICE_OK)
         return SLUICE_ERROR;
     for (size_t k = 4; k < length; k++)
         if (gather[k] > 0 && remember(s, (sluice_id)gather[k] - 1) != 0) {
-            api->error(host, "out of memory");
+            api->messages->error(host, "out of memory");
             return SLUICE_ERROR;
         }
     layer_sum = gather[0];
@@ -293,12 +293,12 @@ static int monitor_after_step(void *state, sluice_host *host)
                      isfinite(gap_min) ? gap_min : NAN,
                      layer_count > 0 ? layer_sum / layer_count : NAN,
                      near_count};
-    if (api->table_row(s->table, row, 6) != SLUICE_OK)
+    if (api->output->table_row(s->table, row, 6) != SLUICE_OK)
         return SLUICE_ERROR;
     if (s->stop && crossed_count > 0) {
         /* every rank stops; those holding a particle behind a wall name one */
         if (crossed == 0) {
-            api->error(host,
+            api->messages->error(host,
                        "step %lld, t = %.9g s: %.0f fluid particles are behind walls, on other "
                        "ranks (whose messages name one)",
                        (long long)v->step, v->time, crossed_count);
@@ -308,9 +308,9 @@ static int monitor_after_step(void *state, sluice_host *host)
         sluice_real p[3] = {v->position[0][i], v->position[1][i],
                             v->dimensions == 3 ? v->position[2][i] : 0};
         sluice_wall_point w;
-        api->wall_nearest(host, p, -1, &w);
-        const sluice_wall *wall = api->wall(host, w.wall);
-        api->error(host,
+        api->walls->wall_nearest(host, p, -1, &w);
+        const sluice_wall *wall = api->walls->wall(host, w.wall);
+        api->messages->error(host,
                    "step %lld, t = %.9g s: fluid particle id %llu at (%g, %g, %g) m is %.3g m "
                    "behind wall %u%s%s%s (scheme %s); %.0f fluid particles are behind walls",
                    (long long)v->step, v->time, (unsigned long long)v->id[i], (double)p[0],
@@ -329,28 +329,28 @@ static int monitor_save(void *state, sluice_host *host)
     const monitor_state *s = state;
     if (sluice_schedule_save(&s->rows, s->api, host, "rows_written") != SLUICE_OK)
         return SLUICE_ERROR;
-    return s->api->state_write(host, "crossed_ids", SLUICE_STATE_UINT64, s->crossed_count,
+    return s->api->state->state_write(host, "crossed_ids", SLUICE_STATE_UINT64, s->crossed_count,
                                s->crossed_ids);
 }
 
 static int monitor_load(void *state, sluice_host *host)
 {
     monitor_state *s = state;
-    int64_t length = s->api->state_length(host, "crossed_ids");
+    int64_t length = s->api->state->state_length(host, "crossed_ids");
     if (sluice_schedule_load(&s->rows, s->api, host, "rows_written") != SLUICE_OK ||
         length < 0)
         return SLUICE_ERROR;
     if ((size_t)length > s->crossed_capacity) {
         sluice_id *ids = realloc(s->crossed_ids, (size_t)length * sizeof *ids);
         if (!ids) {
-            s->api->error(host, "out of memory");
+            s->api->messages->error(host, "out of memory");
             return SLUICE_ERROR;
         }
         s->crossed_ids = ids;
         s->crossed_capacity = (size_t)length;
     }
     s->crossed_count = (size_t)length;
-    return s->api->state_read(host, "crossed_ids", SLUICE_STATE_UINT64, (uint64_t)length,
+    return s->api->state->state_read(host, "crossed_ids", SLUICE_STATE_UINT64, (uint64_t)length,
                               s->crossed_ids);
 }
 

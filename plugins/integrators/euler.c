@@ -47,6 +47,9 @@ static const sluice_field_spec fields[] = {
     SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_WRITE),
 };
 
+static int euler_integrand(void *state, sluice_host *host);
+static void euler_destroy(void *state);
+
 static int euler_create(const sluice_api *api, sluice_host *host, const void *config,
                         void **state)
 {
@@ -56,11 +59,17 @@ static int euler_create(const sluice_api *api, sluice_host *host, const void *co
         return SLUICE_ERROR;
     s->api = api;
     s->form = c->form;
+    /* integrators are created after every other component: the integrated
+     * fields are known, and the stored copies are declared here */
+    if (euler_integrand(s, host) != SLUICE_OK) {
+        euler_destroy(s);
+        return SLUICE_ERROR;
+    }
     *state = s;
     return SLUICE_OK;
 }
 
-static int euler_bind(void *state, sluice_host *host)
+static int euler_integrand(void *state, sluice_host *host)
 {
     euler_state *s = state;
     return sluice_integrand_bind(&s->in, s->api, host, NULL);
@@ -120,13 +129,13 @@ static int euler_advance(void *state, sluice_host *host)
 {
     euler_state *s = state;
     const sluice_api *api = s->api;
-    if (api->evaluate(host) != SLUICE_OK)
+    if (api->evaluation->evaluate(host, api->particles->view(host)->time, 0) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->dt = api->time_step(host);
+    s->dt = api->evaluation->time_step(host);
     if (!(s->dt > 0))
         return SLUICE_OK; /* the core reports the collapsed step */
-    const sluice_view *v = api->view(host);
-    api->parallel_for(host, v->count,
+    const sluice_view *v = api->particles->view(host);
+    api->particles->parallel_for(host, v->count,
                       s->form == FORM_EXPLICIT ? step_explicit : step_semi_implicit, s);
     return SLUICE_OK;
 }
@@ -145,7 +154,6 @@ static const sluice_component components[] = {{
     .field_count = SLUICE_COUNT(fields),
     .create = euler_create,
     .destroy = euler_destroy,
-    .bind = euler_bind,
     .advance = euler_advance,
 }};
 

@@ -75,6 +75,9 @@ static const sluice_field_spec fields[] = {
      "position at the start of the step (predictor-corrector integrator)"},
 };
 
+static int pc_integrand(void *state, sluice_host *host);
+static void pc_destroy(void *state);
+
 static int pc_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
 {
     const pc_config *c = config;
@@ -83,14 +86,20 @@ static int pc_create(const sluice_api *api, sluice_host *host, const void *confi
         return SLUICE_ERROR;
     s->api = api;
     s->mode = c->mode;
+    /* integrators are created after every other component: the integrated
+     * fields are known, and the stored copies are declared here */
+    if (pc_integrand(s, host) != SLUICE_OK) {
+        pc_destroy(s);
+        return SLUICE_ERROR;
+    }
     *state = s;
     return SLUICE_OK;
 }
 
-static int pc_bind(void *state, sluice_host *host)
+static int pc_integrand(void *state, sluice_host *host)
 {
     pc_state *s = state;
-    if (s->api->field(host, "position_previous", &s->position_start) != SLUICE_OK)
+    if (s->api->fields->field(host, "position_previous", &s->position_start) != SLUICE_OK)
         return SLUICE_ERROR;
     return sluice_integrand_bind(&s->in, s->api, host,
                                  "value at the start of the step (predictor-corrector)");
@@ -161,18 +170,19 @@ static int pc_advance(void *state, sluice_host *host)
 {
     pc_state *s = state;
     const sluice_api *api = s->api;
+    const double t = api->particles->view(host)->time;
     /* pec reuses the rates of the previous step's (mid-step) evaluation */
-    if ((s->mode == MODE_EPEC || !s->rates_ready) && api->evaluate(host) != SLUICE_OK)
+    if ((s->mode == MODE_EPEC || !s->rates_ready) && api->evaluation->evaluate(host, t, 0) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->dt = api->time_step(host);
+    s->dt = api->evaluation->time_step(host);
     if (!(s->dt > 0))
         return SLUICE_OK; /* the core reports the collapsed step */
-    const sluice_view *v = api->view(host);
-    api->parallel_for(host, v->count, predictor, s);
-    if (api->evaluate(host) != SLUICE_OK)
+    const sluice_view *v = api->particles->view(host);
+    api->particles->parallel_for(host, v->count, predictor, s);
+    if (api->evaluation->evaluate(host, t + 0.5 * s->dt, 1) != SLUICE_OK)
         return SLUICE_ERROR;
-    v = api->view(host);
-    api->parallel_for(host, v->count, corrector, s);
+    v = api->particles->view(host);
+    api->particles->parallel_for(host, v->count, corrector, s);
     s->rates_ready = 1;
     return SLUICE_OK;
 }
@@ -189,7 +199,7 @@ static int pc_save(void *state, sluice_host *host)
 static int pc_load(void *state, sluice_host *host)
 {
     pc_state *s = state;
-    if (s->api->state_length(host, "rates_ready") < 0) {
+    if (s->api->state->state_length(host, "rates_ready") < 0) {
         s->rates_ready = 0; /* a checkpoint of predictor_corrector 1.0: evaluate first */
         return SLUICE_OK;
     }
@@ -210,7 +220,6 @@ static const sluice_component components[] = {{
     .field_count = SLUICE_COUNT(fields),
     .create = pc_create,
     .destroy = pc_destroy,
-    .bind = pc_bind,
     .advance = pc_advance,
     .save_state = pc_save,
     .load_state = pc_load,

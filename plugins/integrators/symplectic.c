@@ -19,6 +19,9 @@ static const sluice_field_spec fields[] = {
     SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_WRITE),
 };
 
+static int symplectic_integrand(void *state, sluice_host *host);
+static void symplectic_destroy(void *state);
+
 static int symplectic_create(const sluice_api *api, sluice_host *host, const void *config,
                              void **state)
 {
@@ -27,11 +30,17 @@ static int symplectic_create(const sluice_api *api, sluice_host *host, const voi
     if (!s)
         return SLUICE_ERROR;
     s->api = api;
+    /* integrators are created after every other component: the integrated
+     * fields are known, and the stored copies are declared here */
+    if (symplectic_integrand(s, host) != SLUICE_OK) {
+        symplectic_destroy(s);
+        return SLUICE_ERROR;
+    }
     *state = s;
     return SLUICE_OK;
 }
 
-static int symplectic_bind(void *state, sluice_host *host)
+static int symplectic_integrand(void *state, sluice_host *host)
 {
     symplectic_state *s = state;
     return sluice_integrand_bind(&s->in, s->api, host,
@@ -95,17 +104,18 @@ static int symplectic_advance(void *state, sluice_host *host)
 {
     symplectic_state *s = state;
     const sluice_api *api = s->api;
-    if (api->evaluate(host) != SLUICE_OK)
+    const double t = api->particles->view(host)->time;
+    if (api->evaluation->evaluate(host, t, 0) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->dt = api->time_step(host);
+    s->dt = api->evaluation->time_step(host);
     if (!(s->dt > 0))
         return SLUICE_OK; /* the core reports the collapsed step */
-    const sluice_view *v = api->view(host);
-    api->parallel_for(host, v->count, predictor, s);
-    if (api->evaluate(host) != SLUICE_OK)
+    const sluice_view *v = api->particles->view(host);
+    api->particles->parallel_for(host, v->count, predictor, s);
+    if (api->evaluation->evaluate(host, t + 0.5 * s->dt, 1) != SLUICE_OK)
         return SLUICE_ERROR;
-    v = api->view(host);
-    api->parallel_for(host, v->count, corrector, s);
+    v = api->particles->view(host);
+    api->particles->parallel_for(host, v->count, corrector, s);
     return SLUICE_OK;
 }
 
@@ -118,7 +128,6 @@ static const sluice_component components[] = {{
     .field_count = SLUICE_COUNT(fields),
     .create = symplectic_create,
     .destroy = symplectic_destroy,
-    .bind = symplectic_bind,
     .advance = symplectic_advance,
 }};
 

@@ -63,6 +63,9 @@ static const sluice_field_spec fields[] = {
     SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_WRITE),
 };
 
+static int verlet_integrand(void *state, sluice_host *host);
+static void verlet_destroy(void *state);
+
 static int verlet_create(const sluice_api *api, sluice_host *host, const void *config,
                          void **state)
 {
@@ -72,11 +75,17 @@ static int verlet_create(const sluice_api *api, sluice_host *host, const void *c
         return SLUICE_ERROR;
     s->api = api;
     s->euler_every = c->euler_every;
+    /* integrators are created after every other component: the integrated
+     * fields are known, and the stored copies are declared here */
+    if (verlet_integrand(s, host) != SLUICE_OK) {
+        verlet_destroy(s);
+        return SLUICE_ERROR;
+    }
     *state = s;
     return SLUICE_OK;
 }
 
-static int verlet_bind(void *state, sluice_host *host)
+static int verlet_integrand(void *state, sluice_host *host)
 {
     verlet_state *s = state;
     return sluice_integrand_bind(&s->in, s->api, host, "value one step back (Verlet integrator)");
@@ -145,14 +154,14 @@ static int verlet_advance(void *state, sluice_host *host)
 {
     verlet_state *s = state;
     const sluice_api *api = s->api;
-    if (api->evaluate(host) != SLUICE_OK)
+    if (api->evaluation->evaluate(host, api->particles->view(host)->time, 0) != SLUICE_OK)
         return SLUICE_ERROR;
-    s->dt = api->time_step(host);
+    s->dt = api->evaluation->time_step(host);
     if (!(s->dt > 0))
         return SLUICE_OK; /* the core reports the collapsed step */
     s->euler = s->steps % s->euler_every == 0;
-    const sluice_view *v = api->view(host);
-    api->parallel_for(host, v->count, step, s);
+    const sluice_view *v = api->particles->view(host);
+    api->particles->parallel_for(host, v->count, step, s);
     s->dt_previous = s->dt;
     s->steps++;
     return SLUICE_OK;
@@ -191,7 +200,6 @@ static const sluice_component components[] = {{
     .field_count = SLUICE_COUNT(fields),
     .create = verlet_create,
     .destroy = verlet_destroy,
-    .bind = verlet_bind,
     .advance = verlet_advance,
     .save_state = verlet_save,
     .load_state = verlet_load,

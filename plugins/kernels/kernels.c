@@ -29,7 +29,7 @@ static int kernel_create(const sluice_api *api, sluice_host *host, double n2, do
     s->normalisation = dims == 3 ? (sluice_real)(n3 / (h * h * h)) : (sluice_real)(n2 / (h * h));
     s->gradient_normalisation = s->normalisation / (h * h);
     sluice_real support = 2;
-    if (api->publish_constant(host, "kernel_support", &support, 1, "1") != SLUICE_OK) {
+    if (api->fields->publish_constant(host, "kernel_support", &support, 1, "1") != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }

@@ -88,9 +88,9 @@
  * Across MPI ranks (1.2.0, SLUICE_COMPONENT_ACROSS_RANKS): each rank moves,
  * converts and removes its own particles; every step the boundary sums its
  * ranks' mass and momentum through the plane and its open particles
- * (api->reduce), so its sums, its table and its checkpoint state are alike on
+ * (api->ranks->reduce), so its sums, its table and its checkpoint state are alike on
  * every rank; the inlet's new column is added by the rank that owns its place
- * (api->owns); the vent sums the air's pressure over the ranks before it
+ * (api->ranks->owns); the vent sums the air's pressure over the ranks before it
  * decides to let air out. */
 #include <math.h>
 #include <stdio.h>
@@ -325,60 +325,60 @@ static int boundary_create(const sluice_api *api, sluice_host *host, const void 
     if (inlet) {
         const int has_velocity = c->velocity > 0, has_discharge = c->discharge > 0;
         if (has_velocity == has_discharge) {
-            api->error(host, "give exactly one of 'velocity' (V1, m/s) and 'discharge' (q, m^2/s)");
+            api->messages->error(host, "give exactly one of 'velocity' (V1, m/s) and 'discharge' (q, m^2/s)");
             goto fail;
         }
         s->velocity = has_velocity ? c->velocity : c->discharge / c->depth;
         if (s->dims == 3 && !(c->span[1] > c->span[0])) {
-            api->error(host, "a 3D inlet needs 'span: [y_min, y_max]' with y_max > y_min");
+            api->messages->error(host, "a 3D inlet needs 'span: [y_min, y_max]' with y_max > y_min");
             goto fail;
         }
         s->air_depth = c->air_depth;
         s->submergence = c->submergence;
         s->backflow = c->backflow;
         if (s->submergence > 0 && s->air_depth > 0) {
-            api->error(host, "give submergence (water above a gated inflow) or air_depth (air "
+            api->messages->error(host, "give submergence (water above a gated inflow) or air_depth (air "
                              "above a free inflow), not both");
             goto fail;
         }
         s->turbulence_k = 1.5 * pow(c->turbulence_intensity * s->velocity, 2);
         s->mixing_length = c->mixing_length_factor * s->depth;
         sluice_real x = c->position;
-        if (api->publish_constant(host, "inlet_position", &x, 1, "m") != SLUICE_OK)
+        if (api->fields->publish_constant(host, "inlet_position", &x, 1, "m") != SLUICE_OK)
             goto fail;
     } else {
         s->velocity = c->velocity;
         s->phase_filter = c->phase;
         sluice_real x = c->position;
-        if (api->publish_constant(host, "outlet_position", &x, 1, "m") != SLUICE_OK)
+        if (api->fields->publish_constant(host, "outlet_position", &x, 1, "m") != SLUICE_OK)
             goto fail;
         /* a filter reads the phase: a scene without two_phase is refused by
          * the core (the field 'phase' is computed by no loaded plugin) */
         if (sluice_phase_declare(api, host, s->phase_filter) != SLUICE_OK)
             goto fail;
         if (s->form == OUTLET_BUFFER && !(c->depth > 0)) {
-            api->error(host, "form 'buffer' needs the tailwater 'depth' (yt, m) > 0");
+            api->messages->error(host, "form 'buffer' needs the tailwater 'depth' (yt, m) > 0");
             goto fail;
         }
         if (s->form == OUTLET_BUFFER && s->dims == 3 && !(c->span[1] > c->span[0])) {
-            api->error(host, "a 3D buffer outlet needs 'span: [y_min, y_max]' with y_max > y_min");
+            api->messages->error(host, "a 3D buffer outlet needs 'span: [y_min, y_max]' with y_max > y_min");
             goto fail;
         }
         if (c->tailwater == TAILWATER_CONTROLLED) {
             if (s->form != OUTLET_BUFFER) {
-                api->error(host, "tailwater: controlled needs form: buffer (the layer whose "
+                api->messages->error(host, "tailwater: controlled needs form: buffer (the layer whose "
                                  "velocity is adjusted)");
                 goto fail;
             }
             if (!(c->control_position < c->position)) {
-                api->error(host,
+                api->messages->error(host,
                            "control_position x = %g m must lie upstream of the outlet plane "
                            "(position x = %g m)",
                            (double)c->control_position, (double)c->position);
                 goto fail;
             }
             if (!(c->velocity > 0)) {
-                api->error(host, "tailwater: controlled starts from the tailwater velocity Vt: "
+                api->messages->error(host, "tailwater: controlled starts from the tailwater velocity Vt: "
                                  "give 'velocity' > 0");
                 goto fail;
             }
@@ -427,7 +427,7 @@ static int hydrostatic_density(boundary_state *s, sluice_host *host, sluice_inde
     for (sluice_index k = 0; k < n; k++) {
         sluice_real p = (sluice_real)(surface + s->rho0 * s->g * fmax(depth_below[k], 0.0));
         sluice_real rho;
-        if (s->api->density_from_pressure(host, 1, &p, &rho) != SLUICE_OK)
+        if (s->api->evaluation->density_from_pressure(host, 1, &p, &rho) != SLUICE_OK)
             return SLUICE_ERROR;
         density[k] = rho;
     }
@@ -451,7 +451,7 @@ static int bind_phase(boundary_state *s, sluice_host *host, const char *needs_ai
     if (!s->has_phase)
         return SLUICE_OK;
     if (phase.type != SLUICE_TYPE_UINT8 || phase.components != 1) {
-        api->error(host, "the field 'phase' must be uint8 with one component (0 water, 1 air)");
+        api->messages->error(host, "the field 'phase' must be uint8 with one component (0 water, 1 air)");
         return SLUICE_ERROR;
     }
     /* the inlet writes it on the particles it creates, between steps; the
@@ -460,18 +460,18 @@ static int bind_phase(boundary_state *s, sluice_host *host, const char *needs_ai
         static const sluice_field_spec spec = {
             "phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_READ, 0, NULL, 0,
             "phase of a fluid particle: 0 water, 1 air (set on the inflow particles)"};
-        if (api->declare_field(host, &spec) != SLUICE_OK)
+        if (api->fields->declare_field(host, &spec) != SLUICE_OK)
             return SLUICE_ERROR;
     }
-    if (api->field(host, "phase", &s->phase_field) != SLUICE_OK)
+    if (api->fields->field(host, "phase", &s->phase_field) != SLUICE_OK)
         return SLUICE_ERROR;
     if (!needs_air)
         return SLUICE_OK;
     sluice_real rho_a, c_a, gamma_a;
-    if (api->constant(host, "air_rest_density", &rho_a, 1) < 1 ||
-        api->constant(host, "air_speed_of_sound", &c_a, 1) < 1 ||
-        api->constant(host, "air_gamma", &gamma_a, 1) < 1) {
-        api->error(host, "%s needs the air's equation of state: the constants "
+    if (api->fields->constant(host, "air_rest_density", &rho_a, 1) < 1 ||
+        api->fields->constant(host, "air_speed_of_sound", &c_a, 1) < 1 ||
+        api->fields->constant(host, "air_gamma", &gamma_a, 1) < 1) {
+        api->messages->error(host, "%s needs the air's equation of state: the constants "
                          "'air_rest_density', 'air_speed_of_sound' and 'air_gamma' of two_phase",
                    needs_air);
         return SLUICE_ERROR;
@@ -505,20 +505,20 @@ static int boundary_bind(void *state, sluice_host *host)
         return SLUICE_ERROR;
     if (!(s->width > 0))
         s->width = ceil((double)(support_ratio * h) / s->dx - 1e-9) * s->dx;
-    if (api->constant(host, "gravity", vec, 3) == 0) {
-        api->error(host, "needs gravity (the hydrostatic state of its open particles): load "
+    if (api->fields->constant(host, "gravity", vec, 3) == 0) {
+        api->messages->error(host, "needs gravity (the hydrostatic state of its open particles): load "
                          "`gravity`");
         return SLUICE_ERROR;
     }
     s->g = fabs((double)vec[s->vertical]);
     s->p_ref = 0;
-    if (api->constant(host, "reference_pressure", &value, 1) == 1)
+    if (api->fields->constant(host, "reference_pressure", &value, 1) == 1)
         s->p_ref = value;
-    if (api->density_from_pressure(host, 0, NULL, NULL) != SLUICE_OK)
+    if (api->evaluation->density_from_pressure(host, 0, NULL, NULL) != SLUICE_OK)
         return SLUICE_ERROR;
     sluice_real lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-    api->constant(host, "domain_min", lo, 3);
-    api->constant(host, "domain_max", hi, 3);
+    api->fields->constant(host, "domain_min", lo, 3);
+    api->fields->constant(host, "domain_max", hi, 3);
     for (int d = 0; d < 3; d++) {
         s->domain_min[d] = lo[d];
         s->domain_max[d] = hi[d];
@@ -536,14 +536,14 @@ static int boundary_bind(void *state, sluice_host *host)
         /* the inlet moves every open particle upstream of its plane, the
          * outlet every one downstream of its own: the vent lies between */
         sluice_real x_in, x_out;
-        if (api->constant(host, "inlet_position", &x_in, 1) == 1 && s->box_min[0] < x_in) {
-            api->error(host, "the vent's box (x from %g m) reaches upstream of the inlet's plane "
+        if (api->fields->constant(host, "inlet_position", &x_in, 1) == 1 && s->box_min[0] < x_in) {
+            api->messages->error(host, "the vent's box (x from %g m) reaches upstream of the inlet's plane "
                              "(x = %g m): move it downstream",
                        s->box_min[0], (double)x_in);
             return SLUICE_ERROR;
         }
-        if (api->constant(host, "outlet_position", &x_out, 1) == 1 && s->box_max[0] > x_out) {
-            api->error(host, "the vent's box (x up to %g m) reaches downstream of the outlet's "
+        if (api->fields->constant(host, "outlet_position", &x_out, 1) == 1 && s->box_max[0] > x_out) {
+            api->messages->error(host, "the vent's box (x up to %g m) reaches downstream of the outlet's "
                              "plane (x = %g m): move it upstream",
                        s->box_max[0], (double)x_out);
             return SLUICE_ERROR;
@@ -552,7 +552,7 @@ static int boundary_bind(void *state, sluice_host *host)
     }
     if (s->inlet) {
         if (s->air_depth > 0 && !s->has_phase) {
-            api->error(host,
+            api->messages->error(host,
                        "air_depth = %g m needs the field 'phase' (0 water, 1 air) of the "
                        "two_phase plugin: load two_phase, or set air_depth: 0",
                        s->air_depth);
@@ -566,7 +566,7 @@ static int boundary_bind(void *state, sluice_host *host)
             !(s->bed >= s->domain_min[v] && top <= s->domain_max[v]) ||
             (s->dims == 3 &&
              !(s->span[0] >= s->domain_min[1] && s->span[1] <= s->domain_max[1]))) {
-            api->error(host,
+            api->messages->error(host,
                        "the inflow section (x = %g m, %c from %g to %g m%s) lies outside the "
                        "domain [%g, %g) x [%g, %g) m: move the inlet or enlarge the domain",
                        s->position, "xyz"[v], s->bed, top,
@@ -575,7 +575,7 @@ static int boundary_bind(void *state, sluice_host *host)
             return SLUICE_ERROR;
         }
         if (s->position - s->width < s->domain_min[0] && s->form == INLET_BUFFER) {
-            api->error(host,
+            api->messages->error(host,
                        "the inlet buffer [%g, %g) m reaches below domain.min x = %g m: move the "
                        "inlet downstream or enlarge the domain",
                        s->position - s->width, s->position, s->domain_min[0]);
@@ -591,14 +591,14 @@ static int boundary_bind(void *state, sluice_host *host)
         }
     } else {
         sluice_real x_in;
-        if (api->constant(host, "inlet_position", &x_in, 1) == 1 && !(x_in < s->position)) {
-            api->error(host, "the outlet (x = %g m) must lie downstream of the inlet (x = %g m)",
+        if (api->fields->constant(host, "inlet_position", &x_in, 1) == 1 && !(x_in < s->position)) {
+            api->messages->error(host, "the outlet (x = %g m) must lie downstream of the inlet (x = %g m)",
                        s->position, (double)x_in);
             return SLUICE_ERROR;
         }
         const double reach = s->position + (s->form == OUTLET_FREE ? 0 : s->width) + s->dx;
         if (reach > s->domain_max[0]) {
-            api->error(host,
+            api->messages->error(host,
                        "the outlet (x = %g m, layer %g m) needs the domain to reach x = %g m "
                        "(domain.max x = %g m): fluid past it would leave the domain first",
                        s->position, s->form == OUTLET_FREE ? 0 : s->width, reach,
@@ -621,7 +621,7 @@ static int reserve(boundary_state *s, sluice_host *host, sluice_index n)
     if (b)
         s->to_remove = b;
     if (!a || !b) {
-        s->api->error(host, "out of memory");
+        s->api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     s->capacity = cap;
@@ -675,9 +675,9 @@ static int add_column(boundary_state *s, sluice_host *host, double x)
                 p[1] = (sluice_real)(s->span[0] + (l + 0.5) * s->dx);
         }
     sluice_index first;
-    if (s->api->add_particles(host, SLUICE_KIND_OPEN, s->scratch, n, &first) != SLUICE_OK)
+    if (s->api->particles->add_particles(host, SLUICE_KIND_OPEN, s->scratch, n, &first) != SLUICE_OK)
         return SLUICE_ERROR;
-    impose_lattice_state(s, s->api->view(host), first, n);
+    impose_lattice_state(s, s->api->particles->view(host), first, n);
     return SLUICE_OK;
 }
 
@@ -691,7 +691,7 @@ static int setup_lattice(boundary_state *s, sluice_host *host)
     const sluice_api *api = s->api;
     s->rows = (uint32_t)floor(s->depth / s->dx + 0.5);
     if (s->rows < 1) {
-        api->error(host, "the depth %g m is less than half a particle spacing (%g m)", s->depth,
+        api->messages->error(host, "the depth %g m is less than half a particle spacing (%g m)", s->depth,
                    s->dx);
         return SLUICE_ERROR;
     }
@@ -699,7 +699,7 @@ static int setup_lattice(boundary_state *s, sluice_host *host)
     if (s->air_depth > 0) {
         const uint32_t total = (uint32_t)floor((s->depth + s->air_depth) / s->dx + 0.5);
         if (total <= s->rows) {
-            api->error(host,
+            api->messages->error(host,
                        "air_depth = %g m adds no row of air above the %u rows of water (spacing "
                        "%g m): give at least half a spacing more",
                        s->air_depth, s->rows, s->dx);
@@ -712,7 +712,7 @@ static int setup_lattice(boundary_state *s, sluice_host *host)
     if (s->dims == 3) {
         s->lanes = (uint32_t)floor((s->span[1] - s->span[0]) / s->dx + 0.5);
         if (s->lanes < 1) {
-            api->error(host, "the span is narrower than a particle spacing");
+            api->messages->error(host, "the span is narrower than a particle spacing");
             return SLUICE_ERROR;
         }
     }
@@ -721,7 +721,7 @@ static int setup_lattice(boundary_state *s, sluice_host *host)
     s->scratch = malloc((size_t)rows * s->lanes * 3 * sizeof *s->scratch);
     if (!s->column_density || !below || !s->scratch) {
         free(below);
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     for (uint32_t r = 0; r < s->rows; r++)
@@ -745,7 +745,7 @@ static int inlet_initialise(void *state, sluice_host *host)
         return SLUICE_ERROR;
     const double effective = s->rows * s->dx;
     if (fabs(effective - s->depth) > 1e-6 * s->depth)
-        api->warning(host,
+        api->messages->warning(host,
                      "the inflow depth %g m is not a whole number of spacings: %u rows carry "
                      "%g m (discharge %g m^2/s instead of %g)",
                      s->depth, s->rows, effective, s->velocity * effective,
@@ -753,7 +753,7 @@ static int inlet_initialise(void *state, sluice_host *host)
     const double air_effective = s->air_rows * s->dx;
     if (s->air_rows && fabs(effective + air_effective - s->depth - s->air_depth) >
                            1e-6 * (s->depth + s->air_depth))
-        api->warning(host,
+        api->messages->warning(host,
                      "depth + air_depth = %g m is not a whole number of spacings: the %u rows of "
                      "air reach %g m above the bed",
                      s->depth + s->air_depth, s->air_rows, effective + air_effective);
@@ -764,7 +764,7 @@ static int inlet_initialise(void *state, sluice_host *host)
             return SLUICE_ERROR;
         length = ceil(((double)end * s->velocity + s->width) / s->dx) * s->dx;
         if (s->position - length < s->domain_min[0]) {
-            api->error(host,
+            api->messages->error(host,
                        "the inflow block for %g s is %g m long and reaches x = %g m, below "
                        "domain.min x = %g m: enlarge the domain (seed 000 placed the whole "
                        "inflow upstream of the inlet)",
@@ -778,19 +778,19 @@ static int inlet_initialise(void *state, sluice_host *host)
             return SLUICE_ERROR;
     s->newest_column = s->position - length + 0.5 * s->dx;
     s->open_count = columns * (s->rows + s->air_rows) * s->lanes;
-    api->info(host,
+    api->messages->info(host,
               "%s inflow: V1 = %g m/s, d1 = %g m (%u rows), q = %g m^2/s, Fr1 = %g; %u columns "
               "upstream of x = %g m",
               s->form == INLET_BUFFER ? "buffer" : "block", s->velocity, effective, s->rows,
               s->velocity * effective, s->velocity / sqrt(s->g * effective), columns,
               s->position);
     if (s->air_rows)
-        api->info(host,
+        api->messages->info(host,
                   "air layer: %u rows (%g m) above the water, densities %.9g (bottom) to %.9g "
                   "(top) kg m^-3",
                   s->air_rows, air_effective, s->column_density[s->rows],
                   s->column_density[s->rows + s->air_rows - 1]);
-    s->table = api->table_open(host, s->file,
+    s->table = api->output->table_open(host, s->file,
                                "time,mass_flux,discharge,momentum_flux,mass_total,open_particles");
     return s->table ? SLUICE_OK : SLUICE_ERROR;
 }
@@ -806,7 +806,7 @@ static int write_flux_row(boundary_state *s, double time)
                      (double)s->open_count,
                      s->velocity,
                      s->control_started ? s->control_depth : s->depth};
-    if (s->api->table_row(s->table, row, s->controlled ? 8 : 6) != SLUICE_OK)
+    if (s->api->output->table_row(s->table, row, s->controlled ? 8 : 6) != SLUICE_OK)
         return SLUICE_ERROR;
     s->mass_interval = s->momentum_interval = 0;
     s->row_time = time;
@@ -818,7 +818,7 @@ static int vent_row(boundary_state *s, sluice_host *host, const sluice_view *v, 
 /* A row of the boundary's table: the fluxes, or the vent's row. */
 static int write_row(boundary_state *s, sluice_host *host, double time)
 {
-    return s->vent ? vent_row(s, host, s->api->view(host), time) : write_flux_row(s, time);
+    return s->vent ? vent_row(s, host, s->api->particles->view(host), time) : write_flux_row(s, time);
 }
 
 /* Rows at multiples of the interval (the first at t = 0: zero flux). */
@@ -839,7 +839,7 @@ static int add_step(boundary_state *s, sluice_host *host, double mass, double mo
                     sluice_index open)
 {
     double sums[3] = {mass, momentum, (double)open};
-    if (s->api->reduce(host, sums, 3, SLUICE_REDUCE_SUM) != SLUICE_OK)
+    if (s->api->ranks->reduce(host, sums, 3, SLUICE_REDUCE_SUM) != SLUICE_OK)
         return SLUICE_ERROR;
     s->mass_interval += sums[0];
     s->momentum_interval += sums[1];
@@ -852,7 +852,7 @@ static int inlet_after_step(void *state, sluice_host *host)
 {
     boundary_state *s = state;
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     const double dt = v->time - s->last_time;
     s->last_time = v->time;
     if (reserve(s, host, v->count) != SLUICE_OK)
@@ -917,9 +917,9 @@ static int inlet_after_step(void *state, sluice_host *host)
             open++;
         }
     }
-    if (api->set_kind(host, s->to_convert, converted, SLUICE_KIND_FLUID) != SLUICE_OK)
+    if (api->particles->set_kind(host, s->to_convert, converted, SLUICE_KIND_FLUID) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (returned && api->remove_particles(host, s->to_remove, returned) != SLUICE_OK)
+    if (returned && api->particles->remove_particles(host, s->to_remove, returned) != SLUICE_OK)
         return SLUICE_ERROR;
     if (add_step(s, host, step_mass, step_momentum, open) != SLUICE_OK)
         return SLUICE_ERROR;
@@ -931,7 +931,7 @@ static int inlet_after_step(void *state, sluice_host *host)
             /* across ranks the rank that owns the column's place adds it */
             const sluice_real where[3] = {(sluice_real)s->newest_column, (sluice_real)s->bed,
                                           (sluice_real)s->span[0]};
-            if (api->owns(host, where) && add_column(s, host, s->newest_column) != SLUICE_OK)
+            if (api->ranks->owns(host, where) && add_column(s, host, s->newest_column) != SLUICE_OK)
                 return SLUICE_ERROR;
             s->open_count += (s->rows + s->air_rows) * s->lanes;
         }
@@ -948,7 +948,7 @@ static int outlet_initialise(void *state, sluice_host *host)
         /* the control section: a strip four spacings wide, within the domain */
         s->control_strip = 4 * s->dx;
         if (s->control_position - 0.5 * s->control_strip < s->domain_min[0]) {
-            s->api->error(host, "control_position x = %g m lies outside the domain (x from %g m)",
+            s->api->messages->error(host, "control_position x = %g m lies outside the domain (x from %g m)",
                           s->control_position, s->domain_min[0]);
             return SLUICE_ERROR;
         }
@@ -964,7 +964,7 @@ static int outlet_initialise(void *state, sluice_host *host)
                 return SLUICE_ERROR;
         s->open_count = columns * s->rows * s->lanes;
     }
-    s->table = s->api->table_open(
+    s->table = s->api->output->table_open(
         host, s->file,
         s->controlled ? "time,mass_flux,discharge,momentum_flux,mass_total,open_particles,"
                         "imposed_velocity,control_depth"
@@ -993,7 +993,7 @@ static int control_tailwater(boundary_state *s, sluice_host *host, const sluice_
         if (v->kind[i] == SLUICE_KIND_FLUID && x >= lo && x < hi && !(phase && phase[i]))
             sum += (double)mass[i];
     }
-    if (s->api->reduce(host, &sum, 1, SLUICE_REDUCE_SUM) != SLUICE_OK)
+    if (s->api->ranks->reduce(host, &sum, 1, SLUICE_REDUCE_SUM) != SLUICE_OK)
         return SLUICE_ERROR;
     const double lateral = s->dims == 3 ? s->span[1] - s->span[0] : 1.0;
     const double depth = sum / (s->rho0 * s->control_strip * lateral);
@@ -1014,7 +1014,7 @@ static int outlet_after_step(void *state, sluice_host *host)
 {
     boundary_state *s = state;
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     const double dt = v->time - s->last_time;
     s->last_time = v->time;
     if (reserve(s, host, v->count) != SLUICE_OK)
@@ -1094,8 +1094,8 @@ static int outlet_after_step(void *state, sluice_host *host)
         }
     }
     /* kinds first (indices still valid), then removal */
-    if (api->set_kind(host, s->to_convert, converted, SLUICE_KIND_OPEN) != SLUICE_OK ||
-        api->remove_particles(host, s->to_remove, removed) != SLUICE_OK ||
+    if (api->particles->set_kind(host, s->to_convert, converted, SLUICE_KIND_OPEN) != SLUICE_OK ||
+        api->particles->remove_particles(host, s->to_remove, removed) != SLUICE_OK ||
         add_step(s, host, step_mass, step_momentum, open) != SLUICE_OK)
         return SLUICE_ERROR;
     return flux_rows(s, host, v->time);
@@ -1130,7 +1130,7 @@ static int vent_create(const sluice_api *api, sluice_host *host, const void *con
         s->box_min[d] = c->box_min[d];
         s->box_max[d] = c->box_max[d];
         if (!(s->box_max[d] > s->box_min[d])) {
-            api->error(host, "box_max %c = %g m must exceed box_min %c = %g m", "xyz"[d],
+            api->messages->error(host, "box_max %c = %g m must exceed box_min %c = %g m", "xyz"[d],
                        s->box_max[d], "xyz"[d], s->box_min[d]);
             free(s);
             return SLUICE_ERROR;
@@ -1175,11 +1175,11 @@ static int vent_initialise(void *state, sluice_host *host)
 {
     boundary_state *s = state;
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     double thinnest = INFINITY;
     for (uint32_t d = 0; d < s->dims; d++) {
         if (!(s->box_min[d] >= s->domain_min[d] && s->box_max[d] <= s->domain_max[d])) {
-            api->error(host,
+            api->messages->error(host,
                        "the vent's box (%c from %g to %g m) leaves the domain [%g, %g] m: move "
                        "it inside",
                        "xyz"[d], s->box_min[d], s->box_max[d], s->domain_min[d],
@@ -1189,7 +1189,7 @@ static int vent_initialise(void *state, sluice_host *host)
         thinnest = fmin(thinnest, s->box_max[d] - s->box_min[d]);
     }
     if (thinnest < s->width - 1e-9 * s->dx)
-        api->warning(host,
+        api->messages->warning(host,
                      "the vent's box is %g m across at its thinnest, less than the kernel "
                      "support (%g m): the air next to it sees a truncated atmosphere unless "
                      "walls close that side",
@@ -1210,7 +1210,7 @@ static int vent_initialise(void *state, sluice_host *host)
             water_near += gap2 > 0 && gap2 < s->width * s->width;
         }
     if (water_in || water_near) {
-        api->error(host,
+        api->messages->error(host,
                    "the vent's box holds %u water particles and has %u more within the kernel "
                    "support (%g m) of it: place it in the air, at least %g m from the water",
                    (unsigned)water_in, (unsigned)water_near, s->width, s->width);
@@ -1223,19 +1223,19 @@ static int vent_initialise(void *state, sluice_host *host)
             open += v->kind[i] == SLUICE_KIND_OPEN;
         }
     if (open) {
-        api->error(host, "the vent's box holds %u particles of an open boundary: keep it apart "
+        api->messages->error(host, "the vent's box holds %u particles of an open boundary: keep it apart "
                          "from inlets and outlets",
                    (unsigned)open);
         return SLUICE_ERROR;
     }
     if (inside == 0) {
-        api->error(host, "the vent's box holds no fluid: place it in the air (its particles "
+        api->messages->error(host, "the vent's box holds no fluid: place it in the air (its particles "
                          "become the vent)");
         return SLUICE_ERROR;
     }
-    if (api->set_kind(host, s->to_convert, inside, SLUICE_KIND_OPEN) != SLUICE_OK)
+    if (api->particles->set_kind(host, s->to_convert, inside, SLUICE_KIND_OPEN) != SLUICE_OK)
         return SLUICE_ERROR;
-    v = api->view(host);
+    v = api->particles->view(host);
     sluice_real *rho = sluice_real_column(v, s->density_field, 0);
     sluice_real *mass = sluice_real_column(v, s->mass_field, 0);
     uint8_t *phase = (uint8_t *)v->columns[s->phase_field.column];
@@ -1249,11 +1249,11 @@ static int vent_initialise(void *state, sluice_host *host)
     }
     s->open_count = inside;
     s->air_pressure = s->p_ref;
-    api->info(host,
+    api->messages->info(host,
               "%u particles in the box hold the atmosphere (p_b = %g Pa); air that enters "
               "leaves the domain",
               (unsigned)inside, s->p_ref);
-    s->table = api->table_open(host, s->file,
+    s->table = api->output->table_open(host, s->file,
                                "time,mass_flux,volume_flux,mass_total,water_mass_total,"
                                "air_pressure_near,air_particles_near");
     return s->table ? SLUICE_OK : SLUICE_ERROR;
@@ -1278,7 +1278,7 @@ static double vent_pressure_near(const boundary_state *s, sluice_host *host,
     }
     /* over the ranks: every rank's air next to the box */
     double sums[2] = {sum, (double)n};
-    if (s->api->reduce(host, sums, 2, SLUICE_REDUCE_SUM) != SLUICE_OK)
+    if (s->api->ranks->reduce(host, sums, 2, SLUICE_REDUCE_SUM) != SLUICE_OK)
         return NAN;
     *count = sums[1];
     return sums[1] > 0 ? sums[0] / sums[1] : 0;
@@ -1294,7 +1294,7 @@ static int vent_row(boundary_state *s, sluice_host *host, const sluice_view *v, 
     const double flux = span > 0 ? s->mass_interval / span : 0;
     const double row[7] = {time, flux, flux / s->rho_a, s->mass_total, s->water_total,
                            pressure, near};
-    if (s->api->table_row(s->table, row, 7) != SLUICE_OK)
+    if (s->api->output->table_row(s->table, row, 7) != SLUICE_OK)
         return SLUICE_ERROR;
     s->mass_interval = 0;
     s->row_time = time;
@@ -1305,7 +1305,7 @@ static int vent_after_step(void *state, sluice_host *host)
 {
     boundary_state *s = state;
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     if (reserve(s, host, v->count) != SLUICE_OK)
         return SLUICE_ERROR;
     const sluice_real *mass = sluice_real_column(v, s->mass_field, 0);
@@ -1325,7 +1325,7 @@ static int vent_after_step(void *state, sluice_host *host)
             }
         /* over the ranks, so that every rank decides alike */
         double sums[2] = {sum, (double)n};
-        if (api->reduce(host, sums, 2, SLUICE_REDUCE_SUM) != SLUICE_OK)
+        if (api->ranks->reduce(host, sums, 2, SLUICE_REDUCE_SUM) != SLUICE_OK)
             return SLUICE_ERROR;
         /* an exponential average over the response time: the air's
          * acoustic sloshing, let out at its peaks only, would drain it */
@@ -1355,7 +1355,7 @@ static int vent_after_step(void *state, sluice_host *host)
     }
     /* over the ranks: the air and water that left, alike on every rank */
     double left[2] = {air, water};
-    if (api->reduce(host, left, 2, SLUICE_REDUCE_SUM) != SLUICE_OK)
+    if (api->ranks->reduce(host, left, 2, SLUICE_REDUCE_SUM) != SLUICE_OK)
         return SLUICE_ERROR;
     s->mass_interval += left[0];
     s->mass_total += left[0];
@@ -1363,7 +1363,7 @@ static int vent_after_step(void *state, sluice_host *host)
     if (water > 0) {
         s->water_total += water;
         if (!s->water_warned)
-            api->warning(host,
+            api->messages->warning(host,
                          "water reached the air vent at t = %g s and left the domain through "
                          "it (water_mass_total in %s): move the vent away from the flow",
                          v->time, s->file);
@@ -1371,7 +1371,7 @@ static int vent_after_step(void *state, sluice_host *host)
     }
     const double time = v->time;
     s->last_time = time;
-    if (removed && api->remove_particles(host, s->to_remove, removed) != SLUICE_OK)
+    if (removed && api->particles->remove_particles(host, s->to_remove, removed) != SLUICE_OK)
         return SLUICE_ERROR;
     return flux_rows(s, host, time);
 }
@@ -1382,11 +1382,11 @@ static int vent_save(void *state, sluice_host *host)
     const double values[6] = {s->last_time, s->mass_interval, s->mass_total, s->water_total,
                               s->row_time,  s->air_pressure};
     const int64_t counts[2] = {s->table_rows.count, s->water_warned};
-    if (s->api->state_write(host,
+    if (s->api->state->state_write(host,
                             "last_time,mass_interval,mass_total,water_mass_total,row_time,"
                             "air_pressure",
                             SLUICE_STATE_DOUBLE, 6, values) != SLUICE_OK ||
-        s->api->state_write(host, "rows_written,water_warned", SLUICE_STATE_INT64, 2, counts) !=
+        s->api->state->state_write(host, "rows_written,water_warned", SLUICE_STATE_INT64, 2, counts) !=
             SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;
@@ -1397,11 +1397,11 @@ static int vent_load(void *state, sluice_host *host)
     boundary_state *s = state;
     double values[6];
     int64_t counts[2];
-    if (s->api->state_read(host,
+    if (s->api->state->state_read(host,
                            "last_time,mass_interval,mass_total,water_mass_total,row_time,"
                            "air_pressure",
                            SLUICE_STATE_DOUBLE, 6, values) != SLUICE_OK ||
-        s->api->state_read(host, "rows_written,water_warned", SLUICE_STATE_INT64, 2, counts) !=
+        s->api->state->state_read(host, "rows_written,water_warned", SLUICE_STATE_INT64, 2, counts) !=
             SLUICE_OK)
         return SLUICE_ERROR;
     s->last_time = values[0];
@@ -1433,17 +1433,17 @@ static int boundary_save(void *state, sluice_host *host)
     const double values[6] = {s->last_time,        s->newest_column, s->mass_interval,
                               s->momentum_interval, s->mass_total,    s->row_time};
     const int64_t counts[2] = {s->table_rows.count, (int64_t)s->open_count};
-    if (api->state_write(host, "last_time,newest_column,mass_interval,momentum_interval,"
+    if (api->state->state_write(host, "last_time,newest_column,mass_interval,momentum_interval,"
                                "mass_total,row_time",
                          SLUICE_STATE_DOUBLE, 6, values) != SLUICE_OK ||
-        api->state_write(host, "rows_written,open_count", SLUICE_STATE_INT64, 2, counts) !=
+        api->state->state_write(host, "rows_written,open_count", SLUICE_STATE_INT64, 2, counts) !=
             SLUICE_OK)
         return SLUICE_ERROR;
     /* a controlled tailwater: the gate's state */
     const double control[4] = {s->velocity, s->velocity_integral, s->control_depth,
                                (double)s->control_started};
     if (s->controlled &&
-        api->state_write(host, "velocity,velocity_integral,control_depth,control_started",
+        api->state->state_write(host, "velocity,velocity_integral,control_depth,control_started",
                          SLUICE_STATE_DOUBLE, 4, control) != SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;
@@ -1455,10 +1455,10 @@ static int boundary_load(void *state, sluice_host *host)
     const sluice_api *api = s->api;
     double values[6];
     int64_t counts[2];
-    if (api->state_read(host, "last_time,newest_column,mass_interval,momentum_interval,"
+    if (api->state->state_read(host, "last_time,newest_column,mass_interval,momentum_interval,"
                               "mass_total,row_time",
                         SLUICE_STATE_DOUBLE, 6, values) != SLUICE_OK ||
-        api->state_read(host, "rows_written,open_count", SLUICE_STATE_INT64, 2, counts) !=
+        api->state->state_read(host, "rows_written,open_count", SLUICE_STATE_INT64, 2, counts) !=
             SLUICE_OK)
         return SLUICE_ERROR;
     s->last_time = values[0];
@@ -1471,7 +1471,7 @@ static int boundary_load(void *state, sluice_host *host)
     s->open_count = (sluice_index)counts[1];
     double control[4];
     if (s->controlled) {
-        if (api->state_read(host, "velocity,velocity_integral,control_depth,control_started",
+        if (api->state->state_read(host, "velocity,velocity_integral,control_depth,control_started",
                             SLUICE_STATE_DOUBLE, 4, control) != SLUICE_OK)
             return SLUICE_ERROR;
         s->velocity = control[0];

@@ -250,10 +250,10 @@ static size_t edit_distance(const char *a, const char *b)
 /* Index of field `name` in the core's field table, or -1. */
 static int64_t find_field(const sluice_api *api, sluice_host *host, const char *name)
 {
-    uint32_t count = api->field_count(host);
+    uint32_t count = api->fields->field_count(host);
     for (uint32_t f = 0; f < count; f++) {
         sluice_field_spec spec;
-        if (api->field_info(host, f, &spec, NULL) == SLUICE_OK && spec.name &&
+        if (api->fields->field_info(host, f, &spec, NULL) == SLUICE_OK && spec.name &&
             strcmp(spec.name, name) == 0)
             return (int64_t)f;
     }
@@ -334,7 +334,7 @@ static int h5w_create(const sluice_api *api, sluice_host *host, const void *conf
     const char *prefix = c->prefix ? c->prefix : "";
     if (!*prefix || strchr(prefix, '/') || strcmp(prefix, ".") == 0 ||
         strcmp(prefix, "..") == 0) {
-        api->error(host,
+        api->messages->error(host,
                    "prefix '%s' is not a file name: give a non-empty name without '/' (files "
                    "are written into the run's output directory)",
                    prefix);
@@ -342,19 +342,19 @@ static int h5w_create(const sluice_api *api, sluice_host *host, const void *conf
         return SLUICE_ERROR;
     }
     if (strlen(prefix) > H5W_PREFIX_MAX) {
-        api->error(host, "prefix is longer than %d bytes", H5W_PREFIX_MAX);
+        api->messages->error(host, "prefix is longer than %d bytes", H5W_PREFIX_MAX);
         h5w_destroy(s);
         return SLUICE_ERROR;
     }
     for (const char *p = prefix; *p; p++)
         if ((unsigned char)*p < 0x20) {
-            api->error(host, "prefix contains a control character; give a plain file name");
+            api->messages->error(host, "prefix contains a control character; give a plain file name");
             h5w_destroy(s);
             return SLUICE_ERROR;
         }
     s->prefix = copy_string(prefix);
     if (!s->prefix || parse_names(s, c->fields) != SLUICE_OK) {
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         h5w_destroy(s);
         return SLUICE_ERROR;
     }
@@ -370,7 +370,7 @@ static int h5w_create(const sluice_api *api, sluice_host *host, const void *conf
         H5Eclear2(H5E_DEFAULT);
         H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
         if (!ok) {
-            api->error(host, "compression = %d needs HDF5's deflate filter, which this HDF5 "
+            api->messages->error(host, "compression = %d needs HDF5's deflate filter, which this HDF5 "
                              "library does not provide; use compression: 0",
                        s->compression);
             h5w_destroy(s);
@@ -394,10 +394,10 @@ static int h5w_bind(void *state, sluice_host *host)
         h5w_text available = {0};
         const char *closest = NULL;
         size_t best = (size_t)-1;
-        uint32_t count = api->field_count(host);
+        uint32_t count = api->fields->field_count(host);
         for (uint32_t f = 0; f < count; f++) {
             sluice_field_spec spec;
-            if (api->field_info(host, f, &spec, NULL) != SLUICE_OK || !spec.name)
+            if (api->fields->field_info(host, f, &spec, NULL) != SLUICE_OK || !spec.name)
                 continue;
             text_printf(&available, "%s%s", available.length ? ", " : "", spec.name);
             size_t d = edit_distance(name, spec.name);
@@ -409,7 +409,7 @@ static int h5w_bind(void *state, sluice_host *host)
         char hint[160] = "";
         if (closest && best <= 2)
             snprintf(hint, sizeof hint, " (did you mean '%s'?)", closest);
-        api->error(host, "fields: unknown field '%s'%s; the available fields are: %s", name, hint,
+        api->messages->error(host, "fields: unknown field '%s'%s; the available fields are: %s", name, hint,
                    available.failed || !available.data ? "(out of memory)" : available.data);
         free(available.data);
         errors++;
@@ -423,8 +423,8 @@ static int add_field(h5w_state *s, sluice_host *host, uint32_t index, int explic
     const sluice_api *api = s->api;
     sluice_field_spec spec;
     sluice_field field;
-    if (api->field_info(host, index, &spec, &field) != SLUICE_OK || !spec.name) {
-        api->error(host, "cannot read entry %u of the field table", index);
+    if (api->fields->field_info(host, index, &spec, &field) != SLUICE_OK || !spec.name) {
+        api->messages->error(host, "cannot read entry %u of the field table", index);
         return SLUICE_ERROR;
     }
     for (uint32_t i = 0; i < s->field_count; i++)
@@ -432,23 +432,23 @@ static int add_field(h5w_state *s, sluice_host *host, uint32_t index, int explic
             return SLUICE_OK;
     if (!spec.name[0] || strchr(spec.name, '/') || strcmp(spec.name, ".") == 0) {
         if (explicit_choice) {
-            api->error(host, "field '%s' cannot be written: its name is not a valid HDF5 "
+            api->messages->error(host, "field '%s' cannot be written: its name is not a valid HDF5 "
                              "dataset name",
                        spec.name);
             return SLUICE_ERROR;
         }
-        api->warning(host, "field '%s' is not written: its name is not a valid HDF5 dataset name",
+        api->messages->warning(host, "field '%s' is not written: its name is not a valid HDF5 dataset name",
                      spec.name);
         return SLUICE_OK;
     }
     if (field.components == 0 || field.column < 0) {
-        api->error(host, "field '%s' has no storage (%u components, column %d)", spec.name,
+        api->messages->error(host, "field '%s' has no storage (%u components, column %d)", spec.name,
                    field.components, field.column);
         return SLUICE_ERROR;
     }
     h5w_field *grown = realloc(s->fields, (s->field_count + 1) * sizeof *grown);
     if (!grown) {
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     s->fields = grown;
@@ -462,7 +462,7 @@ static int add_field(h5w_state *s, sluice_host *host, uint32_t index, int explic
     f->column = field.column;
     s->field_count++; /* counted now so that destroy frees the strings */
     if (!f->name || !f->units || !f->doc) {
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     return SLUICE_OK;
@@ -473,11 +473,11 @@ static int h5w_initialise(void *state, sluice_host *host)
 {
     h5w_state *s = state;
     const sluice_api *api = s->api;
-    uint32_t count = api->field_count(host);
+    uint32_t count = api->fields->field_count(host);
     if (s->name_count == 0) {
         for (uint32_t f = 0; f < count; f++) {
             sluice_field_spec spec;
-            if (api->field_info(host, f, &spec, NULL) != SLUICE_OK)
+            if (api->fields->field_info(host, f, &spec, NULL) != SLUICE_OK)
                 continue;
             if ((spec.flags & SLUICE_FIELD_OUTPUT) && add_field(s, host, f, 0) != SLUICE_OK)
                 return SLUICE_ERROR;
@@ -488,7 +488,7 @@ static int h5w_initialise(void *state, sluice_host *host)
         const char *name = k < SLUICE_COUNT(always) ? always[k] : s->names[k - SLUICE_COUNT(always)];
         int64_t index = find_field(api, host, name);
         if (index < 0) {
-            api->error(host, "fields: unknown field '%s'", name);
+            api->messages->error(host, "fields: unknown field '%s'", name);
             return SLUICE_ERROR;
         }
         if (add_field(s, host, (uint32_t)index, 1) != SLUICE_OK)
@@ -496,15 +496,15 @@ static int h5w_initialise(void *state, sluice_host *host)
     }
     for (uint32_t i = 0; i < s->field_count; i++)
         if (strcmp(s->fields[i].name, "position") == 0 && s->fields[i].type != SLUICE_TYPE_REAL) {
-            api->error(host, "field 'position' is not of type real");
+            api->messages->error(host, "field 'position' is not of type real");
             return SLUICE_ERROR;
         }
 
     h5w_text plugins = {0};
-    uint32_t n = api->plugin_count(host);
+    uint32_t n = api->output->plugin_count(host);
     for (uint32_t k = 0; k < n; k++) {
         sluice_plugin_info info;
-        if (api->plugin(host, k, &info) != SLUICE_OK)
+        if (api->output->plugin(host, k, &info) != SLUICE_OK)
             continue;
         text_printf(&plugins, "%s %s %s %s\n", info.component ? info.component : "?",
                     info.library ? info.library : "?", info.version ? info.version : "?",
@@ -514,7 +514,7 @@ static int h5w_initialise(void *state, sluice_host *host)
         text_append(&plugins, "", 0);
     if (plugins.failed) {
         free(plugins.data);
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     s->plugins = plugins.data;
@@ -794,7 +794,7 @@ static int build_image(h5w_state *s, sluice_host *host, const sluice_view *v, co
                        const char *status, void **image, size_t *image_size, h5w_failure *f)
 {
     const sluice_api *api = s->api;
-    const char *scene = api->resolved_scene(host);
+    const char *scene = api->output->resolved_scene(host);
     if (!scene)
         scene = "";
     /* the core driver grows its buffer in steps of `increment`: one step
@@ -864,7 +864,7 @@ static int write_shared(h5w_state *s, sluice_host *host, const sluice_view *v,
 {
 #ifdef H5_HAVE_PARALLEL
     const sluice_api *api = s->api;
-    const char *scene = api->resolved_scene(host);
+    const char *scene = api->output->resolved_scene(host);
     char partial[H5W_PATH_MAX + 16];
     if (snprintf(partial, sizeof partial, "%s.partial", path) >= (int)sizeof partial) {
         fail(f, "the path is too long");
@@ -890,7 +890,7 @@ static int write_shared(h5w_state *s, sluice_host *host, const sluice_view *v,
         H5Pclose(part.transfer);
     /* the file is whole once every rank has closed it */
     double failed = f->text[0] ? 1 : 0;
-    if (api->reduce(host, &failed, 1, SLUICE_REDUCE_MAX) != SLUICE_OK)
+    if (api->ranks->reduce(host, &failed, 1, SLUICE_REDUCE_MAX) != SLUICE_OK)
         return -1;
     if (failed > 0 && !f->text[0])
         fail(f, "another rank failed to write its part");
@@ -944,13 +944,13 @@ static int write_vertex_index(h5w_state *s, sluice_host *host, uint64_t capacity
     const sluice_api *api = s->api;
     char name[H5W_PREFIX_MAX + 16], path[H5W_PATH_MAX];
     snprintf(name, sizeof name, "%s_vertices.h5", s->prefix);
-    if (api->output_path(host, name, path, sizeof path) != SLUICE_OK) {
-        api->error(host, "the path of '%s' in the output directory is too long", name);
+    if (api->output->output_path(host, name, path, sizeof path) != SLUICE_OK) {
+        api->messages->error(host, "the path of '%s' in the output directory is too long", name);
         return SLUICE_ERROR;
     }
     int64_t *index = malloc((size_t)capacity * sizeof *index);
     if (!index) {
-        api->error(host, "out of memory for the vertex index (%llu entries)",
+        api->messages->error(host, "out of memory for the vertex index (%llu entries)",
                    (unsigned long long)capacity);
         return SLUICE_ERROR;
     }
@@ -997,10 +997,10 @@ static int write_vertex_index(h5w_state *s, sluice_host *host, uint64_t capacity
     free(index);
     if (f.text[0]) {
         free(image);
-        api->error(host, "cannot write '%s': %s", path, f.text);
+        api->messages->error(host, "cannot write '%s': %s", path, f.text);
         return SLUICE_ERROR;
     }
-    int rc = api->write_file_atomic(host, path, image, (size_t)size);
+    int rc = api->output->write_file_atomic(host, path, image, (size_t)size);
     free(image);
     if (rc == SLUICE_OK)
         s->vertex_capacity = capacity;
@@ -1017,7 +1017,7 @@ static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v, uin
         for (size_t r = 0; r < s->record_count; r++) {
             char name[H5W_PREFIX_MAX + 40], path[H5W_PATH_MAX];
             snprintf(name, sizeof name, "%s.h5", s->records[r].stem);
-            if (api->output_path(host, name, path, sizeof path) == SLUICE_OK &&
+            if (api->output->output_path(host, name, path, sizeof path) == SLUICE_OK &&
                 access(path, F_OK) == 0)
                 s->records[kept++] = s->records[r];
         }
@@ -1035,7 +1035,7 @@ static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v, uin
         size_t cap = s->record_capacity ? 2 * s->record_capacity : 64;
         h5w_record *r = realloc(s->records, cap * sizeof *r);
         if (!r) {
-            api->error(host, "out of memory building the XDMF index");
+            api->messages->error(host, "out of memory building the XDMF index");
             return SLUICE_ERROR;
         }
         s->records = r;
@@ -1102,16 +1102,16 @@ static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v, uin
     }
     text_printf(t, "    </Grid>\n  </Domain>\n</Xdmf>\n");
     if (t->failed) {
-        api->error(host, "out of memory building the XDMF index");
+        api->messages->error(host, "out of memory building the XDMF index");
         return SLUICE_ERROR;
     }
     char name[H5W_PREFIX_MAX + 8], path[H5W_PATH_MAX];
     snprintf(name, sizeof name, "%s.xdmf", s->prefix);
-    if (api->output_path(host, name, path, sizeof path) != SLUICE_OK) {
-        api->error(host, "the path of '%s' in the output directory is too long", name);
+    if (api->output->output_path(host, name, path, sizeof path) != SLUICE_OK) {
+        api->messages->error(host, "the path of '%s' in the output directory is too long", name);
         return SLUICE_ERROR;
     }
-    return api->write_file_atomic(host, path, t->data, t->length);
+    return api->output->write_file_atomic(host, path, t->data, t->length);
 }
 
 /* ------------------------------------------------------------ snapshots -- */
@@ -1119,17 +1119,17 @@ static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v, uin
 static int write_snapshot(h5w_state *s, sluice_host *host, const char *status)
 {
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     /* the prefix is at most H5W_PREFIX_MAX bytes (checked in create) */
     char stem[H5W_PREFIX_MAX + 32], name[H5W_PREFIX_MAX + 40], path[H5W_PATH_MAX];
     snprintf(stem, sizeof stem, "%s_%06llu", s->prefix, (unsigned long long)s->snapshots);
     snprintf(name, sizeof name, "%.*s.h5", (int)(sizeof stem), stem);
-    if (api->output_path(host, name, path, sizeof path) != SLUICE_OK) {
+    if (api->output->output_path(host, name, path, sizeof path) != SLUICE_OK) {
         if (!path[0]) {
             s->disabled = 1; /* no output directory: nothing is written */
             return SLUICE_OK;
         }
-        api->error(host, "the path of '%s' in the output directory is too long", name);
+        api->messages->error(host, "the path of '%s' in the output directory is too long", name);
         s->broken = 1;
         return SLUICE_ERROR;
     }
@@ -1141,7 +1141,7 @@ static int write_snapshot(h5w_state *s, sluice_host *host, const char *status)
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
     h5w_failure failure = {{0}};
     sluice_ranks ranks = {0, 1, 0, v->count, NULL};
-    if (api->abi_minor >= 8 && api->ranks(host, &ranks) != SLUICE_OK) {
+    if (api->ranks->ranks(host, &ranks) != SLUICE_OK) {
         s->broken = 1;
         return SLUICE_ERROR;
     }
@@ -1153,14 +1153,14 @@ static int write_snapshot(h5w_state *s, sluice_host *host, const char *status)
     H5Eclear2(H5E_DEFAULT);
     H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
     if (rc != 0) {
-        api->error(host, "cannot write snapshot '%s' (t = %.9g s): %s", path, v->time,
+        api->messages->error(host, "cannot write snapshot '%s' (t = %.9g s): %s", path, v->time,
                    failure.text);
         s->broken = 1;
         return SLUICE_ERROR;
     }
     /* a temporary file in the same directory, renamed once complete; the
      * core reports a failure with the path */
-    rc = ranks.count > 1 ? SLUICE_OK : api->write_file_atomic(host, path, image, image_size);
+    rc = ranks.count > 1 ? SLUICE_OK : api->output->write_file_atomic(host, path, image, image_size);
     free(image);
     if (rc != SLUICE_OK) {
         s->broken = 1;
@@ -1180,7 +1180,7 @@ static int write_snapshot(h5w_state *s, sluice_host *host, const char *status)
 static int h5w_after_step(void *state, sluice_host *host)
 {
     h5w_state *s = state;
-    const sluice_view *v = s->api->view(host);
+    const sluice_view *v = s->api->particles->view(host);
     if (!sluice_schedule_due(&s->schedule, v->time))
         return SLUICE_OK;
     if (!s->disabled && write_snapshot(s, host, "ok") != SLUICE_OK)
@@ -1196,7 +1196,7 @@ static int h5w_finish(void *state, sluice_host *host, int status)
     h5w_state *s = state;
     if (s->disabled || s->broken)
         return SLUICE_OK;
-    const sluice_view *v = s->api->view(host);
+    const sluice_view *v = s->api->particles->view(host);
     if (status != SLUICE_FINISH_FAILED && s->have_last && s->last_step == v->step &&
         s->last_time == v->time)
         return SLUICE_OK;
@@ -1214,7 +1214,7 @@ static int h5w_save(void *state, sluice_host *host)
     uint64_t *counts = malloc((n + 1) * sizeof *counts);
     int rc = SLUICE_ERROR;
     if (!times || !counts) {
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
     } else {
         for (size_t r = 0; r < n; r++) {
             times[r] = s->records[r].time;
@@ -1225,8 +1225,8 @@ static int h5w_save(void *state, sluice_host *host)
             sluice_util_save_int(api, host, "have_last", s->have_last) == SLUICE_OK &&
             sluice_util_save_int(api, host, "last_step", s->last_step) == SLUICE_OK &&
             sluice_util_save_double(api, host, "last_time", s->last_time) == SLUICE_OK &&
-            api->state_write(host, "record_times", SLUICE_STATE_DOUBLE, n, times) == SLUICE_OK &&
-            api->state_write(host, "record_counts", SLUICE_STATE_UINT64, n, counts) == SLUICE_OK)
+            api->state->state_write(host, "record_times", SLUICE_STATE_DOUBLE, n, times) == SLUICE_OK &&
+            api->state->state_write(host, "record_counts", SLUICE_STATE_UINT64, n, counts) == SLUICE_OK)
             rc = SLUICE_OK;
     }
     free(times);
@@ -1239,7 +1239,7 @@ static int h5w_load(void *state, sluice_host *host)
     h5w_state *s = state;
     const sluice_api *api = s->api;
     int64_t snapshots = 0, have_last = 0;
-    const int64_t n = api->state_length(host, "record_times");
+    const int64_t n = api->state->state_length(host, "record_times");
     if (sluice_schedule_load(&s->schedule, api, host, "schedule") != SLUICE_OK ||
         sluice_util_load_int(api, host, "snapshots", &snapshots) != SLUICE_OK ||
         sluice_util_load_int(api, host, "have_last", &have_last) != SLUICE_OK ||
@@ -1254,12 +1254,12 @@ static int h5w_load(void *state, sluice_host *host)
     h5w_record *records = calloc((size_t)n + 1, sizeof *records);
     int rc = SLUICE_ERROR;
     if (!times || !counts || !records) {
-        api->error(host, "out of memory");
-    } else if (api->state_read(host, "record_times", SLUICE_STATE_DOUBLE, (uint64_t)n, times) ==
+        api->messages->error(host, "out of memory");
+    } else if (api->state->state_read(host, "record_times", SLUICE_STATE_DOUBLE, (uint64_t)n, times) ==
                    SLUICE_OK &&
-               api->state_read(host, "record_counts", SLUICE_STATE_UINT64, (uint64_t)n,
+               api->state->state_read(host, "record_counts", SLUICE_STATE_UINT64, (uint64_t)n,
                                counts) == SLUICE_OK) {
-        const sluice_view *v = api->view(host);
+        const sluice_view *v = api->particles->view(host);
         /* snapshot r is <prefix>_r; the last n of them are recorded */
         const uint64_t first = s->snapshots >= (uint64_t)n ? s->snapshots - (uint64_t)n : 0;
         for (int64_t r = 0; r < n; r++) {

@@ -62,7 +62,7 @@
  * particle is new when its id is at least the first id not seen yet; across
  * MPI ranks every scan looks at every particle of the rank (a particle that
  * came from another rank changes no count) and the ranks agree on the first
- * id not seen (api->reduce, maximum), so a particle initialised on one rank
+ * id not seen (api->ranks->reduce, maximum), so a particle initialised on one rank
  * keeps its concentration when it moves to another.
  *
  * Time step: the explicit diffusion limit 0.125 h^2 / max(D) (as
@@ -97,7 +97,7 @@ typedef struct do_state {
     int started;          /* air particles zeroed (first evaluation) */
     sluice_id next_id;    /* particles with an id from here on are new */
     uint64_t seen;        /* count + removed at the last scan for new particles */
-    int32_t ranks;        /* ranks of the run (api->ranks) */
+    int32_t ranks;        /* ranks of the run (api->ranks->ranks) */
 } do_state;
 
 #define POSITIVE (SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE)
@@ -180,7 +180,7 @@ static int do_create(const sluice_api *api, sluice_host *host, const void *confi
     if (c->two_phase == TWO_PHASE_YES) {
         const sluice_field_spec phase = SLUICE_SPEC_PHASE_DOC(
             SLUICE_READ | SLUICE_READ_NEIGHBOUR, 0, "phase of a fluid particle: 0 water, 1 air");
-        if (api->declare_field(host, &phase) != SLUICE_OK) {
+        if (api->fields->declare_field(host, &phase) != SLUICE_OK) {
             free(s);
             return SLUICE_ERROR;
         }
@@ -194,9 +194,9 @@ static int do_declare(do_state *s, sluice_host *host, const char *name, uint32_t
                       sluice_type type, sluice_field *out)
 {
     const sluice_field_spec spec = {name, type, components, units, access, flags, NULL, 0, doc};
-    if (s->api->declare_field(host, &spec) != SLUICE_OK)
+    if (s->api->fields->declare_field(host, &spec) != SLUICE_OK)
         return SLUICE_ERROR;
-    return s->api->field(host, name, out);
+    return s->api->fields->field(host, name, out);
 }
 
 static int do_bind(void *state, sluice_host *host)
@@ -215,7 +215,7 @@ static int do_bind(void *state, sluice_host *host)
     s->support = ratio * s->h;
     s->radius = s->c.radius > 0 ? s->c.radius : s->support;
     if (s->radius > s->support * (1 + 1e-12)) {
-        api->error(host,
+        api->messages->error(host,
                    "search_radius = %g m is larger than the kernel support %g m (%g h): pairs "
                    "reach only the support; use search_radius <= %g m",
                    (double)s->radius, (double)s->support, (double)ratio, (double)s->support);
@@ -237,16 +237,16 @@ static int do_bind(void *state, sluice_host *host)
     const int has_phase = sluice_util_optional_field(api, host, "phase", &phase);
     if (s->c.two_phase == TWO_PHASE_NO) {
         if (has_phase)
-            api->warning(host, "two_phase: no: the field 'phase' is ignored; every fluid "
+            api->messages->warning(host, "two_phase: no: the field 'phase' is ignored; every fluid "
                                "particle is water and the reaeration source is zero");
     } else if (!has_phase) {
         /* (two_phase: yes declared it in create(): it is always found here) */
-        api->warning(host, "no loaded plugin declares the field 'phase': every fluid particle "
+        api->messages->warning(host, "no loaded plugin declares the field 'phase': every fluid particle "
                            "is water and the reaeration source is zero everywhere (diffusion "
                            "and advection only)");
     } else {
         if (phase.type != SLUICE_TYPE_UINT8 || phase.components != 1) {
-            api->error(host, "the field 'phase' must be uint8 with one component (0 water, 1 "
+            api->messages->error(host, "the field 'phase' must be uint8 with one component (0 water, 1 "
                              "air)");
             return SLUICE_ERROR;
         }
@@ -268,7 +268,7 @@ static int do_bind(void *state, sluice_host *host)
     if (s->power_law) {
         s->law = s->c.c1 * sqrt(s->c.diffusivity * s->c.nu) / d_b;
         if (!(s->c.diffusivity > 0))
-            api->warning(host, "molecular_diffusivity = 0 makes the transfer velocity of the "
+            api->messages->warning(host, "molecular_diffusivity = 0 makes the transfer velocity of the "
                                "Reynolds-number law zero (K ~ Sc^(-1/2)): no reaeration");
         if (do_declare(s, host, "velocity", SLUICE_COMPONENTS_DIM, "m s^-1",
                        SLUICE_READ | SLUICE_READ_NEIGHBOUR,
@@ -280,8 +280,8 @@ static int do_bind(void *state, sluice_host *host)
                    SLUICE_FIELD_OUTPUT, "K a_i: volumetric oxygen transfer coefficient (0 away "
                    "from air)", SLUICE_TYPE_REAL, &s->ka) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (api->constant(host, "courant_number", &s->courant, 1) < 1) {
-        api->error(host, "the reaeration source needs the constant 'courant_number' for its "
+    if (api->fields->constant(host, "courant_number", &s->courant, 1) < 1) {
+        api->messages->error(host, "the reaeration source needs the constant 'courant_number' for its "
                          "time-step limit C / (K a): load time_step");
         return SLUICE_ERROR;
     }
@@ -431,12 +431,12 @@ static void do_start(void *context, const sluice_view *v, sluice_index begin, sl
 static int do_initialise(void *state, sluice_host *host)
 {
     do_state *s = state;
-    const sluice_view *v = s->api->view(host);
-    s->api->parallel_for(host, v->count, do_start, s);
+    const sluice_view *v = s->api->particles->view(host);
+    s->api->particles->parallel_for(host, v->count, do_start, s);
     s->next_id = do_next_id(v);
-    s->seen = (uint64_t)v->count + s->api->removed_count(host);
+    s->seen = (uint64_t)v->count + s->api->particles->removed_count(host);
     sluice_ranks ranks;
-    if (s->api->ranks(host, &ranks) != SLUICE_OK)
+    if (s->api->ranks->ranks(host, &ranks) != SLUICE_OK)
         return SLUICE_ERROR;
     s->ranks = ranks.count;
     return SLUICE_OK;
@@ -451,8 +451,8 @@ static int do_initialise(void *state, sluice_host *host)
  * inflow particles' value). */
 static int do_scan(do_state *s, sluice_host *host)
 {
-    const sluice_view *v = s->api->view(host);
-    const uint64_t total = (uint64_t)v->count + s->api->removed_count(host);
+    const sluice_view *v = s->api->particles->view(host);
+    const uint64_t total = (uint64_t)v->count + s->api->particles->removed_count(host);
     sluice_real *restrict c = sluice_real_column(v, s->concentration, 0);
     const uint8_t *phase = s->two_phase ? (const uint8_t *)v->columns[s->phase.column] : NULL;
     if (total != s->seen || s->ranks > 1) {
@@ -467,7 +467,7 @@ static int do_scan(do_state *s, sluice_host *host)
     }
     if (s->ranks > 1) { /* collective: every rank scans at the same points */
         double next = (double)s->next_id; /* ids below 2^53: exact */
-        if (s->api->reduce(host, &next, 1, SLUICE_REDUCE_MAX) != SLUICE_OK)
+        if (s->api->ranks->reduce(host, &next, 1, SLUICE_REDUCE_MAX) != SLUICE_OK)
             return SLUICE_ERROR;
         s->next_id = (sluice_id)next;
     }
@@ -499,18 +499,18 @@ static int do_save_state(void *state, sluice_host *host)
 {
     const do_state *s = state;
     const uint64_t next = s->next_id;
-    return s->api->state_write(host, "next_id", SLUICE_STATE_UINT64, 1, &next);
+    return s->api->state->state_write(host, "next_id", SLUICE_STATE_UINT64, 1, &next);
 }
 
 static int do_load_state(void *state, sluice_host *host)
 {
     do_state *s = state;
     uint64_t next;
-    if (s->api->state_read(host, "next_id", SLUICE_STATE_UINT64, 1, &next) != SLUICE_OK)
+    if (s->api->state->state_read(host, "next_id", SLUICE_STATE_UINT64, 1, &next) != SLUICE_OK)
         return SLUICE_ERROR;
     s->next_id = (sluice_id)next;
-    const sluice_view *v = s->api->view(host);
-    s->seen = (uint64_t)v->count + s->api->removed_count(host);
+    const sluice_view *v = s->api->particles->view(host);
+    s->seen = (uint64_t)v->count + s->api->particles->removed_count(host);
     s->started = 1;
     return SLUICE_OK;
 }

@@ -79,14 +79,14 @@ static int step_create(const sluice_api *api, sluice_host *host, const void *con
     sluice_real dims;
     if (sluice_util_constant(api, host, "smoothing_length", &s->h) != SLUICE_OK ||
         sluice_util_constant(api, host, "dimensions", &dims) != SLUICE_OK ||
-        api->publish_constant(host, "courant_number", &s->courant, 1, "1") != SLUICE_OK ||
-        (s->acoustic && api->declare_field(host, &sound_speed_field) != SLUICE_OK)) {
+        api->fields->publish_constant(host, "courant_number", &s->courant, 1, "1") != SLUICE_OK ||
+        (s->acoustic && api->fields->declare_field(host, &sound_speed_field) != SLUICE_OK)) {
         free(s);
         return SLUICE_ERROR;
     }
     s->dims = (uint32_t)dims;
     if (!s->force && !s->acoustic && !s->viscous)
-        api->warning(host, "every condition is off: only other plugins limit the time step");
+        api->messages->warning(host, "every condition is off: only other plugins limit the time step");
     *state = s;
     return SLUICE_OK;
 }
@@ -95,15 +95,15 @@ static int step_bind(void *state, sluice_host *host)
 {
     step_state *s = state;
     const sluice_api *api = s->api;
-    if (api->field(host, "acceleration", &s->acceleration) != SLUICE_OK ||
-        api->field(host, "velocity", &s->velocity) != SLUICE_OK ||
-        (s->acoustic && api->field(host, "sound_speed", &s->sound_speed) != SLUICE_OK))
+    if (api->fields->field(host, "acceleration", &s->acceleration) != SLUICE_OK ||
+        api->fields->field(host, "velocity", &s->velocity) != SLUICE_OK ||
+        (s->acoustic && api->fields->field(host, "sound_speed", &s->sound_speed) != SLUICE_OK))
         return SLUICE_ERROR;
     s->viscous_limit = (sluice_real)INFINITY;
     if (s->viscous) {
         sluice_real nu;
-        if (api->constant(host, "kinematic_viscosity", &nu, 1) < 1) {
-            api->error(host,
+        if (api->fields->constant(host, "kinematic_viscosity", &nu, 1) < 1) {
+            api->messages->error(host,
                        "viscous: true needs the constant 'kinematic_viscosity', which no loaded "
                        "plugin publishes (load laminar_viscosity)");
             return SLUICE_ERROR;

@@ -20,7 +20,7 @@
  * Walls (standard wall functions, Launder & Spalding 1974): no flux of k or
  * eps through a wall (wall particles are not neighbours of the diffusion). In
  * the wall layer, fluid particles closer than wall_layer to a wall (distance y
- * from api->wall_distance), eps is not integrated but set to its log-layer
+ * from api->walls->wall_distance), eps is not integrated but set to its log-layer
  * equilibrium value eps = c_mu^(3/4) k^(3/2) / (kappa y), used in the rates at
  * every evaluation and stored after every step; k there keeps its equation
  * with the SPH production. In a log layer (k = u*^2 / sqrt(c_mu)) this is
@@ -136,20 +136,13 @@ static int ke_create(const sluice_api *api, sluice_host *host, const void *confi
     s->c_mu34 = pow(c->c_mu, 0.75);
     s->wall_layer = c->wall_layer > 0 ? c->wall_layer : dx;
     if (!(c->initial_epsilon > 0) && !(c->length_scale > 0)) {
-        api->error(host, "the initial eps needs initial_epsilon or length_scale (eps = "
+        api->messages->error(host, "the initial eps needs initial_epsilon or length_scale (eps = "
                          "c_mu^(3/4) k^(3/2) / length_scale)");
         free(s);
         return SLUICE_ERROR;
     }
-    if (c->wall_function && (api->size < offsetof(sluice_api, wall_distance) +
-                                             sizeof api->wall_distance ||
-                             !api->wall_distance)) {
-        api->error(host, "wall functions need api->wall_distance (plugin ABI 1.1 or later)");
-        free(s);
-        return SLUICE_ERROR;
-    }
     const sluice_field_spec gradient = SLUICE_SPEC_VELOCITY_GRADIENT(s->dims, SLUICE_READ);
-    if (api->declare_field(host, &gradient) != SLUICE_OK) {
+    if (api->fields->declare_field(host, &gradient) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
@@ -170,7 +163,7 @@ static int ke_bind(void *state, sluice_host *host)
     if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
     s->nu_lam = 0;
-    api->constant(host, "kinematic_viscosity", &s->nu_lam, 1);
+    api->fields->constant(host, "kinematic_viscosity", &s->nu_lam, 1);
     if (sluice_util_constant(api, host, "courant_number", &s->courant) != SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;
@@ -186,7 +179,7 @@ static inline sluice_real ke_wall_distance(const ke_state *s, const sluice_view 
 {
     const sluice_real point[3] = {v->position[0][i], v->position[1][i],
                                   v->dimensions == 3 ? v->position[2][i] : 0};
-    return s->api->wall_distance(s->host, point);
+    return s->api->walls->wall_distance(s->host, point);
 }
 
 /* walls: the batch holds wall neighbours (another term of the pass reads
@@ -309,8 +302,8 @@ static void ke_clamp(void *context, const sluice_view *v, sluice_index begin, sl
 static int ke_after_step(void *state, sluice_host *host)
 {
     ke_state *s = state;
-    const sluice_view *v = s->api->view(host);
-    s->api->parallel_for(host, v->count, ke_clamp, s);
+    const sluice_view *v = s->api->particles->view(host);
+    s->api->particles->parallel_for(host, v->count, ke_clamp, s);
     return SLUICE_OK;
 }
 
@@ -345,8 +338,8 @@ static void ke_start(void *context, const sluice_view *v, sluice_index begin, sl
 static int ke_initialise(void *state, sluice_host *host)
 {
     ke_state *s = state;
-    const sluice_view *v = s->api->view(host);
-    s->api->parallel_for(host, v->count, ke_start, s);
+    const sluice_view *v = s->api->particles->view(host);
+    s->api->particles->parallel_for(host, v->count, ke_start, s);
     return SLUICE_OK;
 }
 

@@ -2,7 +2,7 @@
  *   nu_T,i = c_mu l_i^2 |S_i|,   |S| = sqrt(2 S:S),  S = (G + G^T) / 2,
  *   l_i = min(1, s_i^3) min(kappa y_i, l_max),   s_i = sum_j V_j W_ij + V_i W(0),
  * with G the field velocity_gradient, y_i the distance to the nearest wall of
- * the scene (api->wall_distance) and s_i the Shepard sum over fluid and wall
+ * the scene (api->walls->wall_distance) and s_i the Shepard sum over fluid and wall
  * neighbours plus the particle itself. s_i is close to 1 inside the fluid and
  * next to wall particles and drops towards 1/2 at a free surface, so the cube
  * damps l in the top kernel radius (seed 004's "damping function": its printed
@@ -75,14 +75,8 @@ static int ml_create(const sluice_api *api, sluice_host *host, const void *confi
         free(s);
         return SLUICE_ERROR;
     }
-    if (api->size < offsetof(sluice_api, wall_distance) + sizeof api->wall_distance ||
-        !api->wall_distance) {
-        api->error(host, "needs api->wall_distance (Sluice plugin ABI 1.1 or later)");
-        free(s);
-        return SLUICE_ERROR;
-    }
     const sluice_field_spec gradient = SLUICE_SPEC_VELOCITY_GRADIENT(s->dims, SLUICE_READ);
-    if (api->declare_field(host, &gradient) != SLUICE_OK) {
+    if (api->fields->declare_field(host, &gradient) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
@@ -126,7 +120,7 @@ static inline void ml_pairs(const ml_state *s, const sluice_view *v, const sluic
             shepard += mj[k] / rhoj[k] * W[k];
         const sluice_real point[3] = {v->position[0][i], v->position[1][i],
                                       dims == 3 ? v->position[2][i] : 0};
-        const sluice_real y = s->api->wall_distance(s->host, point);
+        const sluice_real y = s->api->walls->wall_distance(s->host, point);
         sluice_real l = kappa * y < l_max ? kappa * y : l_max;
         const sluice_real s3 = shepard * shepard * shepard;
         l *= s3 < 1 ? s3 : 1;

@@ -114,7 +114,7 @@ static int ts_create(const sluice_api *api, sluice_host *host, const void *confi
     s->dims = (uint32_t)dims;
     s->eta2 = (sluice_real)0.01 * s->h * s->h;
     if (s->renormalise && s->form != FORM_TENSOR) {
-        api->error(host, "renormalise applies to form tensor only; the eddy_viscosity form uses "
+        api->messages->error(host, "renormalise applies to form tensor only; the eddy_viscosity form uses "
                          "r_ij . grad W_ij, which renormalisation does not correct");
         free(s);
         return SLUICE_ERROR;
@@ -122,8 +122,8 @@ static int ts_create(const sluice_api *api, sluice_host *host, const void *confi
     const sluice_field_spec gradient =
         SLUICE_SPEC_VELOCITY_GRADIENT(s->dims, SLUICE_READ | SLUICE_READ_NEIGHBOUR);
     const sluice_field_spec correction = SLUICE_SPEC_KERNEL_CORRECTION(s->dims, SLUICE_READ);
-    if ((s->form == FORM_TENSOR && api->declare_field(host, &gradient) != SLUICE_OK) ||
-        (s->renormalise && api->declare_field(host, &correction) != SLUICE_OK)) {
+    if ((s->form == FORM_TENSOR && api->fields->declare_field(host, &gradient) != SLUICE_OK) ||
+        (s->renormalise && api->fields->declare_field(host, &correction) != SLUICE_OK)) {
         free(s);
         return SLUICE_ERROR;
     }
@@ -140,9 +140,9 @@ static int ts_bind(void *state, sluice_host *host)
     if (sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
     if (s->form == FORM_TENSOR &&
-        s->api->field(host, "velocity_gradient", &s->gradient) != SLUICE_OK)
+        s->api->fields->field(host, "velocity_gradient", &s->gradient) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (s->renormalise && s->api->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
+    if (s->renormalise && s->api->fields->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;
 }

@@ -53,8 +53,8 @@ static int vg_create(const sluice_api *api, sluice_host *host, const void *confi
     }
     const sluice_field_spec gradient = SLUICE_SPEC_VELOCITY_GRADIENT(s->dims, SLUICE_WRITE);
     const sluice_field_spec correction = SLUICE_SPEC_KERNEL_CORRECTION(s->dims, SLUICE_READ);
-    if (api->declare_field(host, &gradient) != SLUICE_OK ||
-        (s->renormalise && api->declare_field(host, &correction) != SLUICE_OK)) {
+    if (api->fields->declare_field(host, &gradient) != SLUICE_OK ||
+        (s->renormalise && api->fields->declare_field(host, &correction) != SLUICE_OK)) {
         free(s);
         return SLUICE_ERROR;
     }
@@ -70,7 +70,7 @@ static int vg_bind(void *state, sluice_host *host)
         {"velocity_gradient", &s->gradient}};
     if (sluice_util_bind(s->api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (s->renormalise && s->api->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
+    if (s->renormalise && s->api->fields->field(host, "kernel_correction", &s->correction) != SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;
 }

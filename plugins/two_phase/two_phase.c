@@ -51,7 +51,7 @@
  *    and derives from the potential -a sum_i m_i rho^H_i, so it conserves
  *    energy. H = 2h in Nugent & Posch: the pairs reach 2H = 4h, beyond the
  *    scene kernel's support (2h); the term asks the core for them with
- *    api->request_reach (plugin ABI 1.6) and evaluates W(r, H) itself from
+ *    api->evaluation->request_reach (plugin ABI 1.6) and evaluates W(r, H) itself from
  *    the pair distances (its batches carry no kernel values).
  *
  *  air_cohesion_held: the same cohesion, recomputed every `update_every`
@@ -236,12 +236,12 @@ static int phase_create(const sluice_api *api, sluice_host *host, const void *co
     char text[300];
     const char *problem = check_air(c, s->dims, text, sizeof text);
     if (problem) {
-        api->error(host, "%s", problem);
+        api->messages->error(host, "%s", problem);
         free(s);
         return SLUICE_ERROR;
     }
     if (!(c->air_rest_density < s->rho_w)) {
-        api->error(host,
+        api->messages->error(host,
                    "air_rest_density = %g kg m^-3 is not below the water's rest density "
                    "(particles.rest_density = %g kg m^-3): the air is the light phase",
                    (double)c->air_rest_density, (double)s->rho_w);
@@ -267,15 +267,15 @@ static int phase_create(const sluice_api *api, sluice_host *host, const void *co
     s->polygon = copy_points(&c->air_polygon);
     if ((s->above_count && !s->above) || (s->box_count && (!s->box_min || !s->box_max)) ||
         (s->polygon_count && !s->polygon)) {
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         phase_destroy(s);
         return SLUICE_ERROR;
     }
-    if (api->publish_constant(host, "speed_of_sound", &s->c_w, 1, "m s^-1") != SLUICE_OK ||
-        api->publish_constant(host, "air_speed_of_sound", &s->c_a, 1, "m s^-1") != SLUICE_OK ||
-        api->publish_constant(host, "air_rest_density", &s->rho_a, 1, "kg m^-3") != SLUICE_OK ||
-        api->publish_constant(host, "air_gamma", &s->gamma_a, 1, "1") != SLUICE_OK ||
-        api->publish_constant(host, "reference_pressure", &s->background, 1, "Pa") !=
+    if (api->fields->publish_constant(host, "speed_of_sound", &s->c_w, 1, "m s^-1") != SLUICE_OK ||
+        api->fields->publish_constant(host, "air_speed_of_sound", &s->c_a, 1, "m s^-1") != SLUICE_OK ||
+        api->fields->publish_constant(host, "air_rest_density", &s->rho_a, 1, "kg m^-3") != SLUICE_OK ||
+        api->fields->publish_constant(host, "air_gamma", &s->gamma_a, 1, "1") != SLUICE_OK ||
+        api->fields->publish_constant(host, "reference_pressure", &s->background, 1, "Pa") !=
             SLUICE_OK) {
         phase_destroy(s);
         return SLUICE_ERROR;
@@ -342,7 +342,7 @@ static int phase_initialise(void *state, sluice_host *host)
 {
     two_phase_state *s = state;
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     const uint32_t dims = s->dims, up = dims - 1;
     uint8_t *restrict phase = v->columns[s->phase.column];
     sluice_real *restrict rho = sluice_real_column(v, s->density, 0);
@@ -368,18 +368,18 @@ static int phase_initialise(void *state, sluice_host *host)
         }
     }
     if (air == 0) {
-        api->error(host, "the air description selects none of the %u fluid particles (are "
+        api->messages->error(host, "the air description selects none of the %u fluid particles (are "
                          "air_above, air_box_min/max or air_polygon inside the fluid regions?)",
                    (unsigned)water);
         return SLUICE_ERROR;
     }
     if (water == 0)
-        api->warning(host, "every fluid particle is air: the scene has no water");
+        api->messages->warning(host, "every fluid particle is air: the scene has no water");
     /* the air's hydrostatic pressure, p_b at the top of the highest water
      * particle (or at the bottom of the lowest air particle without water) */
     const sluice_real surface = water ? top + s->dx / 2 : bottom - s->dx / 2;
     sluice_real g[3] = {0, 0, 0};
-    const uint32_t gravity = api->constant(host, "gravity", g, 3);
+    const uint32_t gravity = api->fields->constant(host, "gravity", g, 3);
     const sluice_real weight = gravity >= dims ? -g[up] * s->rho_a : 0; /* rho_a g, Pa/m */
     const sluice_real volume = (sluice_real)pow((double)s->dx, (double)dims);
     for (sluice_index i = 0; i < v->count; i++) {
@@ -389,7 +389,7 @@ static int phase_initialise(void *state, sluice_host *host)
         const sluice_real excess = weight * (surface - v->position[up][i]); /* p - p_b */
         rho[i] = s->rho_a * (sluice_real)pow(1 + (double)(excess / s->B), 1 / (double)s->gamma_a);
     }
-    api->info(host,
+    api->messages->info(host,
               "%u air and %u water particles; B = %.6g Pa, c0 water %.6g m/s, c0 air %.6g m/s, "
               "p_b = %.6g Pa",
               (unsigned)air, (unsigned)water, (double)s->B, (double)s->c_w, (double)s->c_a,
@@ -538,8 +538,8 @@ static int cohesion_setup(const sluice_api *api, sluice_host *host, const cohesi
      * this term passes of its own (ABI 1.6); within it this changes nothing */
     /* ...and of those only the air's (ABI 1.7): the water, about half of
      * the particles, is neither traversed nor scanned as a neighbour */
-    if (api->request_reach(host, 2 * s->H) != SLUICE_OK ||
-        api->restrict_reach(host, "phase", PHASE_AIR) != SLUICE_OK) {
+    if (api->evaluation->request_reach(host, 2 * s->H) != SLUICE_OK ||
+        api->evaluation->restrict_reach(host, "phase", PHASE_AIR) != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }
@@ -572,19 +572,19 @@ static int cohesion_bind(void *state, sluice_host *host)
     if (sluice_util_bind(api, host, fields, s->update_every ? 4 : 3) != SLUICE_OK)
         return SLUICE_ERROR;
     sluice_real rho_a, background;
-    if (api->constant(host, "air_rest_density", &rho_a, 1) < 1 ||
-        api->constant(host, "reference_pressure", &background, 1) < 1) {
-        api->error(host, "needs the two_phase plugin, which sets the field 'phase' and publishes "
+    if (api->fields->constant(host, "air_rest_density", &rho_a, 1) < 1 ||
+        api->fields->constant(host, "reference_pressure", &background, 1) < 1) {
+        api->messages->error(host, "needs the two_phase plugin, which sets the field 'phase' and publishes "
                          "'air_rest_density' and the background pressure: load two_phase");
         return SLUICE_ERROR;
     }
     /* the transport velocity's background pressure orders the particles
      * against the attraction as the equation of state's does (docs/physics.md) */
     sluice_real transport = 0;
-    api->constant(host, "transport_background_pressure", &transport, 1);
+    api->fields->constant(host, "transport_background_pressure", &transport, 1);
     background += transport;
     if (s->a > 0 && !(s->a * rho_a * rho_a < background)) {
-        api->error(host,
+        api->messages->error(host,
                    "the cohesion pressure a rho0_a^2 = %g Pa is not below the background "
                    "pressure p_b = %g Pa (two_phase's, plus transport_velocity's if loaded): "
                    "the attraction would make the air clump (tensile instability); lower the "
@@ -681,14 +681,14 @@ static void cohesion_pair(void *state, const sluice_view *v, const sluice_pair_b
 static int held_before_step(void *state, sluice_host *host)
 {
     cohesion_state *s = state;
-    const sluice_view *v = s->api->view(host);
+    const sluice_view *v = s->api->particles->view(host);
     if (v->step % s->update_every != 0)
         return SLUICE_OK;
     for (uint32_t d = 0; d < s->dims; d++) {
         sluice_real *a = sluice_real_column(v, s->held, d);
         memset(a, 0, (size_t)v->count * sizeof *a);
     }
-    return s->api->pair_pass(host);
+    return s->api->evaluation->pair_pass(host);
 }
 
 /* every evaluation: the held cohesion joins the other accelerations */
@@ -817,8 +817,8 @@ static int bubbles_bind(void *state, sluice_host *host)
         {"density", &s->density}};
     if (sluice_util_bind(api, host, fields, SLUICE_COUNT(fields)) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (api->constant(host, "air_rest_density", &s->rho_a, 1) < 1) {
-        api->error(host, "needs the two_phase plugin, which sets the field 'phase' and publishes "
+    if (api->fields->constant(host, "air_rest_density", &s->rho_a, 1) < 1) {
+        api->messages->error(host, "needs the two_phase plugin, which sets the field 'phase' and publishes "
                          "'air_rest_density': load two_phase");
         return SLUICE_ERROR;
     }
@@ -828,9 +828,9 @@ static int bubbles_bind(void *state, sluice_host *host)
 static int bubbles_initialise(void *state, sluice_host *host)
 {
     bubbles_state *s = state;
-    const sluice_view *v = s->api->view(host);
+    const sluice_view *v = s->api->particles->view(host);
     s->last_check = s->row_time = v->time;
-    s->table = s->api->table_open(host, s->file,
+    s->table = s->api->output->table_open(host, s->file,
                                   "time,particles_removed,mass_removed_total,"
                                   "volume_removed_total,particles_removed_total,isolated_air,"
                                   "particles_compressed_total");
@@ -867,7 +867,7 @@ static int bubbles_row(bubbles_state *s, double time)
                            (double)s->removed_total,
                            (double)s->isolated,
                            (double)s->compressed_total};
-    if (s->api->table_row(s->table, row, 7) != SLUICE_OK)
+    if (s->api->output->table_row(s->table, row, 7) != SLUICE_OK)
         return SLUICE_ERROR;
     s->removed_interval = 0;
     s->mass_interval = 0;
@@ -891,7 +891,7 @@ static int bubbles_reserve(bubbles_state *s, sluice_host *host, sluice_index cou
         return SLUICE_OK;
     sluice_index *grown = realloc(s->to_remove, (size_t)count * sizeof *grown);
     if (!grown) {
-        s->api->error(host, "out of memory for %llu particle indices", (unsigned long long)count);
+        s->api->messages->error(host, "out of memory for %llu particle indices", (unsigned long long)count);
         return SLUICE_ERROR;
     }
     s->to_remove = grown;
@@ -911,7 +911,7 @@ static void bubbles_log(bubbles_state *s, sluice_host *host, const sluice_view *
     else
         snprintf(where, sizeof where, "(%.4g, %.4g)", (double)v->position[0][i],
                  (double)v->position[1][i]);
-    s->api->info(host, "t = %.6g s: air particle %llu at %s m %s; it leaves as an unresolved "
+    s->api->messages->info(host, "t = %.6g s: air particle %llu at %s m %s; it leaves as an unresolved "
                        "bubble (%s%s)",
                  v->time, (unsigned long long)v->id[i], where, why, s->file,
                  s->logged == 9 ? "; further ones are counted there only" : "");
@@ -923,7 +923,7 @@ static void bubbles_log(bubbles_state *s, sluice_host *host, const sluice_view *
 static int bubbles_compressed(bubbles_state *s, sluice_host *host)
 {
     const sluice_api *api = s->api;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     if (bubbles_reserve(s, host, v->count) != SLUICE_OK)
         return SLUICE_ERROR;
     const uint8_t *phase = v->columns[s->phase.column];
@@ -943,14 +943,14 @@ static int bubbles_compressed(bubbles_state *s, sluice_host *host)
         bubbles_log(s, host, v, i, why);
     }
     double sums[2] = {(double)removed, removed_mass};
-    if (api->reduce(host, sums, 2, SLUICE_REDUCE_SUM) != SLUICE_OK)
+    if (api->ranks->reduce(host, sums, 2, SLUICE_REDUCE_SUM) != SLUICE_OK)
         return SLUICE_ERROR;
     s->removed_interval += (int64_t)sums[0];
     s->removed_total += (int64_t)sums[0];
     s->compressed_total += (int64_t)sums[0];
     s->mass_interval += sums[1];
     s->mass_total += sums[1];
-    if (removed && api->remove_particles(host, s->to_remove, removed) != SLUICE_OK)
+    if (removed && api->particles->remove_particles(host, s->to_remove, removed) != SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;
 }
@@ -961,7 +961,7 @@ static int bubbles_after_step(void *state, sluice_host *host)
     const sluice_api *api = s->api;
     if (s->max_compression > 0 && bubbles_compressed(s, host) != SLUICE_OK)
         return SLUICE_ERROR;
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     if (v->step % s->check_every != 0)
         return bubbles_rows(s, host, v->time);
     /* every air particle is isolated until the pass finds an air neighbour */
@@ -974,9 +974,9 @@ static int bubbles_after_step(void *state, sluice_host *host)
                                ? isolation[i] + (sluice_real)span
                                : 0;
     }
-    if (api->pair_pass(host) != SLUICE_OK)
+    if (api->evaluation->pair_pass(host) != SLUICE_OK)
         return SLUICE_ERROR;
-    v = api->view(host); /* the pass may have reordered the particles */
+    v = api->particles->view(host); /* the pass may have reordered the particles */
     if (bubbles_reserve(s, host, v->count) != SLUICE_OK)
         return SLUICE_ERROR;
     const uint8_t *phase = v->columns[s->phase.column];
@@ -1000,7 +1000,7 @@ static int bubbles_after_step(void *state, sluice_host *host)
     }
     /* over the ranks: alike on every rank */
     double sums[3] = {(double)removed, removed_mass, (double)isolated};
-    if (api->reduce(host, sums, 3, SLUICE_REDUCE_SUM) != SLUICE_OK)
+    if (api->ranks->reduce(host, sums, 3, SLUICE_REDUCE_SUM) != SLUICE_OK)
         return SLUICE_ERROR;
     s->removed_interval += (int64_t)sums[0];
     s->removed_total += (int64_t)sums[0];
@@ -1009,7 +1009,7 @@ static int bubbles_after_step(void *state, sluice_host *host)
     s->isolated = (int64_t)sums[2];
     s->last_check = v->time;
     const double time = v->time;
-    if (removed && api->remove_particles(host, s->to_remove, removed) != SLUICE_OK)
+    if (removed && api->particles->remove_particles(host, s->to_remove, removed) != SLUICE_OK)
         return SLUICE_ERROR;
     return bubbles_rows(s, host, time);
 }
@@ -1018,7 +1018,7 @@ static int bubbles_finish(void *state, sluice_host *host, int status)
 {
     bubbles_state *s = state;
     (void)status;
-    const double time = s->api->view(host)->time;
+    const double time = s->api->particles->view(host)->time;
     if (s->table && time > s->row_time)
         return bubbles_row(s, time);
     return SLUICE_OK;
@@ -1030,11 +1030,11 @@ static int bubbles_save(void *state, sluice_host *host)
     const double values[4] = {s->last_check, s->row_time, s->mass_total, s->mass_interval};
     const int64_t counts[5] = {s->removed_total, s->removed_interval, s->isolated, s->rows.count,
                                s->logged};
-    if (s->api->state_write(host, "last_check,row_time,mass_total,mass_interval",
+    if (s->api->state->state_write(host, "last_check,row_time,mass_total,mass_interval",
                             SLUICE_STATE_DOUBLE, 4, values) != SLUICE_OK ||
-        s->api->state_write(host, "removed_total,removed_interval,isolated,rows_written,logged",
+        s->api->state->state_write(host, "removed_total,removed_interval,isolated,rows_written,logged",
                             SLUICE_STATE_INT64, 5, counts) != SLUICE_OK ||
-        s->api->state_write(host, "compressed_total", SLUICE_STATE_INT64, 1,
+        s->api->state->state_write(host, "compressed_total", SLUICE_STATE_INT64, 1,
                             &s->compressed_total) != SLUICE_OK)
         return SLUICE_ERROR;
     return SLUICE_OK;
@@ -1045,16 +1045,16 @@ static int bubbles_load(void *state, sluice_host *host)
     bubbles_state *s = state;
     double values[4];
     int64_t counts[5];
-    if (s->api->state_read(host, "last_check,row_time,mass_total,mass_interval",
+    if (s->api->state->state_read(host, "last_check,row_time,mass_total,mass_interval",
                            SLUICE_STATE_DOUBLE, 4, values) != SLUICE_OK ||
-        s->api->state_read(host, "removed_total,removed_interval,isolated,rows_written,logged",
+        s->api->state->state_read(host, "removed_total,removed_interval,isolated,rows_written,logged",
                            SLUICE_STATE_INT64, 5, counts) != SLUICE_OK)
         return SLUICE_ERROR;
     /* checkpoints of unresolved_bubbles before max_compression (two_phase
      * 1.3.0) have none: nothing was removed for it */
     s->compressed_total = 0;
-    if (s->api->state_length(host, "compressed_total") >= 0 &&
-        s->api->state_read(host, "compressed_total", SLUICE_STATE_INT64, 1,
+    if (s->api->state->state_length(host, "compressed_total") >= 0 &&
+        s->api->state->state_read(host, "compressed_total", SLUICE_STATE_INT64, 1,
                            &s->compressed_total) != SLUICE_OK)
         return SLUICE_ERROR;
     s->last_check = values[0];

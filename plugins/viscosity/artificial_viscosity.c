@@ -82,7 +82,7 @@ static int av_create(const sluice_api *api, sluice_host *host, const void *confi
     s->limit = c->time_step_limit;
     s->same_phase = c->phases == PHASES_SAME;
     if (sluice_util_constant(api, host, "smoothing_length", &s->h) != SLUICE_OK ||
-        (s->limit && api->declare_field(host, &mu_max_field) != SLUICE_OK)) {
+        (s->limit && api->fields->declare_field(host, &mu_max_field) != SLUICE_OK)) {
         free(s);
         return SLUICE_ERROR;
     }

@@ -79,7 +79,7 @@ static int laminar_create(const sluice_api *api, sluice_host *host, const void *
     s->nu = c->nu;
     sluice_real h;
     if (sluice_util_constant(api, host, "smoothing_length", &h) != SLUICE_OK ||
-        api->publish_constant(host, "kinematic_viscosity", &s->nu, 1, "m^2 s^-1") != SLUICE_OK) {
+        api->fields->publish_constant(host, "kinematic_viscosity", &s->nu, 1, "m^2 s^-1") != SLUICE_OK) {
         free(s);
         return SLUICE_ERROR;
     }

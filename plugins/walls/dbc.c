@@ -113,7 +113,7 @@ static int dbc_create(const sluice_api *api, sluice_host *host, const void *conf
     s->start = (double)c->start;
     s->moving_wall = c->moving_wall && c->moving_wall[0] ? c->moving_wall : NULL;
     if (moves && !s->moving_wall) {
-        api->error(host, "'velocity' or 'amplitude' is set but no 'moving_wall' names the wall "
+        api->messages->error(host, "'velocity' or 'amplitude' is set but no 'moving_wall' names the wall "
                          "that moves");
         free(s);
         return SLUICE_ERROR;
@@ -122,7 +122,7 @@ static int dbc_create(const sluice_api *api, sluice_host *host, const void *conf
         /* the moving wall's particles carry its velocity (continuity and
          * viscosity read it); written in the hooks, not during evaluation */
         const sluice_field_spec velocity = SLUICE_SPEC_VELOCITY(0);
-        if (api->declare_field(host, &velocity) != SLUICE_OK) {
+        if (api->fields->declare_field(host, &velocity) != SLUICE_OK) {
             free(s);
             return SLUICE_ERROR;
         }
@@ -136,10 +136,10 @@ static int dbc_bind(void *state, sluice_host *host)
     dbc_state *s = state;
     if (s->layers == 0)
         s->layers = sluice_wall_layers_default(s->api, host, s->h, s->dx);
-    if (s->api->field(host, "density", &s->density) != SLUICE_OK)
+    if (s->api->fields->field(host, "density", &s->density) != SLUICE_OK)
         return SLUICE_ERROR;
-    if (s->moving_wall && (s->api->field(host, "position", &s->position) != SLUICE_OK ||
-                           s->api->field(host, "velocity", &s->velocity) != SLUICE_OK))
+    if (s->moving_wall && (s->api->fields->field(host, "position", &s->position) != SLUICE_OK ||
+                           s->api->fields->field(host, "velocity", &s->velocity) != SLUICE_OK))
         return SLUICE_ERROR;
     return SLUICE_OK;
 }
@@ -186,27 +186,27 @@ static int dbc_initialise(void *state, sluice_host *host)
     const sluice_api *api = s->api;
     int64_t moving = -1;
     if (s->moving_wall) {
-        uint32_t walls = api->wall_count(host);
+        uint32_t walls = api->walls->wall_count(host);
         for (uint32_t w = 0; w < walls; w++) {
-            const sluice_wall *wall = api->wall(host, w);
+            const sluice_wall *wall = api->walls->wall(host, w);
             if (!wall || !wall->name || strcmp(wall->name, s->moving_wall) != 0)
                 continue;
             if (moving >= 0) {
-                api->error(host,
+                api->messages->error(host,
                            "moving_wall: several walls are named '%s' (one moving wall per "
                            "scene)",
                            s->moving_wall);
                 return SLUICE_ERROR;
             }
             if (strcmp(wall->scheme, "dbc") != 0) {
-                api->error(host, "moving_wall: wall '%s' uses the scheme '%s', not dbc",
+                api->messages->error(host, "moving_wall: wall '%s' uses the scheme '%s', not dbc",
                            s->moving_wall, wall->scheme);
                 return SLUICE_ERROR;
             }
             moving = w;
         }
         if (moving < 0) {
-            api->error(host, "moving_wall: no wall is named '%s' (geometry.walls[k].name)",
+            api->messages->error(host, "moving_wall: no wall is named '%s' (geometry.walls[k].name)",
                        s->moving_wall);
             return SLUICE_ERROR;
         }
@@ -222,18 +222,18 @@ static int dbc_initialise(void *state, sluice_host *host)
     if (s->moving_wall) {
         if (s->moving_count == 0) {
             free(layers.positions);
-            api->error(host, "moving_wall: wall '%s' has no wall particles", s->moving_wall);
+            api->messages->error(host, "moving_wall: wall '%s' has no wall particles", s->moving_wall);
             return SLUICE_ERROR;
         }
         s->rest = malloc((size_t)s->moving_count * 3 * sizeof *s->rest);
         if (!s->rest) {
             free(layers.positions);
-            api->error(host, "out of memory");
+            api->messages->error(host, "out of memory");
             return SLUICE_ERROR;
         }
         memcpy(s->rest, layers.positions + 3 * (size_t)s->fixed_count,
                (size_t)s->moving_count * 3 * sizeof *s->rest);
-        apply_motion(s, api->view(host), api->view(host)->time);
+        apply_motion(s, api->particles->view(host), api->particles->view(host)->time);
     }
     free(layers.positions);
     return SLUICE_OK;
@@ -265,7 +265,7 @@ static int dbc_before_step(void *state, sluice_host *host)
 {
     dbc_state *s = state;
     if (s->moving_count) {
-        const sluice_view *v = s->api->view(host);
+        const sluice_view *v = s->api->particles->view(host);
         apply_motion(s, v, v->time);
     }
     return SLUICE_OK;
@@ -274,11 +274,11 @@ static int dbc_before_step(void *state, sluice_host *host)
 static int dbc_after_step(void *state, sluice_host *host)
 {
     dbc_state *s = state;
-    const sluice_view *v = s->api->view(host);
+    const sluice_view *v = s->api->particles->view(host);
     if (s->moving_count)
         apply_motion(s, v, v->time);
     if (s->clamp)
-        s->api->parallel_for(host, v->count, clamp, s);
+        s->api->particles->parallel_for(host, v->count, clamp, s);
     return SLUICE_OK;
 }
 

@@ -15,7 +15,7 @@
  * never move, so x_m and the unit reflection direction
  * n_b = (x_m - x_b) / |x_m - x_b| are computed once, in initialise().
  *
- * Interpolation at x_m (api->point_pass over fluid particles j within the
+ * Interpolation at x_m (api->evaluation->point_pass over fluid particles j within the
  * kernel support; V_j = m_j / rho_j, u_j = (x_j - x_m) / h, G_j = h grad W,
  * grad W = (x_m - x_j) F): the first-order consistent (corrected) SPH
  * interpolation of Liu & Liu (2006), as in English et al. (2021):
@@ -45,7 +45,7 @@
  *                        tangential kept)
  *   pressure  p_b = p_m + rho_m g . (x_b - x_m)  (hydrostatic correction: a
  *             tank at rest keeps rho g H down to the wall particles)
- *   density   rho_b = EOS^-1(p_b) (api->density_from_pressure), so that the
+ *   density   rho_b = EOS^-1(p_b) (api->evaluation->density_from_pressure), so that the
  *             equation of state, which runs after prepare(), returns p_b.
  *   no fluid  v_b = 0, p_b = reference_pressure (the EOS's, 0 if none).
  *   clamp     with `clamp_pressure` (default true) p_b >= reference_pressure:
@@ -241,17 +241,17 @@ static int mirror_create_common(const sluice_api *api, sluice_host *host, mirror
     s->dims = (uint32_t)dims;
     const sluice_field_spec density = SLUICE_SPEC_DENSITY(SLUICE_READ | SLUICE_WRITE);
     const sluice_field_spec mass = SLUICE_SPEC_MASS(SLUICE_READ);
-    if (api->declare_field(host, &density) != SLUICE_OK ||
-        api->declare_field(host, &mass) != SLUICE_OK)
+    if (api->fields->declare_field(host, &density) != SLUICE_OK ||
+        api->fields->declare_field(host, &mass) != SLUICE_OK)
         return SLUICE_ERROR;
     if (s->velocity_mode != VELOCITY_ZERO) {
         const sluice_field_spec velocity = SLUICE_SPEC_VELOCITY(SLUICE_READ | SLUICE_WRITE);
-        if (api->declare_field(host, &velocity) != SLUICE_OK)
+        if (api->fields->declare_field(host, &velocity) != SLUICE_OK)
             return SLUICE_ERROR;
     }
     if (s->scheme == SCHEME_GHOST) {
         const sluice_field_spec pressure = SLUICE_SPEC_PRESSURE(SLUICE_READ);
-        if (api->declare_field(host, &pressure) != SLUICE_OK)
+        if (api->fields->declare_field(host, &pressure) != SLUICE_OK)
             return SLUICE_ERROR;
     }
     return SLUICE_OK;
@@ -307,22 +307,22 @@ static int mirror_bind(void *state, sluice_host *host)
     const sluice_api *api = s->api;
     if (s->layers == 0)
         s->layers = sluice_wall_layers_default(api, host, s->h, s->dx);
-    if (api->field(host, "density", &s->density) != SLUICE_OK ||
-        api->field(host, "mass", &s->mass) != SLUICE_OK)
+    if (api->fields->field(host, "density", &s->density) != SLUICE_OK ||
+        api->fields->field(host, "mass", &s->mass) != SLUICE_OK)
         return SLUICE_ERROR;
     if (s->velocity_mode != VELOCITY_ZERO &&
-        api->field(host, "velocity", &s->velocity) != SLUICE_OK)
+        api->fields->field(host, "velocity", &s->velocity) != SLUICE_OK)
         return SLUICE_ERROR;
     if (s->scheme == SCHEME_GHOST) {
-        if (api->field(host, "pressure", &s->pressure) != SLUICE_OK ||
-            api->density_from_pressure(host, 0, NULL, NULL) != SLUICE_OK ||
+        if (api->fields->field(host, "pressure", &s->pressure) != SLUICE_OK ||
+            api->evaluation->density_from_pressure(host, 0, NULL, NULL) != SLUICE_OK ||
             sluice_util_constant(api, host, "speed_of_sound", &s->c0) != SLUICE_OK)
             return SLUICE_ERROR;
         sluice_real p_ref = 0;
-        api->constant(host, "reference_pressure", &p_ref, 1);
+        api->fields->constant(host, "reference_pressure", &p_ref, 1);
         s->p_ref = p_ref;
         sluice_real g[3] = {0, 0, 0};
-        api->constant(host, "gravity", g, 3);
+        api->fields->constant(host, "gravity", g, 3);
         for (int d = 0; d < 3; d++)
             s->g[d] = (double)g[d];
     }
@@ -347,9 +347,9 @@ static int mirror_in_fluid(const sluice_api *api, sluice_host *host, const sluic
         xm[d] = 2 * c->closest[d] - xb[d];
     for (uint32_t w = 0; w < walls; w++) {
         sluice_wall_point at;
-        if (!api->wall(host, w))
+        if (!api->walls->wall(host, w))
             continue;
-        if (api->wall_nearest(host, xm, (int32_t)w, &at) != SLUICE_OK)
+        if (api->walls->wall_nearest(host, xm, (int32_t)w, &at) != SLUICE_OK)
             return -1;
         if (at.distance < 0 && !at.beyond_end)
             return 0;
@@ -388,13 +388,13 @@ static int mirror_initialise(void *state, sluice_host *host)
     if (!s->mirror || !s->normal || !s->index || !s->local || !s->slot || !s->points ||
         !s->status || !s->value || !s->gradient ||
         !s->p0 || !s->p1 || !s->r0 || !s->r1 || !s->target) {
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     /* the mirror point of each wall particle across the nearest of the
      * scheme's walls whose mirror point lies in the fluid (see
      * mirror_in_fluid); when none does, across the nearest */
-    const uint32_t walls = api->wall_count(host);
+    const uint32_t walls = api->walls->wall_count(host);
     double margin = 0;
     size_t farther = 0, behind = 0;
     for (size_t k = 0; k < n; k++) {
@@ -404,10 +404,10 @@ static int mirror_initialise(void *state, sluice_host *host)
         memset(&nearest, 0, sizeof nearest);
         int found = 0, found_valid = 0;
         for (uint32_t w = 0; w < walls; w++) {
-            const sluice_wall *wall = api->wall(host, w);
+            const sluice_wall *wall = api->walls->wall(host, w);
             if (!wall || strcmp(wall->scheme, s->name) != 0)
                 continue;
-            if (api->wall_nearest(host, xb, (int32_t)w, &candidate) != SLUICE_OK)
+            if (api->walls->wall_nearest(host, xb, (int32_t)w, &candidate) != SLUICE_OK)
                 return SLUICE_ERROR;
             if (!found || fabs((double)candidate.distance) < fabs((double)nearest.distance)) {
                 nearest = candidate;
@@ -424,7 +424,7 @@ static int mirror_initialise(void *state, sluice_host *host)
             }
         }
         if (!found) {
-            api->error(host, "no wall of scheme '%s' for wall particle %zu", s->name, k);
+            api->messages->error(host, "no wall of scheme '%s' for wall particle %zu", s->name, k);
             return SLUICE_ERROR;
         }
         if (!found_valid) {
@@ -447,14 +447,14 @@ static int mirror_initialise(void *state, sluice_host *host)
                 margin = fabs(r[d]);
     }
     if (farther || behind)
-        api->info(host,
+        api->messages->info(host,
                   "%zu wall particles mirrored across a farther wall (the nearest one's mirror "
                   "point lay behind a wall), %zu with no mirror point in front of every wall "
                   "(mirrored across the nearest)",
                   farther, behind);
     /* across ranks the rank of a wall particle interpolates at its mirror
      * point, up to `margin` along an axis outside its box */
-    return api->request_point_margin(host, (sluice_real)margin);
+    return api->evaluation->request_point_margin(host, (sluice_real)margin);
 }
 
 /* ------------------------------------------------------- interpolation -- */
@@ -587,7 +587,7 @@ static void interpolate_points(void *context, const sluice_view *v, const sluice
 /* The density the EOS inverse gives for `count` pressures. */
 static int eos_inverse(mirror_state *s, sluice_host *host, const sluice_real *p, sluice_real *rho)
 {
-    return s->api->density_from_pressure(host, s->local_count, p, rho);
+    return s->api->evaluation->density_from_pressure(host, s->local_count, p, rho);
 }
 
 /* p_m = EOS(rho_m) for every point with fluid, by a secant iteration on the
@@ -662,23 +662,23 @@ static int mirror_prepare(void *state, sluice_host *host)
     const sluice_api *api = s->api;
     if (s->count == 0)
         return SLUICE_OK;
-    list_local(s, api->view(host));
+    list_local(s, api->particles->view(host));
     const sluice_index n = s->local_count;
     memset(s->status, STATUS_NONE, n);
     /* collective across ranks: every rank calls it, with its own points */
-    if (api->point_pass_local(host, s->points, n, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
+    if (api->evaluation->point_pass_local(host, s->points, n, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
                               interpolate_points, s) != SLUICE_OK)
         return SLUICE_ERROR;
     /* where the own particles are now (a rebuild in the pass would have
      * sorted them anew; wall particles never change rank) */
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     sluice_index seen = 0;
     for (sluice_index i = 0; i < v->count; i++) {
         const sluice_id k = v->id[i] - s->first_id;
         if (k < s->count) {
             const sluice_index m = s->slot[k];
             if (m >= n || s->local[m] != (sluice_index)k) {
-                api->error(host, "wall particle id %llu came to this rank during an evaluation",
+                api->messages->error(host, "wall particle id %llu came to this rank during an evaluation",
                            (unsigned long long)v->id[i]);
                 return SLUICE_ERROR;
             }
@@ -687,7 +687,7 @@ static int mirror_prepare(void *state, sluice_host *host)
         }
     }
     if (seen != n) {
-        api->error(host, "%u wall particles left this rank during an evaluation",
+        api->messages->error(host, "%u wall particles left this rank during an evaluation",
                    (unsigned)(n - seen));
         return SLUICE_ERROR;
     }

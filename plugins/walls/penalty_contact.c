@@ -169,7 +169,7 @@ static int penalty_create_common(const sluice_api *api, sluice_host *host, penal
         SLUICE_SPEC_VELOCITY(s->mu > 0 ? SLUICE_READ : 0u),
     };
     for (size_t f = 0; f < sizeof fields / sizeof fields[0]; f++)
-        if (api->declare_field(host, &fields[f]) != SLUICE_OK) {
+        if (api->fields->declare_field(host, &fields[f]) != SLUICE_OK) {
             free(s);
             return SLUICE_ERROR;
         }
@@ -198,17 +198,17 @@ static int penalty_bind(void *state, sluice_host *host)
 {
     penalty_state *s = state;
     const sluice_api *api = s->api;
-    if (api->constant(host, "speed_of_sound", &s->c0, 1) < 1) {
-        api->error(host, "needs the constant 'speed_of_sound' (the fluid's bulk modulus rho0 c0^2 "
+    if (api->fields->constant(host, "speed_of_sound", &s->c0, 1) < 1) {
+        api->messages->error(host, "needs the constant 'speed_of_sound' (the fluid's bulk modulus rho0 c0^2 "
                          "sets the penalty stiffness), which no loaded plugin publishes (load an "
                          "equation of state, e.g. tait)");
         return SLUICE_ERROR;
     }
-    if (api->field(host, "acceleration", &s->acceleration) != SLUICE_OK ||
-        api->field(host, "velocity", &s->velocity) != SLUICE_OK)
+    if (api->fields->field(host, "acceleration", &s->acceleration) != SLUICE_OK ||
+        api->fields->field(host, "velocity", &s->velocity) != SLUICE_OK)
         return SLUICE_ERROR;
     sluice_real support = 2;
-    api->constant(host, "kernel_support", &support, 1);
+    api->fields->constant(host, "kernel_support", &support, 1);
     s->reach = s->d0 + support * s->h;
     const sluice_real K = s->rho0 * s->c0 * s->c0;
     const sluice_real A = s->dims == 2 ? s->dx : s->dx * s->dx;
@@ -220,11 +220,11 @@ static int penalty_bind(void *state, sluice_host *host)
     if (contact_walls_select(&s->walls, api, host, s->scheme, s->exclude, s->dims) != SLUICE_OK)
         return SLUICE_ERROR;
     if (s->walls.count == 0)
-        api->warning(host, s->exclude ? "no wall of the scene uses another scheme than "
+        api->messages->warning(host, s->exclude ? "no wall of the scene uses another scheme than "
                                         "penalty_contact: the backstop adds no force"
                                       : "no wall of the scene uses this scheme: it adds no force");
     else
-        api->info(host,
+        api->messages->info(host,
                   "k = %.6g N m^-1%s, d0 = %.6g m, stable-step limit C_p sqrt(m/k) = %.6g s",
                   (double)s->k, s->dims == 2 ? " per metre of depth" : "", (double)s->d0,
                   (double)s->limit);

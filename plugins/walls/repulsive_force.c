@@ -127,7 +127,7 @@ static int repulsive_create(const sluice_api *api, sluice_host *host, const void
         return SLUICE_ERROR;
     }
     if (!(c->p1 > c->p2)) {
-        api->error(host, "p1 (%g) must be larger than p2 (%g): the force must repel near the wall",
+        api->messages->error(host, "p1 (%g) must be larger than p2 (%g): the force must repel near the wall",
                    (double)c->p1, (double)c->p2);
         free(s);
         return SLUICE_ERROR;
@@ -149,18 +149,18 @@ static int repulsive_bind(void *state, sluice_host *host)
     const sluice_api *api = s->api;
     if (!s->given_strength) {
         sluice_real c0;
-        if (api->constant(host, "speed_of_sound", &c0, 1) < 1) {
-            api->error(host, "the default strength D = c0^2/40 needs the constant "
+        if (api->fields->constant(host, "speed_of_sound", &c0, 1) < 1) {
+            api->messages->error(host, "the default strength D = c0^2/40 needs the constant "
                              "'speed_of_sound', which no loaded plugin publishes: set strength "
                              "or load an equation of state (e.g. tait)");
             return SLUICE_ERROR;
         }
         s->D = c0 * c0 / 40;
     }
-    if (api->field(host, "acceleration", &s->acceleration) != SLUICE_OK)
+    if (api->fields->field(host, "acceleration", &s->acceleration) != SLUICE_OK)
         return SLUICE_ERROR;
     sluice_real support = 2;
-    api->constant(host, "kernel_support", &support, 1);
+    api->fields->constant(host, "kernel_support", &support, 1);
     s->reach = s->r0 + support * s->h;
     s->floor_r = s->r0 / 2;
     s->floor_force = lj_force(s, s->floor_r);
@@ -169,9 +169,9 @@ static int repulsive_bind(void *state, sluice_host *host)
     if (contact_walls_build(&s->walls, api, host, "repulsive_force", s->dims) != SLUICE_OK)
         return SLUICE_ERROR;
     if (s->walls.count == 0)
-        api->warning(host, "no wall of the scene uses this scheme: it adds no force");
+        api->messages->warning(host, "no wall of the scene uses this scheme: it adds no force");
     else
-        api->info(host, "D = %.6g m^2 s^-2, r0 = %.6g m, first-contact step limit %.6g s",
+        api->messages->info(host, "D = %.6g m^2 s^-2, r0 = %.6g m, first-contact step limit %.6g s",
                   (double)s->D, (double)s->r0, (double)(s->factor / sqrt(s->first_kappa)));
     return SLUICE_OK;
 }

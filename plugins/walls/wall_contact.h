@@ -14,7 +14,7 @@
  *  - Behind the wall. When the wall's signed distance d is negative and p is
  *    not past an open end (the crossing test of the core: the side is given
  *    by the normal of the nearest element at an interior point, by the
- *    core's pseudo-normal from api->wall_nearest at a vertex or an edge), p
+ *    core's pseudo-normal from api->walls->wall_nearest at a vertex or an edge), p
  *    has crossed the wall: one contact, gap d < 0, along that normal,
  *    whatever the other faces near it. Pushing along every face p is behind
  *    would push a particle inside a thin solid out through its far face.
@@ -61,7 +61,7 @@
 #define CONTACT_MAX 32
 
 typedef struct contact_wall {
-    uint32_t index;         /* api->wall index */
+    uint32_t index;         /* api->walls->wall index */
     uint32_t element_count; /* segments (2D) or triangles (3D) */
     sluice_real *points;    /* 2 (2D) or 3 (3D) points of 3 reals per element */
     sluice_real *normals;   /* unit normal into the fluid, 3 reals per element */
@@ -96,7 +96,7 @@ static inline void contact_walls_free(contact_walls *cw)
 }
 
 /* Copies the walls whose scheme is `scheme` (with `exclude`, those whose
- * scheme is not). Returns SLUICE_OK, or SLUICE_ERROR after api->error (out
+ * scheme is not). Returns SLUICE_OK, or SLUICE_ERROR after api->messages->error (out
  * of memory). */
 static inline int contact_walls_select(contact_walls *cw, const sluice_api *api,
                                        sluice_host *host, const char *scheme, int exclude,
@@ -104,15 +104,15 @@ static inline int contact_walls_select(contact_walls *cw, const sluice_api *api,
 {
     memset(cw, 0, sizeof *cw);
     cw->dims = dims;
-    const uint32_t total = api->wall_count(host);
+    const uint32_t total = api->walls->wall_count(host);
     cw->walls = calloc((size_t)total + 1, sizeof *cw->walls);
     if (!cw->walls) {
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     const size_t corners = dims == 2 ? 2 : 3;
     for (uint32_t w = 0; w < total; w++) {
-        const sluice_wall *wall = api->wall(host, w);
+        const sluice_wall *wall = api->walls->wall(host, w);
         if (!wall || !wall->scheme || (strcmp(wall->scheme, scheme) != 0) != (exclude != 0) ||
             wall->element_count == 0)
             continue;
@@ -126,7 +126,7 @@ static inline int contact_walls_select(contact_walls *cw, const sluice_api *api,
         cw->count++; /* so that contact_walls_free releases a partial wall */
         if (!c->points || !c->normals || !c->bounds) {
             contact_walls_free(cw);
-            api->error(host, "out of memory");
+            api->messages->error(host, "out of memory");
             return SLUICE_ERROR;
         }
         memcpy(c->points, wall->points, n * corners * 3 * sizeof *c->points);
@@ -307,7 +307,7 @@ static inline int contact_claimed(const contact_wall *w, uint32_t e, const sluic
 /* The contacts of point p with the walls of `cw` closer than `range`, plus
  * the behind-the-wall contacts of points behind a wall by less than `reach`
  * (>= range). Writes at most CONTACT_MAX and returns their number. Thread-safe
- * (api->wall_nearest is). */
+ * (api->walls->wall_nearest is). */
 static inline uint32_t contact_find(const contact_walls *cw, const sluice_api *api,
                                     sluice_host *host, const sluice_real p[3], sluice_real range,
                                     sluice_real reach, uint32_t dims, contact *out)
@@ -337,7 +337,7 @@ static inline uint32_t contact_find(const contact_walls *cw, const sluice_api *a
         if (!(best < reach))
             continue;
         /* which side: the element normal at an interior point, the core's
-         * pseudo-normal (api->wall_nearest) at a vertex or an edge */
+         * pseudo-normal (api->walls->wall_nearest) at a vertex or an edge */
         if (best_feature == 0) {
             const sluice_real *a = w->points + (dims == 2 ? 6 : 9) * (size_t)best_element;
             const sluice_real *normal = w->normals + 3 * (size_t)best_element;
@@ -353,7 +353,7 @@ static inline uint32_t contact_find(const contact_walls *cw, const sluice_api *a
             }
         } else {
             sluice_wall_point q;
-            if (api->wall_nearest(host, p, (int32_t)w->index, &q) == SLUICE_OK && q.distance < 0 &&
+            if (api->walls->wall_nearest(host, p, (int32_t)w->index, &q) == SLUICE_OK && q.distance < 0 &&
                 !q.beyond_end) {
                 if (n < CONTACT_MAX) {
                     out[n].gap = q.distance;
@@ -394,7 +394,7 @@ static inline uint32_t contact_find(const contact_walls *cw, const sluice_api *a
                     out[n].direction[d] = (p[d] - c[d]) / r;
             } else { /* on the vertex or edge itself: its pseudo-normal */
                 sluice_wall_point q;
-                if (api->wall_nearest(host, p, (int32_t)w->index, &q) != SLUICE_OK)
+                if (api->walls->wall_nearest(host, p, (int32_t)w->index, &q) != SLUICE_OK)
                     continue;
                 memcpy(out[n].direction, q.normal, sizeof q.normal);
             }

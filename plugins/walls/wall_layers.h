@@ -3,13 +3,13 @@
  * header only: plugins never link against each other).
  *
  * Every wall of the scene whose `scheme` is the given component name becomes
- * the lattice points behind it (api->wall_layer_points: spacing dx, aligned
+ * the lattice points behind it (api->walls->wall_layer_points: spacing dx, aligned
  * with the fluid lattice, at a distance in (0, thickness] on the side away
  * from the fluid). Walls that meet share lattice points: each point is kept
  * once. One wall may be marked as moving (dbc's prescribed motion): its points
  * (including those it shares with a fixed wall of the same scheme: the moving
  * body owns its whole cross-section) are added after the fixed ones, by a
- * second api->add_particles call, so that the scheme's particles have the
+ * second api->particles->add_particles call, so that the scheme's particles have the
  * consecutive ids
  *     [first_id, first_id + fixed_count)                       fixed walls
  *     [first_id + fixed_count, first_id + fixed + moving)       moving wall
@@ -35,7 +35,7 @@ static inline int64_t sluice_wall_layers_default(const sluice_api *api, sluice_h
                                                  sluice_real h, sluice_real dx)
 {
     sluice_real support = 2;
-    api->constant(host, "kernel_support", &support, 1);
+    api->fields->constant(host, "kernel_support", &support, 1);
     return (int64_t)ceil(support * h / dx - 1e-9);
 }
 
@@ -55,7 +55,7 @@ static inline int sluice_wall_layers_compare_(const void *a, const void *b)
 
 /* Builds and adds the wall particles (kind SLUICE_KIND_WALL) of every wall
  * whose scheme is `scheme`, `thickness` deep; `moving_wall` is the index of
- * the moving wall (api->wall) or -1. Call from initialise(). On success
+ * the moving wall (api->walls->wall) or -1. Call from initialise(). On success
  * `out` holds the ids and positions (free out->positions with free()). */
 static inline int sluice_wall_layers_add(const sluice_api *api, sluice_host *host,
                                          const char *scheme, sluice_real thickness, sluice_real dx,
@@ -65,26 +65,26 @@ static inline int sluice_wall_layers_add(const sluice_api *api, sluice_host *hos
     sluice_real *all = NULL;
     uint8_t *moving = NULL;
     size_t count = 0;
-    uint32_t walls = api->wall_count(host);
+    uint32_t walls = api->walls->wall_count(host);
     for (uint32_t w = 0; w < walls; w++) {
-        const sluice_wall *wall = api->wall(host, w);
+        const sluice_wall *wall = api->walls->wall(host, w);
         if (!wall || strcmp(wall->scheme, scheme) != 0)
             continue;
         sluice_real *points = NULL;
         sluice_index n = 0;
-        if (api->wall_layer_points(host, w, thickness, &points, &n) != SLUICE_OK) {
+        if (api->walls->wall_layer_points(host, w, thickness, &points, &n) != SLUICE_OK) {
             free(all);
             free(moving);
-            api->error(host, "cannot build the wall-particle layers of wall %u", w);
+            api->messages->error(host, "cannot build the wall-particle layers of wall %u", w);
             return SLUICE_ERROR;
         }
         sluice_real *grown = realloc(all, (count + n) * 3 * sizeof *grown + 1);
         uint8_t *grown_flags = grown ? realloc(moving, count + n + 1) : NULL;
         if (!grown || !grown_flags) {
-            api->release(points);
+            api->walls->release(points);
             free(grown ? grown : all);
             free(moving);
-            api->error(host, "out of memory");
+            api->messages->error(host, "out of memory");
             return SLUICE_ERROR;
         }
         all = grown;
@@ -92,7 +92,7 @@ static inline int sluice_wall_layers_add(const sluice_api *api, sluice_host *hos
         memcpy(all + 3 * count, points, (size_t)n * 3 * sizeof *points);
         memset(moving + count, (int64_t)w == moving_wall, n);
         count += n;
-        api->release(points);
+        api->walls->release(points);
     }
     if (count == 0) {
         free(all);
@@ -108,7 +108,7 @@ static inline int sluice_wall_layers_add(const sluice_api *api, sluice_host *hos
         free(unique_moving);
         free(all);
         free(moving);
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     /* lattice points coincide exactly up to round-off: a key on a grid of
@@ -139,7 +139,7 @@ static inline int sluice_wall_layers_add(const sluice_api *api, sluice_host *hos
     if (!ordered) {
         free(unique);
         free(unique_moving);
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     size_t fixed = 0, placed = 0;
@@ -153,23 +153,23 @@ static inline int sluice_wall_layers_add(const sluice_api *api, sluice_host *hos
     free(unique);
     free(unique_moving);
     sluice_index first_fixed = 0, first_moving = 0;
-    if (fixed > 0 && api->add_particles(host, SLUICE_KIND_WALL, ordered, (sluice_index)fixed,
+    if (fixed > 0 && api->particles->add_particles(host, SLUICE_KIND_WALL, ordered, (sluice_index)fixed,
                                         &first_fixed) != SLUICE_OK) {
         free(ordered);
         return SLUICE_ERROR;
     }
     if (kept > fixed &&
-        api->add_particles(host, SLUICE_KIND_WALL, ordered + 3 * fixed,
+        api->particles->add_particles(host, SLUICE_KIND_WALL, ordered + 3 * fixed,
                            (sluice_index)(kept - fixed), &first_moving) != SLUICE_OK) {
         free(ordered);
         return SLUICE_ERROR;
     }
-    const sluice_view *v = api->view(host);
+    const sluice_view *v = api->particles->view(host);
     sluice_id first = v->id[fixed > 0 ? first_fixed : first_moving];
     /* the contract above: the ids are consecutive (checked, not assumed) */
     if (kept > fixed && v->id[first_moving] != first + fixed) {
         free(ordered);
-        api->error(host, "wall particles did not receive consecutive ids");
+        api->messages->error(host, "wall particles did not receive consecutive ids");
         return SLUICE_ERROR;
     }
     out->first_id = first;

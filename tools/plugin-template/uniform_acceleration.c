@@ -57,7 +57,7 @@ static int create(const sluice_api *api, sluice_host *host, const void *cfg, voi
 static int bind(void *st, sluice_host *host)
 {
     state *s = st;
-    return s->api->field(host, "acceleration", &s->field);
+    return s->api->fields->field(host, "acceleration", &s->field);
 }
 
 static void destroy(void *st)

@@ -27,7 +27,7 @@ static inline int sluice_gauge_check_list(const sluice_api *api,
                                           sluice_index count,
                                           const char *gauges) {
   if (list->count > 1 && list->count != count) {
-    api->error(host,
+    api->messages->error(host,
                "'%s' lists %u values for %u %s: give one value for all or one "
                "per %.*s",
                name, list->count, count, gauges, (int)strlen(gauges) - 1,

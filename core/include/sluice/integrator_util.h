@@ -25,28 +25,30 @@ typedef struct sluice_integrand {
     sluice_field *stored;      /* "<state>_previous" of every rate, when asked for */
 } sluice_integrand;
 
-/* Binds everything (in bind()); with stored_doc non-NULL also declares the
- * stored copies (documented by stored_doc, in the units of their field).
- * in->dims is the scene's dimension count. */
+/* Binds everything, in the integrator's create(): the core creates the
+ * integrator after every other component, so the integrated fields
+ * (api->fields->rate_count / rate) are known there. With stored_doc non-NULL
+ * also declares the stored copies (documented by stored_doc, in the units of
+ * their field). in->dims is the scene's dimension count. */
 static inline int sluice_integrand_bind(sluice_integrand *in, const sluice_api *api,
                                         sluice_host *host, const char *stored_doc)
 {
     memset(in, 0, sizeof *in);
     if (sluice_util_dimensions(api, host, &in->dims) != SLUICE_OK ||
-        api->field(host, "position", &in->position) != SLUICE_OK ||
-        api->field(host, "velocity", &in->velocity) != SLUICE_OK)
+        api->fields->field(host, "position", &in->position) != SLUICE_OK ||
+        api->fields->field(host, "velocity", &in->velocity) != SLUICE_OK)
         return SLUICE_ERROR;
     in->has_transport =
         sluice_util_optional_field(api, host, "transport_velocity_correction", &in->transport);
-    in->rate_count = api->rate_count(host);
+    in->rate_count = api->fields->rate_count(host);
     in->rates = calloc(in->rate_count + 1, sizeof *in->rates);
     in->stored = stored_doc ? calloc(in->rate_count + 1, sizeof *in->stored) : NULL;
     if (!in->rates || (stored_doc && !in->stored)) {
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
         return SLUICE_ERROR;
     }
     for (uint32_t r = 0; r < in->rate_count; r++) {
-        if (api->rate(host, r, &in->rates[r]) != SLUICE_OK)
+        if (api->fields->rate(host, r, &in->rates[r]) != SLUICE_OK)
             return SLUICE_ERROR;
         if (strcmp(in->rates[r].state_name, "velocity") == 0) {
             in->has_acceleration = 1;
@@ -59,15 +61,15 @@ static inline int sluice_integrand_bind(sluice_integrand *in, const sluice_api *
         sluice_field_spec spec = {name, SLUICE_TYPE_REAL, in->rates[r].state.components, "",
                                   SLUICE_READ | SLUICE_WRITE, SLUICE_FIELD_RESTART, NULL, 0,
                                   stored_doc};
-        uint32_t count = api->field_count(host);
+        uint32_t count = api->fields->field_count(host);
         for (uint32_t f = 0; f < count; f++) {
             sluice_field_spec info;
-            if (api->field_info(host, f, &info, NULL) == SLUICE_OK &&
+            if (api->fields->field_info(host, f, &info, NULL) == SLUICE_OK &&
                 strcmp(info.name, in->rates[r].state_name) == 0)
                 spec.units = info.units;
         }
-        if (api->declare_field(host, &spec) != SLUICE_OK ||
-            api->field(host, name, &in->stored[r]) != SLUICE_OK)
+        if (api->fields->declare_field(host, &spec) != SLUICE_OK ||
+            api->fields->field(host, name, &in->stored[r]) != SLUICE_OK)
             return SLUICE_ERROR;
     }
     return SLUICE_OK;

@@ -6,7 +6,7 @@
  * schedule counts the outputs made; the next one is due at
  * count x interval (never accumulated, so no rounding drifts in). Times
  * within 1e-9 interval of a due time count as that time. After an output,
- * sluice_schedule_advance asks the core (api->request_time) to end a step
+ * sluice_schedule_advance asks the core (api->evaluation->request_time) to end a step
  * exactly on the next due time.
  *
  *     if (!sluice_schedule_due(&s->schedule, v->time))      in after_step
@@ -64,7 +64,7 @@ static inline void sluice_schedule_advance(sluice_schedule *s, const sluice_api 
     const double tolerance = sluice_schedule_tolerance(s);
     while (sluice_schedule_next(s) <= time + tolerance)
         s->count++;
-    api->request_time(host, sluice_schedule_next(s));
+    api->evaluation->request_time(host, sluice_schedule_next(s));
 }
 
 /* Checkpoints (save_state / load_state): the count, as an int64 named
@@ -72,13 +72,13 @@ static inline void sluice_schedule_advance(sluice_schedule *s, const sluice_api 
 static inline int sluice_schedule_save(const sluice_schedule *s, const sluice_api *api,
                                        sluice_host *host, const char *name)
 {
-    return api->state_write(host, name, SLUICE_STATE_INT64, 1, &s->count);
+    return api->state->state_write(host, name, SLUICE_STATE_INT64, 1, &s->count);
 }
 
 static inline int sluice_schedule_load(sluice_schedule *s, const sluice_api *api,
                                        sluice_host *host, const char *name)
 {
-    return api->state_read(host, name, SLUICE_STATE_INT64, 1, &s->count);
+    return api->state->state_read(host, name, SLUICE_STATE_INT64, 1, &s->count);
 }
 
 /* Defines the save_state and load_state callbacks (named save_fn, load_fn)

@@ -23,7 +23,7 @@ static inline int sluice_phase_declare(const sluice_api *api, sluice_host *host,
 {
     static const sluice_field_spec phase =
         SLUICE_SPEC_PHASE_DOC(SLUICE_READ, 0, "phase of a fluid particle: 0 water, 1 air");
-    return filter == SLUICE_PHASE_ALL ? SLUICE_OK : api->declare_field(host, &phase);
+    return filter == SLUICE_PHASE_ALL ? SLUICE_OK : api->fields->declare_field(host, &phase);
 }
 
 /* Binds the field (column -1 without a filter). */
@@ -31,7 +31,7 @@ static inline int sluice_phase_bind(const sluice_api *api, sluice_host *host, in
                                     sluice_field *out)
 {
     out->column = -1;
-    return filter == SLUICE_PHASE_ALL ? SLUICE_OK : api->field(host, "phase", out);
+    return filter == SLUICE_PHASE_ALL ? SLUICE_OK : api->fields->field(host, "phase", out);
 }
 
 /* The phase column, or NULL without a filter. */

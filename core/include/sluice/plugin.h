@@ -8,15 +8,24 @@
  * Plugins never link against the core: every service of the core is reached
  * through the sluice_api table handed to each component's create().
  *
- * Compatibility rules (see docs/plugin-abi.md):
+ * ABI 2.0, frozen (docs/plugin-abi.md; its history: docs/abi-changelog.md):
  *  - SLUICE_ABI_MAJOR changes when anything existing changes; the core refuses
  *    a plugin with another major version.
- *  - SLUICE_ABI_MINOR grows when members are appended at the end of
- *    sluice_api or sluice_component; the core refuses a plugin built for a
- *    newer minor than its own, and accepts older ones (members the plugin does
- *    not know about read as absent).
+ *  - SLUICE_ABI_MINOR grows when members are appended at the end of a host
+ *    sub-table, of sluice_component or of sluice_view, never elsewhere. Every
+ *    host sub-table and the library descriptor carry their size: the core
+ *    reads a plugin's components with the stride it was built with (members
+ *    it does not know read as absent), and a plugin checks a table's size
+ *    before it uses a member appended after its build (SLUICE_API_HAS). The
+ *    core refuses a plugin built for a newer minor than its own.
  *  - The build signature (size of sluice_real, of sluice_index, supported
  *    dimensions) must match the core exactly.
+ *
+ * What each kind of component must provide is checked when the scene loads
+ * (docs/plugin-abi.md, "What each kind of component provides"): a kernel
+ * publishes 'kernel_support'; an equation of state (a component with
+ * density_from_pressure) publishes 'speed_of_sound' and 'reference_pressure';
+ * an integrator has advance and no pair callback.
  *
  * Units are SI throughout: m, s, kg, Pa.
  */
@@ -32,8 +41,8 @@
 extern "C" {
 #endif
 
-#define SLUICE_ABI_MAJOR 1
-#define SLUICE_ABI_MINOR 9
+#define SLUICE_ABI_MAJOR 2
+#define SLUICE_ABI_MINOR 0
 #define SLUICE_PLUGIN_MAGIC 0x534c4349u /* "SLCI" */
 
 #if defined(__GNUC__)
@@ -58,7 +67,7 @@ enum { SLUICE_OK = 0, SLUICE_ERROR = -1 };
 
 /* Every particle has a kind, owned by the core. Masks are (1u << kind).
  *
- * SLUICE_KIND_OPEN (1.4) is fluid in an inlet or outlet buffer whose state
+ * SLUICE_KIND_OPEN is fluid in an inlet or outlet buffer whose state
  * (position, velocity, density) an open-boundary plugin imposes: the
  * integrators do not move it and no term targets it unless it asks for the
  * kind, but it is fluid to its neighbours. A component whose neighbour_kinds
@@ -68,7 +77,7 @@ enum { SLUICE_OK = 0, SLUICE_ERROR = -1 };
 enum sluice_kind {
     SLUICE_KIND_FLUID = 0, /* moves with the flow, integrated */
     SLUICE_KIND_WALL = 1,  /* wall particle (dynamic boundary), fixed or prescribed motion */
-    SLUICE_KIND_OPEN = 2,  /* 1.4: fluid with an imposed state in an open-boundary buffer */
+    SLUICE_KIND_OPEN = 2,  /* fluid with an imposed state in an open-boundary buffer */
     SLUICE_KIND_COUNT = 3
 };
 #define SLUICE_KIND_MASK(k) (1u << (k))
@@ -88,8 +97,8 @@ typedef enum sluice_type {
     SLUICE_TYPE_ID = 4 /* sluice_id */
 } sluice_type;
 
-/* 1.5: element types of the plugin state arrays stored in checkpoints
- * (api->state_write / state_read). */
+/* Element types of the plugin state arrays stored in checkpoints
+ * (api->state->state_write / state_read). */
 typedef enum sluice_state_type {
     SLUICE_STATE_DOUBLE = 1, /* double */
     SLUICE_STATE_INT64 = 2,  /* int64_t */
@@ -128,7 +137,7 @@ typedef struct sluice_field_spec {
     const char *doc;
 } sluice_field_spec;
 
-/* A resolved field: filled by api->field(). `column` is the index of its first
+/* A resolved field: filled by api->fields->field(). `column` is the index of its first
  * component in sluice_view.columns; component c is column + c. */
 typedef struct sluice_field {
     int32_t column;
@@ -181,8 +190,8 @@ typedef struct sluice_param_spec {
 /* ------------------------------------------------------------ the view -- */
 
 /* The particle state as seen by callbacks. Valid until the core reorders
- * particles (inside api->evaluate) or changes their number; fetch it again with
- * api->view() after those. */
+ * particles (inside api->evaluation->evaluate) or changes their number; fetch it again with
+ * api->particles->view() after those. */
 typedef struct sluice_view {
     sluice_index count;        /* particles */
     uint32_t dimensions;       /* 2 or 3 */
@@ -195,6 +204,12 @@ typedef struct sluice_view {
     double time;                  /* s, at the start of the current step */
     double dt;                    /* s, current step (0 before the first) */
     int64_t step;
+    /* Inside an evaluation: the time the state being evaluated stands at
+     * (s; e.g. time + dt/2 for a midpoint stage) and the evaluation's index
+     * within the step (0, 1, ...), as the integrator passed them to
+     * api->evaluation->evaluate. Between evaluations: time and 0. */
+    double stage_time;
+    uint32_t stage;
 } sluice_view;
 
 static inline sluice_real *sluice_real_column(const sluice_view *v, sluice_field f, uint32_t c)
@@ -252,20 +267,20 @@ typedef struct sluice_wall {
     const sluice_real *normals; /* unit normal into the fluid, 3 reals per element */
 } sluice_wall;
 
-/* The point of a wall nearest to a query point (api->wall_nearest, 1.3). */
+/* The point of a wall nearest to a query point (api->walls->wall_nearest). */
 typedef struct sluice_wall_point {
     sluice_real distance;   /* signed, m: > 0 on the fluid side, < 0 behind the wall */
     sluice_real closest[3]; /* the nearest point of the wall */
     sluice_real normal[3];  /* unit normal into the fluid there (at a vertex or an edge the
                                pseudo-normal, the mean of the elements' normals) */
-    uint32_t wall;          /* index of the wall (api->wall) */
+    uint32_t wall;          /* index of the wall (api->walls->wall) */
     uint32_t element;       /* segment (2D) or triangle (3D) */
     int32_t feature;        /* 0: interior of the element; 1..3: a vertex; 4..6: an edge (3D) */
     int32_t beyond_end;     /* 1 when the point lies past an open end of the wall (the end
                                of a polyline), where "behind" has no meaning */
 } sluice_wall_point;
 
-/* Called by api->point_pass with batches of (point, particle) pairs. */
+/* Called by api->evaluation->point_pass with batches of (point, particle) pairs. */
 typedef void (*sluice_point_fn)(void *context, const sluice_view *view,
                                 const sluice_pair_batch *batch);
 
@@ -282,14 +297,14 @@ typedef struct sluice_plugin_info {
 typedef void (*sluice_range_fn)(void *context, const sluice_view *view, sluice_index begin,
                                 sluice_index end);
 
-/* 1.8: how values combine across the ranks of a distributed run (api->reduce). */
+/* How values combine across the ranks of a distributed run (api->ranks->reduce). */
 typedef enum sluice_reduce_op {
     SLUICE_REDUCE_SUM = 1,
     SLUICE_REDUCE_MIN = 2,
     SLUICE_REDUCE_MAX = 3
 } sluice_reduce_op;
 
-/* 1.8: this rank's place in a distributed run (api->ranks). On one rank:
+/* This rank's place in a distributed run (api->ranks->ranks). On one rank:
  * rank 0 of 1, offset 0, total = view->count, communicator NULL. */
 typedef struct sluice_ranks {
     int32_t rank, count;      /* this rank, and how many there are */
@@ -298,206 +313,143 @@ typedef struct sluice_ranks {
     const void *communicator; /* the run's MPI_Comm (const MPI_Comm *), NULL without MPI */
 } sluice_ranks;
 
-/* The table of core services. Grows only at its end; `size` tells how much of
- * it this core provides. Every function taking a host must be called from the
- * thread that called the component, except those marked "thread-safe". */
-typedef struct sluice_api {
-    uint32_t size;
-    uint16_t abi_major, abi_minor;
+/* The host API: the core's services, in sub-tables by concern. Each table
+ * starts with its size (sizeof as the core was built), so that a later 2.x
+ * core can append members to a table without moving any other; a plugin
+ * reads a member appended after its own build only after checking the
+ * table's size (SLUICE_API_HAS). Every function taking a host must be called
+ * from the thread that called the component, except those marked
+ * "thread-safe". */
 
-    /* -- 1.0: diagnostics. Messages are prefixed with the component name. */
+/* Messages, prefixed with the component's name. In create(), bind() and
+ * initialise() an error becomes one diagnostic naming the plugin; during
+ * the run it stops the run. */
+typedef struct sluice_api_messages {
+    uint32_t size;
     void (*error)(sluice_host *host, const char *format, ...) SLUICE_PRINTF(2, 3); /* thread-safe */
     void (*warning)(sluice_host *host, const char *format, ...) SLUICE_PRINTF(2, 3);
     void (*info)(sluice_host *host, const char *format, ...) SLUICE_PRINTF(2, 3);
+} sluice_api_messages;
 
-    /* -- 1.0: fields and constants.
-     * declare_field: only in create() or bind(). field: from bind() on; a field
-     * no component declared is an error. */
+/* Fields and named constants. */
+typedef struct sluice_api_fields {
+    uint32_t size;
+    /* Declares a field beyond the component's static `fields` (one whose
+     * name or components depend on parameters). Only in create(): a
+     * declaration in bind() or later is an error, since the schedule, the
+     * integrated rates and the particle store are built from the
+     * declarations made by then. */
     int (*declare_field)(sluice_host *host, const sluice_field_spec *spec);
+    /* The handle of a declared field, from bind() on; a field no component
+     * declared is an error. */
     int (*field)(sluice_host *host, const char *name, sluice_field *out);
+    /* Every field, in declaration order (writers). */
+    uint32_t (*field_count)(sluice_host *host);
+    int (*field_info)(sluice_host *host, uint32_t index, sluice_field_spec *spec,
+                      sluice_field *field);
+    /* The integrated fields: state, rate and kinds (integrators). */
+    uint32_t (*rate_count)(sluice_host *host);
+    int (*rate)(sluice_host *host, uint32_t index, sluice_rate *out);
     /* Named constants (smoothing_length, spacing, rest_density, dimensions,
-     * gravity, speed_of_sound, ...). publish: in create(); get: from bind() on.
-     * get returns the number of values, or 0 when nobody published it. */
+     * end_time, domain_min, domain_max from the core; kernel_support,
+     * speed_of_sound, reference_pressure, gravity, ... from plugins).
+     * publish: in create(), once per name over the scene; constant: from
+     * bind() on, returns the number of values, or 0 when nobody published
+     * it. */
     int (*publish_constant)(sluice_host *host, const char *name, const sluice_real *values,
                             uint32_t count, const char *unit);
     uint32_t (*constant)(sluice_host *host, const char *name, sluice_real *values,
                          uint32_t max_count);
-    uint32_t (*rate_count)(sluice_host *host);
-    int (*rate)(sluice_host *host, uint32_t index, sluice_rate *out);
+} sluice_api_fields;
 
-    /* -- 1.0: particles and geometry. */
+/* Particles: the view, and particles that come and go. */
+typedef struct sluice_api_particles {
+    uint32_t size;
     const sluice_view *(*view)(sluice_host *host);
-    /* Add `count` particles of `kind` at positions (3 reals each); mass,
+    /* Adds `count` particles of `kind` at positions (3 reals each); mass,
      * density (rest density) and a new id are set by the core, other fields
-     * are zero. In initialise(), and (1.4) between steps: in before_step or
-     * after_step hooks, never inside an evaluation. *first receives the index
-     * of the first one; indices of existing particles do not change. */
+     * are zero. In initialise(), and between steps (before_step or
+     * after_step), never inside an evaluation. *first receives the index of
+     * the first one; indices of existing particles do not change. Across
+     * ranks only components flagged SLUICE_COMPONENT_ACROSS_RANKS add or
+     * remove particles during the run; new ids are unique over the ranks,
+     * and a particle added outside the rank's box moves to its owner at the
+     * next neighbour-list rebuild. */
     int (*add_particles)(sluice_host *host, uint8_t kind, const sluice_real *positions,
                          sluice_index count, sluice_index *first);
-    /* (Across ranks, 1.8: during the run only components flagged
-     * SLUICE_COMPONENT_ACROSS_RANKS add or remove particles; new ids are
-     * unique over the ranks, and a particle added outside the rank's box
-     * moves to its owner at the next neighbour-list rebuild.) */
+    /* Only between steps. Removes the particles at the listed indices (any
+     * order, no duplicates); the others keep their ids and order but move to
+     * lower indices, so indices held before the call are stale after it. Ids
+     * are never reused. */
+    int (*remove_particles)(sluice_host *host, const sluice_index *indices, sluice_index count);
+    /* Only between steps: changes the kind of the listed particles (e.g.
+     * SLUICE_KIND_OPEN -> SLUICE_KIND_FLUID when an inflow particle leaves
+     * the inlet buffer). Fails on an index out of range. */
+    int (*set_kind)(sluice_host *host, const sluice_index *indices, sluice_index count,
+                    uint8_t kind);
+    /* Particles removed since the start of the run (all kinds; across ranks,
+     * by this rank). */
+    uint64_t (*removed_count)(sluice_host *host);
+    /* Runs fn over [0, count) in parallel chunks. */
+    void (*parallel_for)(sluice_host *host, sluice_index count, sluice_range_fn fn, void *context);
+} sluice_api_particles;
+
+/* The scene's walls and distances to them. */
+typedef struct sluice_api_walls {
+    uint32_t size;
     uint32_t (*wall_count)(sluice_host *host);
     const sluice_wall *(*wall)(sluice_host *host, uint32_t index);
-    /* Lattice points (spacing dx, aligned with the fluid lattice) behind a wall,
-     * at a distance in (0, thickness] from it on the side away from the fluid.
-     * The array (3 reals per point) is freed with api->release(). */
+    /* Lattice points (spacing dx, aligned with the fluid lattice) behind a
+     * wall, at a distance in (0, thickness] from it on the side away from
+     * the fluid. The array (3 reals per point) is freed with release(). */
     int (*wall_layer_points)(sluice_host *host, uint32_t wall_index, sluice_real thickness,
                              sluice_real **points, sluice_index *count);
     void (*release)(void *memory);
-
-    /* -- 1.0: running. */
-    /* Integrators: evaluate every rate at the current state (updating the
-     * neighbour search first when needed). */
-    int (*evaluate)(sluice_host *host);
-    /* Integrators: the step size after an evaluation: the minimum of every
-     * component's limit, clamped to the end time and requested times. */
-    double (*time_step)(sluice_host *host);
-    /* Run fn over [0, count) in parallel chunks. */
-    void (*parallel_for)(sluice_host *host, sluice_index count, sluice_range_fn fn, void *context);
-    /* Ask the core to end a step exactly at time t (outputs, gauges). */
-    void (*request_time)(sluice_host *host, double t);
-
-    /* -- 1.0: output. */
-    /* Path of `name` inside the run's output directory. */
-    int (*output_path)(sluice_host *host, const char *name, char *buffer, size_t size);
-    /* The fully resolved scene (every default filled in), YAML text. */
-    const char *(*resolved_scene)(sluice_host *host);
-    uint32_t (*plugin_count)(sluice_host *host);
-    int (*plugin)(sluice_host *host, uint32_t index, sluice_plugin_info *out);
-    /* Field table for writers. */
-    uint32_t (*field_count)(sluice_host *host);
-    int (*field_info)(sluice_host *host, uint32_t index, sluice_field_spec *spec,
-                      sluice_field *field);
-    /* Time series in the output directory: a CSV file with a header line;
-     * rows are written whole. */
-    sluice_table *(*table_open)(sluice_host *host, const char *file_name, const char *header);
-    int (*table_row)(sluice_table *table, const double *values, uint32_t count);
-    /* Write `size` bytes to `path` atomically (temporary file, then rename). */
-    int (*write_file_atomic)(sluice_host *host, const char *path, const void *data, size_t size);
-
-    /* -- 1.1: geometry queries and on-demand pair passes. */
-    /* Distance from a point (3 reals) to the nearest wall of the scene, of any
-     * scheme, in m; INFINITY when the scene has no walls. Thread-safe. */
+    /* Distance from a point (3 reals) to the nearest wall of the scene, of
+     * any scheme, in m; INFINITY when the scene has no walls. Thread-safe. */
     sluice_real (*wall_distance)(sluice_host *host, const sluice_real *point);
-    /* For a component flagged SLUICE_COMPONENT_ON_DEMAND: run its pair
-     * callback over every particle now, on the current state (from a hook,
-     * e.g. after_step every N steps). Across ranks (1.9) the core first
-     * refreshes the halo, so the neighbours other ranks own are current:
-     * collective, every rank calls it at the same point of the run. */
-    int (*pair_pass)(sluice_host *host);
-
-    /* -- 1.2: equation of state. */
-    /* density[k] for pressure[k], k < n, through the inverse of the scene's
-     * equation of state (the component with a density_from_pressure callback,
-     * the one the core uses for the hydrostatic start). Fails with a message
-     * when the scene loads none; n = 0 only checks that one is loaded. */
-    int (*density_from_pressure)(sluice_host *host, sluice_index n, const sluice_real *pressure,
-                                 sluice_real *density);
-
-    /* -- 1.3: wall geometry and interpolation at points. */
-    /* The nearest point of wall `wall` (or of every wall when wall < 0) to
+    /* The nearest point of wall `wall` (of every wall when wall < 0) to
      * `point` (3 reals). SLUICE_ERROR when the scene has no such wall.
      * Thread-safe. */
     int (*wall_nearest)(sluice_host *host, const sluice_real *point, int32_t wall,
                         sluice_wall_point *out);
+} sluice_api_walls;
+
+/* Evaluations, time steps and passes. */
+typedef struct sluice_api_evaluation {
+    uint32_t size;
+    /* Integrators: evaluates every rate at the current state (updating the
+     * neighbour search first when needed), for the stage of the step that
+     * starts at view->time and whose state stands at `stage_time` (s);
+     * `stage` counts the evaluations of the step from 0. Every callback of
+     * the evaluation reads both in the view (stage_time, stage). */
+    int (*evaluate)(sluice_host *host, double stage_time, uint32_t stage);
+    /* Integrators: the step size after an evaluation: the minimum of every
+     * component's limit, clamped to the end time and requested times. */
+    double (*time_step)(sluice_host *host);
+    /* Asks the core to end a step exactly at time t (outputs, gauges). */
+    void (*request_time)(sluice_host *host, double t);
+    /* For a component flagged SLUICE_COMPONENT_ON_DEMAND: runs its pair
+     * callback over every particle now, on the current state (from a hook).
+     * Across ranks the core first refreshes the halo: collective. */
+    int (*pair_pass)(sluice_host *host);
     /* Interpolation at arbitrary points: calls fn with batches in which
      * target[t] is the index of a point (3 reals each in `points`) and the
-     * pairs are the particles of a kind in `kinds` within the kernel
-     * support of it: offset = point - x_j, distance (may be 0), kernel (W)
-     * and kernel_gradient (F) always set, gathered NULL (read the view's
-     * columns at neighbour[k]). Runs in parallel over chunks of points, so fn
-     * writes only to what belongs to its points. Call from prepare() or a
-     * hook, never from a particle or pair callback. */
+     * pairs are the particles of a kind in `kinds` within the kernel support
+     * of it: offset = point - x_j, distance (may be 0), kernel (W) and
+     * kernel_gradient (F) always set, gathered NULL (read the view's columns
+     * at neighbour[k]). Runs in parallel over chunks of points, so fn writes
+     * only to what belongs to its points. From prepare() or a hook, never
+     * from a particle or pair callback. */
     int (*point_pass)(sluice_host *host, const sluice_real *points, sluice_index count,
                       uint32_t kinds, sluice_point_fn fn, void *context);
-
-    /* -- 1.4: particles that come and go (open boundaries). Only between
-     * steps (before_step / after_step hooks), never inside an evaluation.
-     * remove_particles: removes the particles at the listed indices (any
-     * order, no duplicates); the others keep their ids and order but move
-     * to lower indices, so indices held before the call are stale after it.
-     * Their ids are never reused. set_kind: changes the kind of the listed
-     * particles (e.g. SLUICE_KIND_OPEN -> SLUICE_KIND_FLUID when an inflow
-     * particle leaves the inlet buffer). Both fail on an index out of range. */
-    int (*remove_particles)(sluice_host *host, const sluice_index *indices, sluice_index count);
-    int (*set_kind)(sluice_host *host, const sluice_index *indices, sluice_index count,
-                    uint8_t kind);
-    /* Particles removed since the start of the run (all kinds; across
-     * ranks, by this rank). */
-    uint64_t (*removed_count)(sluice_host *host);
-
-    /* -- 1.5: plugin state in checkpoints (docs/reliability.md, "Checkpoints
-     * and restart"). Only inside the component's own save_state (write) or
-     * load_state (read, length) callback. Arrays are named (a plain name, no
-     * '/'), stored under the component's group of the checkpoint, with an
-     * element type and count (0 is allowed). state_read fails with a
-     * message (the restart adds the plugin and the checkpoint) when the
-     * array is missing or its type or count differ; state_length returns the
-     * element count, or -1 when the array is missing. A checkpoint with no
-     * group for the component (an older plugin version without state) still
-     * calls load_state, with every array missing. */
-    int (*state_write)(sluice_host *host, const char *name, sluice_state_type type,
-                       uint64_t count, const void *data);
-    int (*state_read)(sluice_host *host, const char *name, sluice_state_type type,
-                      uint64_t count, void *data);
-    int64_t (*state_length)(sluice_host *host, const char *name);
-
-    /* -- 1.6: pair terms that reach beyond the kernel support (a kernel of
-     * their own with a longer smoothing length, e.g. the air's cohesion with
-     * H = 2h). Called in the component's create(), once: the term then
-     * receives every pair within `radius` m (> the scene kernel's support)
-     * instead of the support, in passes of its own that the core traverses
-     * through the cell grid (the Verlet list stays at the support, so no
-     * other term pays for the reach). In its batches `kernel` and
-     * `kernel_gradient` are NULL: the term evaluates its own kernel from
-     * `distance`. Fails after create(), for a non-pair component, or for a
-     * radius that is not finite and positive; a radius within the support
-     * changes nothing. Across ranks (1.9) the halo is as wide as the largest
-     * reach (plus the neighbour skin). */
-    int (*request_reach)(sluice_host *host, sluice_real radius);
-
-    /* -- 1.7: the pairs a reaching term needs. Called in create(), after
-     * request_reach: the term contributes only where the target and the
-     * neighbour both hold `value` in the uint8 field `field` (which the
-     * component declares it reads), e.g. the air's cohesion, phase = 1. The
-     * core then leaves every other particle out of the term's pass, as
-     * target and as neighbour, and the term is spared their traversal. */
-    int (*restrict_reach)(sluice_host *host, const char *field, uint32_t value);
-
-    /* -- 1.8: runs across MPI ranks (docs/scaling.md). Each rank's components
-     * see the rank's own particles (view->count) and, in pair batches, the
-     * neighbours other ranks own. Both calls are collective: every rank calls
-     * them at the same point of the run, in the same order. */
-    /* Combines values[0 .. count) over the ranks, in place, on every rank:
-     * a gauge sums its particles' contributions with it before it writes.
-     * The identity on one rank. */
-    int (*reduce)(sluice_host *host, double *values, uint32_t count, sluice_reduce_op op);
-    /* This rank's place and the offset of its particles in the global order
-     * (ranks in order, each rank's particles in view order): where a writer
-     * puts them in a shared file. */
-    int (*ranks)(sluice_host *host, sluice_ranks *out);
-    /* 1 when this rank owns the particles at `point` (3 reals; its box
-     * holds the point, 1.9: the box of docs/scaling.md's decomposition;
-     * 1.8: its slab along x), 0 otherwise; always 1 on one rank. Not
-     * collective: the rank that owns a place adds the particles there (an
-     * inlet's new column), the others leave it. */
-    int (*owns)(sluice_host *host, const sluice_real *point);
-
-    /* -- 1.9: interpolation at points of this rank's own particles (a wall
-     * particle's mirror point, docs/scaling.md). As point_pass, but the
-     * pairs include, across ranks, the particles other ranks own near the
-     * rank's box (the halo, refreshed first), so that every point gets what it
-     * gets on one rank: the caller passes only points that belong to its
-     * rank's own particles (view->count), and it may run without
-     * SLUICE_COMPONENT_ACROSS_RANKS (nothing is summed over ranks). Each
-     * point must lie within the margin the component requested
-     * (request_point_margin; 0 by default) of the rank's box; a point
-     * beyond it fails with a message. Collective across ranks: every rank
-     * calls it at the same point of the run, with its own points (count
-     * may be 0). On one rank it is point_pass. Call from prepare() or a
-     * hook, never from a particle or pair callback. */
+    /* As point_pass at points of this rank's own particles (a wall
+     * particle's mirror point), with, across ranks, the particles other
+     * ranks own near the rank's box (the halo, refreshed first), so that
+     * every point gets what it gets on one rank. Each point lies within the
+     * margin the component requested (request_point_margin; 0 by default) of
+     * the rank's box; a point beyond it fails with a message. Collective
+     * across ranks; on one rank it is point_pass. */
     int (*point_pass_local)(sluice_host *host, const sluice_real *points, sluice_index count,
                             uint32_t kinds, sluice_point_fn fn, void *context);
     /* In create(), bind() or initialise(): the points of this component's
@@ -505,28 +457,121 @@ typedef struct sluice_api {
      * from the particle they belong to; across ranks the halo is widened by
      * the largest margin requested. */
     int (*request_point_margin)(sluice_host *host, sluice_real margin);
+    /* In create(), once: a pair term that reaches beyond the kernel support
+     * (a kernel of its own with a longer smoothing length, e.g. the air's
+     * cohesion with H = 2h) receives every pair within `radius` m in passes
+     * of its own (the Verlet list stays at the support, so no other term
+     * pays for the reach); in its batches `kernel` and `kernel_gradient` are
+     * NULL. Fails after create(), for a non-pair component, or for a radius
+     * that is not finite and positive; a radius within the support changes
+     * nothing. Across ranks the halo is as wide as the largest reach. */
+    int (*request_reach)(sluice_host *host, sluice_real radius);
+    /* In create(), after request_reach: the term contributes only where the
+     * target and the neighbour both hold `value` in the uint8 field `field`
+     * (which the component declares it reads); the core leaves every other
+     * particle out of the term's pass. */
+    int (*restrict_reach)(sluice_host *host, const char *field, uint32_t value);
+    /* density[k] for pressure[k], k < n, through the inverse of the scene's
+     * equation of state (the component with a density_from_pressure
+     * callback, the one the core uses for the hydrostatic start). Fails with
+     * a message when the scene loads none; n = 0 only checks that one is
+     * loaded. */
+    int (*density_from_pressure)(sluice_host *host, sluice_index n, const sluice_real *pressure,
+                                 sluice_real *density);
+} sluice_api_evaluation;
+
+/* The run's output directory, tables and files. */
+typedef struct sluice_api_output {
+    uint32_t size;
+    /* Path of `name` inside the run's output directory. */
+    int (*output_path)(sluice_host *host, const char *name, char *buffer, size_t size);
+    /* The fully resolved scene (every default filled in), YAML text. */
+    const char *(*resolved_scene)(sluice_host *host);
+    /* The loaded components: name, library, version, file. */
+    uint32_t (*plugin_count)(sluice_host *host);
+    int (*plugin)(sluice_host *host, uint32_t index, sluice_plugin_info *out);
+    /* Time series in the output directory: a CSV file with a header line;
+     * rows are written whole, and a restart continues the file. */
+    sluice_table *(*table_open)(sluice_host *host, const char *file_name, const char *header);
+    int (*table_row)(sluice_table *table, const double *values, uint32_t count);
+    /* Writes `size` bytes to `path` atomically (temporary file, then rename). */
+    int (*write_file_atomic)(sluice_host *host, const char *path, const void *data, size_t size);
+} sluice_api_output;
+
+/* Plugin state in checkpoints (docs/reliability.md, "Checkpoints and
+ * restart"). Only inside the component's own save_state (write) or
+ * load_state (read, length). Arrays are named (a plain name, no '/'),
+ * stored under the component's group of the checkpoint, with an element
+ * type and count (0 is allowed). read fails with a message when the array
+ * is missing or its type or count differ; length returns the element
+ * count, or -1 when the array is missing. A checkpoint with no group for
+ * the component still calls load_state, with every array missing. */
+typedef struct sluice_api_state {
+    uint32_t size;
+    int (*state_write)(sluice_host *host, const char *name, sluice_state_type type,
+                       uint64_t count, const void *data);
+    int (*state_read)(sluice_host *host, const char *name, sluice_state_type type,
+                      uint64_t count, void *data);
+    int64_t (*state_length)(sluice_host *host, const char *name);
+} sluice_api_state;
+
+/* Runs across MPI ranks (docs/scaling.md). Each rank's components see the
+ * rank's own particles (view->count) and, in pair batches, the neighbours
+ * other ranks own. reduce and ranks are collective: every rank calls them
+ * at the same point of the run, in the same order. */
+typedef struct sluice_api_ranks {
+    uint32_t size;
+    /* Combines values[0 .. count) over the ranks, in place, on every rank;
+     * the identity on one rank. */
+    int (*reduce)(sluice_host *host, double *values, uint32_t count, sluice_reduce_op op);
+    /* This rank's place and the offset of its particles in the global order
+     * (ranks in order, each rank's particles in view order). */
+    int (*ranks)(sluice_host *host, sluice_ranks *out);
+    /* 1 when this rank's box holds `point` (3 reals), 0 otherwise; always 1
+     * on one rank. Not collective. */
+    int (*owns)(sluice_host *host, const sluice_real *point);
+} sluice_api_ranks;
+
+/* The host table handed to every component's create(). */
+typedef struct sluice_api {
+    uint32_t size;
+    uint16_t abi_major, abi_minor;
+    const sluice_api_messages *messages;
+    const sluice_api_fields *fields;
+    const sluice_api_particles *particles;
+    const sluice_api_walls *walls;
+    const sluice_api_evaluation *evaluation;
+    const sluice_api_output *output;
+    const sluice_api_state *state;
+    const sluice_api_ranks *ranks;
 } sluice_api;
+
+/* 1 when a (sub-)table of type `type` provides `member`: for members a
+ * later 2.x minor appends, e.g.
+ * SLUICE_API_HAS(api->fields, sluice_api_fields, some_new_member). */
+#define SLUICE_API_HAS(table, type, member)                                                    \
+    ((table)->size >= offsetof(type, member) + sizeof(((const type *)0)->member))
 
 /* ----------------------------------------------------------- components -- */
 
 enum sluice_component_flags {
     SLUICE_COMPONENT_NEEDS_KERNEL = 1u << 0, /* pair term reads batch->kernel */
-    SLUICE_COMPONENT_WALL_SCHEME = 1u << 1,  /* handles the scene's walls (api->wall) */
-    SLUICE_COMPONENT_ON_DEMAND = 1u << 2,    /* 1.1: its pair callback is not part of every
+    SLUICE_COMPONENT_WALL_SCHEME = 1u << 1,  /* handles the scene's walls (api->walls->wall) */
+    SLUICE_COMPONENT_ON_DEMAND = 1u << 2,    /* its pair callback is not part of every
                                                 evaluation; it runs when the component calls
-                                                api->pair_pass() */
-    SLUICE_COMPONENT_ACROSS_RANKS = 1u << 3  /* 1.8: written for runs across ranks: it
+                                                api->evaluation->pair_pass() */
+    SLUICE_COMPONENT_ACROSS_RANKS = 1u << 3  /* written for runs across ranks: it
                                                 combines what it sums or finds over its
-                                                rank's particles with api->reduce before it
+                                                rank's particles with api->ranks->reduce before it
                                                 writes or decides, so its output is the
                                                 one-rank output. Only such a component may
                                                 write files, tables or point passes in a run
                                                 across ranks; rank 0 alone writes its tables
                                                 and write_file_atomic files, and a writer of
-                                                shared files uses api->ranks. */
+                                                shared files uses api->ranks->ranks. */
 };
 
-/* SLUICE_FINISH_INTERRUPTED (1.5): the run was stopped by SIGINT/SIGTERM after a
+/* SLUICE_FINISH_INTERRUPTED: the run was stopped by SIGINT/SIGTERM after a
  * whole step and a checkpoint was written; plugins built for an older minor
  * receive SLUICE_FINISH_COMPLETE instead. */
 enum sluice_finish_status {
@@ -556,7 +601,7 @@ typedef struct sluice_component {
      * receives every particle and filters itself). */
     uint32_t particle_kinds;
 
-    /* Lifecycle. Return SLUICE_OK or SLUICE_ERROR (after api->error()). */
+    /* Lifecycle. Return SLUICE_OK or SLUICE_ERROR (after api->messages->error()). */
     int (*create)(const sluice_api *api, sluice_host *host, const void *config, void **state);
     void (*destroy)(void *state);
     int (*bind)(void *state, sluice_host *host);       /* all components exist */
@@ -581,7 +626,7 @@ typedef struct sluice_component {
     void (*density_from_pressure)(void *state, sluice_index n, const sluice_real *pressure,
                                   sluice_real *density);
 
-    /* Integrator: advance the state by one step (uses api->evaluate/time_step). */
+    /* Integrator: advance the state by one step (uses api->evaluation->evaluate/time_step). */
     int (*advance)(void *state, sluice_host *host);
 
     /* Largest stable step this component allows, over particles [begin, end). */
@@ -595,19 +640,17 @@ typedef struct sluice_component {
     /* At the end of a run, complete or failed (final output, close files). */
     int (*finish)(void *state, sluice_host *host, int status);
 
-    /* -- 1.3 (read only from plugins built for ABI 1.3 or later) */
     /* At every evaluation, once the neighbour search is up to date and before
      * the first pass, in scene order: set fields the passes read that depend
      * on the current positions and state of other particles (wall-particle
-     * values from the fluid, with api->point_pass). Must not add, remove or
+     * values from the fluid, with api->evaluation->point_pass). Must not add, remove or
      * move particles. */
     int (*prepare)(void *state, sluice_host *host);
 
-    /* -- 1.5 (read only from plugins built for ABI 1.5 or later) */
     /* Checkpoints: a component that keeps state across steps outside the
      * particle fields (counters, next output times, running sums) stores it
-     * with api->state_write in save_state, and reads it back with
-     * api->state_read in load_state. A restart loads the scene (create,
+     * with api->state->state_write in save_state, and reads it back with
+     * api->state->state_read in load_state. A restart loads the scene (create,
      * bind, initialise run as usual), replaces the particles, the time and
      * the core's counters with the checkpoint's, then calls load_state; the
      * after_step call before the first step is not repeated. Particle fields
@@ -637,6 +680,10 @@ typedef struct sluice_library {
     const char *description;
     uint32_t component_count;
     const sluice_component *components;
+    /* sizeof(sluice_component) as the library was built: the core reads its
+     * components with this stride, and members a later 2.x minor appends
+     * read as absent (zero) for a library built before them. */
+    uint32_t component_size;
 } sluice_library;
 
 #define SLUICE_SIGNATURE_INIT(dims) {sizeof(sluice_real), sizeof(sluice_index), (dims)}
@@ -651,7 +698,8 @@ SLUICE_EXPORT const sluice_library *sluice_plugin_entry(void);
     static const sluice_library sluice_library_descriptor_ = {                                  \
         SLUICE_PLUGIN_MAGIC, SLUICE_ABI_MAJOR, SLUICE_ABI_MINOR, SLUICE_SIGNATURE_INIT(dims),   \
         (lib_name), (lib_version), (lib_description),                                           \
-        (uint32_t)(sizeof(component_array) / sizeof((component_array)[0])), (component_array)}; \
+        (uint32_t)(sizeof(component_array) / sizeof((component_array)[0])), (component_array), \
+        (uint32_t)sizeof(sluice_component)};                                                    \
     SLUICE_EXPORT const sluice_library *sluice_plugin_entry(void)                               \
     {                                                                                           \
         return &sluice_library_descriptor_;                                                     \

@@ -33,8 +33,8 @@ static inline int sluice_util_constant(const sluice_api *api, sluice_host *host,
                                        sluice_real *value)
 {
     sluice_real v[3];
-    if (api->constant(host, name, v, 3) < 1) {
-        api->error(host, "needs the constant '%s', which no loaded plugin publishes", name);
+    if (api->fields->constant(host, name, v, 3) < 1) {
+        api->messages->error(host, "needs the constant '%s', which no loaded plugin publishes", name);
         return SLUICE_ERROR;
     }
     *value = v[0];
@@ -60,9 +60,9 @@ static inline int sluice_util_publish_eos(const sluice_api *api, sluice_host *ho
                                           sluice_real speed_of_sound,
                                           sluice_real reference_pressure)
 {
-    if (api->publish_constant(host, "speed_of_sound", &speed_of_sound, 1, "m s^-1") != SLUICE_OK)
+    if (api->fields->publish_constant(host, "speed_of_sound", &speed_of_sound, 1, "m s^-1") != SLUICE_OK)
         return SLUICE_ERROR;
-    return api->publish_constant(host, "reference_pressure", &reference_pressure, 1, "Pa");
+    return api->fields->publish_constant(host, "reference_pressure", &reference_pressure, 1, "Pa");
 }
 
 /* Resolves several fields at once: names[i] -> fields[i]. */
@@ -70,7 +70,7 @@ static inline int sluice_util_fields(const sluice_api *api, sluice_host *host,
                                      const char *const *names, sluice_field *fields, int count)
 {
     for (int i = 0; i < count; i++)
-        if (api->field(host, names[i], &fields[i]) != SLUICE_OK)
+        if (api->fields->field(host, names[i], &fields[i]) != SLUICE_OK)
             return SLUICE_ERROR;
     return SLUICE_OK;
 }
@@ -86,12 +86,12 @@ typedef struct sluice_field_binding {
     sluice_field *field;
 } sluice_field_binding;
 
-/* Resolves every binding (api->field, which reports an unknown name). */
+/* Resolves every binding (api->fields->field, which reports an unknown name). */
 static inline int sluice_util_bind(const sluice_api *api, sluice_host *host,
                                    const sluice_field_binding *bindings, size_t count)
 {
     for (size_t i = 0; i < count; i++)
-        if (api->field(host, bindings[i].name, bindings[i].field) != SLUICE_OK)
+        if (api->fields->field(host, bindings[i].name, bindings[i].field) != SLUICE_OK)
             return SLUICE_ERROR;
     return SLUICE_OK;
 }
@@ -101,11 +101,11 @@ static inline int sluice_util_bind(const sluice_api *api, sluice_host *host,
 static inline int sluice_util_optional_field(const sluice_api *api, sluice_host *host,
                                              const char *name, sluice_field *out)
 {
-    uint32_t count = api->field_count(host);
+    uint32_t count = api->fields->field_count(host);
     for (uint32_t f = 0; f < count; f++) {
         sluice_field_spec spec;
         sluice_field field;
-        if (api->field_info(host, f, &spec, &field) == SLUICE_OK && spec.name &&
+        if (api->fields->field_info(host, f, &spec, &field) == SLUICE_OK && spec.name &&
             strcmp(spec.name, name) == 0) {
             *out = field;
             return 1;
@@ -121,12 +121,12 @@ static inline int sluice_util_phase_field(const sluice_api *api, sluice_host *ho
                                           sluice_field *out)
 {
     if (!sluice_util_optional_field(api, host, "phase", out)) {
-        api->error(host, "phases: same needs the field 'phase' of the two_phase plugin; load "
+        api->messages->error(host, "phases: same needs the field 'phase' of the two_phase plugin; load "
                          "two_phase or use phases: all");
         return SLUICE_ERROR;
     }
     if (out->type != SLUICE_TYPE_UINT8 || out->components != 1) {
-        api->error(host, "the field 'phase' must be uint8 with one component");
+        api->messages->error(host, "the field 'phase' must be uint8 with one component");
         return SLUICE_ERROR;
     }
     return SLUICE_OK;
@@ -137,7 +137,7 @@ static inline void *sluice_util_state(const sluice_api *api, sluice_host *host, 
 {
     void *p = calloc(1, size);
     if (!p)
-        api->error(host, "out of memory");
+        api->messages->error(host, "out of memory");
     return p;
 }
 
@@ -160,29 +160,29 @@ static inline sluice_real sluice_util_from_bits(int64_t bits)
 }
 
 /* 1.5: named scalars of a component's state in a checkpoint, from its
- * save_state / load_state callbacks (api->state_write / state_read). */
+ * save_state / load_state callbacks (api->state->state_write / state_read). */
 static inline int sluice_util_save_double(const sluice_api *api, sluice_host *host,
                                           const char *name, double value)
 {
-    return api->state_write(host, name, SLUICE_STATE_DOUBLE, 1, &value);
+    return api->state->state_write(host, name, SLUICE_STATE_DOUBLE, 1, &value);
 }
 
 static inline int sluice_util_load_double(const sluice_api *api, sluice_host *host,
                                           const char *name, double *value)
 {
-    return api->state_read(host, name, SLUICE_STATE_DOUBLE, 1, value);
+    return api->state->state_read(host, name, SLUICE_STATE_DOUBLE, 1, value);
 }
 
 static inline int sluice_util_save_int(const sluice_api *api, sluice_host *host, const char *name,
                                        int64_t value)
 {
-    return api->state_write(host, name, SLUICE_STATE_INT64, 1, &value);
+    return api->state->state_write(host, name, SLUICE_STATE_INT64, 1, &value);
 }
 
 static inline int sluice_util_load_int(const sluice_api *api, sluice_host *host, const char *name,
                                        int64_t *value)
 {
-    return api->state_read(host, name, SLUICE_STATE_INT64, 1, value);
+    return api->state->state_read(host, name, SLUICE_STATE_INT64, 1, value);
 }
 
 /* The focused headers (each also includes this one). */

@@ -1,14 +1,13 @@
-/* The core services of ABI 1.3, through the fixture plugins in
- * tests/sdk/fixtures/api_probe.c and old_minor_plugin.c:
+/* Core services of the plugin ABI, through the fixture plugins in
+ * tests/sdk/fixtures/api_probe.c and short_component_plugin.c:
  *  - prepare() runs at every evaluation after the neighbour update and
  *    before the passes;
- *  - api->point_pass finds exactly the particles within the support of
+ *  - api->evaluation->point_pass finds exactly the particles within the support of
  *    arbitrary points (brute force), of the kinds asked, across periodic
  *    sides, with the kernel values of the scene's kernel;
- *  - api->wall_nearest returns the signed distance, nearest point and
+ *  - api->walls->wall_nearest returns the signed distance, nearest point and
  *    normal of the nearest wall;
- *  - a plugin built for ABI 1.2 (shorter component stride) loads, with the
- *    members appended since reading as absent. */
+ *  - a descriptor whose components are shorter than ABI 2.0's is refused. */
 #include <math.h>
 
 #include "api_probe.h"
@@ -217,7 +216,10 @@ START_TEST(wall_nearest_in_a_tank)
 }
 END_TEST
 
-START_TEST(plugin_built_for_abi_1_2_loads)
+/* A descriptor whose components are shorter than ABI 2.0's (not made by
+ * SLUICE_DEFINE_LIBRARY) is refused with the plugin's file named: the core
+ * never reads a component past its end. */
+START_TEST(plugin_with_short_components_refused)
 {
     char yaml[2048];
     snprintf(yaml, sizeof yaml,
@@ -228,50 +230,9 @@ START_TEST(plugin_built_for_abi_1_2_loads)
              "domain: {min: [0, 0], max: [1, 1]}\n"
              "geometry: {fluid: [{shape: box, min: [0, 0], max: [0.5, 0.5]}]}\n"
              "initial: {density: rest}\n"
-             "plugins: {wendland_c2: {}, old_minor_second: {}, symplectic: {}}\n",
+             "plugins: {wendland_c2: {}, short_component_plugin: {}, symplectic: {}}\n",
              fixture_dir());
-    sluice_sim *sim = test_load("old-minor", yaml, NULL, 0);
-    sluice_instance *in = instance_named(sim, "old_minor_second");
-    ck_assert_str_eq(in->component->summary, "ABI 1.2 fixture, second component");
-    ck_assert_uint_eq(in->library->abi_minor, 2);
-    ck_assert_ptr_null(in->component->prepare);
-    ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
-    sluice_sim_free(sim);
-}
-END_TEST
-
-/* A plugin built for ABI 1.4 (before save_state / load_state) loads, has no
- * state callbacks, and a run that loads it checkpoints and restarts. */
-START_TEST(plugin_built_for_abi_1_4_checkpoints)
-{
-    char yaml[1024];
-    snprintf(yaml, sizeof yaml,
-             "dimensions: 2\n"
-             "plugin_path: %s\n"
-             "particles: {spacing: 0.05}\n"
-             "time: {end: 0.01, max_step: 0.001}\n"
-             "domain: {min: [0, 0], max: [1, 1]}\n"
-             "geometry: {fluid: [{shape: box, min: [0, 0], max: [0.5, 0.5]}]}\n"
-             "initial: {density: rest}\n"
-             "plugins: {wendland_c2: {}, abi14_second: {}, symplectic: {}}\n",
-             fixture_dir());
-    sluice_sim *sim = test_load("abi14", yaml, NULL, 0);
-    sluice_instance *in = instance_named(sim, "abi14_second");
-    ck_assert_str_eq(in->component->summary, "ABI 1.4 fixture, second component");
-    ck_assert_uint_eq(in->library->abi_minor, 4);
-    ck_assert_ptr_null(in->component->save_state);
-    ck_assert_ptr_null(in->component->load_state);
-    ck_assert_int_eq(sluice_sim_begin(sim, NULL), SLUICE_RUN_COMPLETE);
-    ck_assert_int_eq(sluice_sim_step(sim), SLUICE_RUN_COMPLETE);
-    char *dir = test_scratch("abi14-checkpoint"), path[512], error[1024];
-    snprintf(path, sizeof path, "%s/checkpoint_test.h5", dir);
-    ck_assert_msg(sluice_sim_checkpoint(sim, path) == SLUICE_OK, "%s", sluice_sim_failure(sim));
-    sluice_sim *again = test_load("abi14", yaml, NULL, 0);
-    ck_assert_msg(sluice_sim_restart(again, path, error, sizeof error) == SLUICE_OK, "%s", error);
-    ck_assert_int_eq(sluice_sim_steps(again), 1);
-    sluice_sim_free(again);
-    sluice_sim_free(sim);
-    free(dir);
+    test_load_refused("short-component", yaml, "component size");
 }
 END_TEST
 
@@ -355,6 +316,47 @@ static void pass_of_instances(sluice_sim *sim, int *pass_of)
     }
 }
 
+/* The schedule as sluice check --schedule and run.json write it says what
+ * the core runs: as many passes as it has, of the same kinds, and each
+ * evaluation component named once, in its pass. */
+static void check_written_schedule(const sluice_sim *sim, const int *pass_of, const char *scene)
+{
+    char *text = NULL;
+    size_t size = 0;
+    FILE *f = open_memstream(&text, &size);
+    ck_assert_ptr_nonnull(f);
+    sluice_sim_write_schedule(sim, f, 1);
+    ck_assert_int_eq(fclose(f), 0);
+    uint32_t particle = 0, pair = 0;
+    for (const char *p = text; (p = strstr(p, "\"kind\": \"")); p++) {
+        particle += strncmp(p + 9, "particle", 8) == 0;
+        pair += strncmp(p + 9, "pair", 4) == 0;
+    }
+    uint32_t want_pair = 0;
+    for (uint32_t p = 0; p < sim->pass_count; p++)
+        want_pair += sim->passes[p].is_pair != 0;
+    ck_assert_msg(pair == want_pair && particle + pair == sim->pass_count,
+                  "%s: the written schedule has %u particle and %u pair passes, the core %u "
+                  "passes (%u pair): %s", scene, particle, pair, sim->pass_count, want_pair, text);
+    /* each component in its pass: the k-th {"kind" ...} object names it */
+    for (uint32_t v = 0; v < sim->instance_count; v++) {
+        if (pass_of[v] < 0)
+            continue;
+        const char *p = strstr(text, "\"passes\": [");
+        ck_assert_ptr_nonnull(p);
+        for (int k = 0; k <= pass_of[v]; k++)
+            p = strstr(p + 1, "{\"kind\"");
+        const char *end = strchr(p, '}');
+        char quoted[256];
+        snprintf(quoted, sizeof quoted, "\"%s\"", sim->instances[v].name);
+        const char *at = strstr(p, quoted);
+        ck_assert_msg(at && at < end, "%s: '%s' is not written in pass %d: %s", scene,
+                      sim->instances[v].name, pass_of[v] + 1, text);
+    }
+    fprintf(stderr, "%s: schedule as written: %s\n", scene, text);
+    free(text);
+}
+
 /* Loads a scene file and checks its evaluation schedule against the plugins'
  * declarations: every reader of a field runs in a later pass than each of the
  * field's writers and accumulators, and there are as few pair passes as the
@@ -434,6 +436,7 @@ static void check_schedule(const char *scene, uint32_t expected_pair_passes)
     fprintf(stderr, "\n");
     ck_assert_uint_eq(longest, expected_pair_passes);
     ck_assert_uint_eq(pair_passes, longest);
+    check_written_schedule(sim, pass_of, scene);
     free(pass_of);
     free(edge);
     free(chain);
@@ -453,7 +456,7 @@ START_TEST(schedule_has_fewest_pair_passes)
 }
 END_TEST
 
-/* api->request_reach (ABI 1.6): the fixture reach_probe asks for every fluid
+/* api->evaluation->request_reach (ABI 1.6): the fixture reach_probe asks for every fluid
  * pair within twice the kernel support (a kernel of smoothing length 2h, as
  * the air's cohesion). Its counts, summed distances and x offsets must equal
  * brute force over all fluid pairs, at the start and after the particles
@@ -565,7 +568,7 @@ END_TEST
 START_TEST(reach_matches_brute_force_periodic) { check_reach(1, 0); }
 END_TEST
 
-/* api->restrict_reach (ABI 1.7): the fixture restricted to a checkerboard
+/* api->evaluation->restrict_reach (ABI 1.7): the fixture restricted to a checkerboard
  * of particles (reach_group = 1) gets exactly the pairs among them, and
  * the others are never targets. */
 START_TEST(restricted_reach_matches_brute_force) { check_reach(0, 1); }
@@ -691,8 +694,7 @@ int main(void)
     tcase_add_test(c, point_pass_matches_brute_force);
     tcase_add_test(c, point_pass_periodic);
     tcase_add_test(c, wall_nearest_in_a_tank);
-    tcase_add_test(c, plugin_built_for_abi_1_2_loads);
-    tcase_add_test(c, plugin_built_for_abi_1_4_checkpoints);
+    tcase_add_test(c, plugin_with_short_components_refused);
     tcase_add_test(c, region_and_wall_lattice_origin);
     tcase_add_test(c, schedule_has_fewest_pair_passes);
     tcase_add_test(c, reach_matches_brute_force);

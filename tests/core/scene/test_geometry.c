@@ -1435,7 +1435,7 @@ START_TEST(wall_watch_matches_full_query)
 }
 END_TEST
 
-/* The nearest-wall distance of the index (api->wall_distance) against every
+/* The nearest-wall distance of the index (api->walls->wall_distance) against every
  * element of every wall: the same number, bit for bit, for points in the
  * index's box, near the walls' vertices and corners, and far outside the
  * box (where every element is asked), with the cell size of a kernel

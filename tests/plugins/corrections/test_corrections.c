@@ -8,7 +8,7 @@
  *  - pressure_smoothing: a tank at rest is unchanged, a checkerboard pressure
  *    decays by the lattice factor of the Shepard filter, the density written
  *    is the EOS inverse of the smoothed pressure, masses are untouched;
- *  - api->density_from_pressure (ABI 1.2) without an equation of state. */
+ *  - api->evaluation->density_from_pressure (ABI 1.2) without an equation of state. */
 #include <math.h>
 
 #include "sim_util.h"
@@ -1234,7 +1234,7 @@ START_TEST(ps_masses_untouched)
 }
 END_TEST
 
-/* ------------------------------------------- api->density_from_pressure -- */
+/* ------------------------------------------- api->evaluation->density_from_pressure -- */
 
 /* With no equation of state, the API call is refused with a message: at load
  * (pressure_smoothing checks in bind with n = 0) and during a run (the EOS

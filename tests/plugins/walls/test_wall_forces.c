@@ -71,11 +71,22 @@ static int fake_nearest(sluice_host *host, const sluice_real *point, int32_t wal
     return SLUICE_OK;
 }
 
-static const sluice_api fake_api = {
+static const sluice_api_messages fake_messages = {
+    .size = sizeof(sluice_api_messages),
     .error = fake_error,
+};
+static const sluice_api_walls fake_walls = {
+    .size = sizeof(sluice_api_walls),
     .wall_count = fake_wall_count,
     .wall = fake_wall,
     .wall_nearest = fake_nearest,
+};
+static const sluice_api fake_api = {
+    .size = sizeof(sluice_api),
+    .abi_major = SLUICE_ABI_MAJOR,
+    .abi_minor = SLUICE_ABI_MINOR,
+    .messages = &fake_messages,
+    .walls = &fake_walls,
 };
 
 static void fake_build(fake_host *f, const sluice_real *vertices, uint32_t vertex_count,
