@@ -57,6 +57,10 @@ int sluice_sim_run(sluice_sim *sim, const sluice_run_options *options);
 int sluice_sim_begin(sluice_sim *sim, const char *output_directory);
 int sluice_sim_step(sluice_sim *sim);
 int sluice_sim_end(sluice_sim *sim, int status);
+/* Evaluates every rate at the current state without taking a step (the
+ * neighbour search brought up to date first): tests that set fields by hand
+ * and read what the terms compute from them. */
+int sluice_sim_evaluate(sluice_sim *sim);
 
 /* Checkpoints and restart: core/checkpoint/checkpoint.h (included at the
  * end: the embedding API is this header). */

@@ -244,7 +244,6 @@ static inline const char *sluice_kind_name(uint8_t kind)
 /* host.c */
 void sluice_sim_refresh_view(sluice_sim *sim);
 void sluice_sim_fail(sluice_sim *sim, const char *format, ...) SLUICE_PRINTF(2, 3);
-int sluice_sim_evaluate(sluice_sim *sim);
 const char *sluice_field_writers(const sluice_sim *sim, const sluice_field_entry *field,
                                  char *buffer, size_t size);
 double sluice_wall_clock(void);

@@ -19,9 +19,6 @@
 #include <math.h>
 
 #include "sim_util.h"
-/* Internal: sluice_sim_evaluate, to evaluate the pressures of densities set by hand without a
- * step (not in sim.h) */
-#include "sim_internal.h"
 
 static uint64_t rng = 77;
 static double uniform(void)

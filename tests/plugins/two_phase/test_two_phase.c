@@ -20,9 +20,6 @@
 
 #include "diag.h"
 #include "sim_util.h"
-/* Internal: sluice_sim_evaluate, to evaluate the pressures and sound speeds of densities set
- * by hand, and of a state between outputs, without a step (not in sim.h) */
-#include "sim_internal.h"
 
 #define G 9.81
 
