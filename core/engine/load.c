@@ -226,6 +226,13 @@ static int check_roles(sluice_sim *sim)
             }
             sim->kernel = (int32_t)k;
         }
+        if (c->advance && (c->pair || c->particle)) {
+            sluice_sim_report(sim, k,
+                              "integrator '%s' also has a %s callback; an integrator advances "
+                              "the state (advance) and evaluates nothing itself",
+                              sim->instances[k].name, c->pair ? "pair" : "particle");
+            errors++;
+        }
         if (c->advance) {
             if (sim->integrator >= 0) {
                 sluice_sim_report(sim, k, "two integrators are loaded ('%s' and '%s'); load exactly one",

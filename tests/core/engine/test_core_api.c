@@ -216,6 +216,36 @@ START_TEST(wall_nearest_in_a_tank)
 }
 END_TEST
 
+/* What each kind of component must provide, and when fields may be
+ * declared (docs/plugin-abi.md): each broken component of
+ * tests/sdk/fixtures/abi2_rules.c is refused with a message that says why. */
+static void rules_scene(const char *tag, const char *plugins, const char *needle)
+{
+    char yaml[2048];
+    snprintf(yaml, sizeof yaml,
+             "dimensions: 2\n"
+             "plugin_path: %s\n"
+             "particles: {spacing: 0.1}\n"
+             "time: {end: 1, max_step: 0.01}\n"
+             "domain: {min: [0, 0], max: [1, 1]}\n"
+             "geometry: {fluid: [{shape: box, min: [0, 0], max: [0.5, 0.5]}]}\n"
+             "initial: {density: rest}\n"
+             "plugins: {wendland_c2: {}, %s}\n",
+             fixture_dir(), plugins);
+    test_load_refused(tag, yaml, needle);
+}
+
+START_TEST(abi2_rules_refused)
+{
+    rules_scene("silent-eos", "silent_eos: {}, symplectic: {}",
+                "did not publish the constant 'speed_of_sound'");
+    rules_scene("late-rate", "continuity: {}, late_rate: {}, symplectic: {}",
+                "declares the rate field 'late_rate' after create()");
+    rules_scene("busy-integrator", "busy_integrator: {}",
+                "also has a particle callback");
+}
+END_TEST
+
 /* A descriptor whose components are shorter than ABI 2.0's (not made by
  * SLUICE_DEFINE_LIBRARY) is refused with the plugin's file named: the core
  * never reads a component past its end. */
@@ -695,6 +725,7 @@ int main(void)
     tcase_add_test(c, point_pass_periodic);
     tcase_add_test(c, wall_nearest_in_a_tank);
     tcase_add_test(c, plugin_with_short_components_refused);
+    tcase_add_test(c, abi2_rules_refused);
     tcase_add_test(c, region_and_wall_lattice_origin);
     tcase_add_test(c, schedule_has_fewest_pair_passes);
     tcase_add_test(c, reach_matches_brute_force);
