@@ -20,7 +20,7 @@
 #include "yaml_tree.h"
 
 
-/* A component written for runs across ranks (SLUICE_COMPONENT_ACROSS_RANKS, 1.8). */
+/* A component written for runs across ranks (SLUICE_COMPONENT_ACROSS_RANKS). */
 static int across_ranks_component(const sluice_sim *sim, uint32_t instance)
 {
     if (instance >= sim->instance_count)
@@ -185,7 +185,7 @@ int sluice_sim_add_particles(sluice_sim *sim, uint8_t kind, const sluice_real *p
 }
 
 /* Output and point passes across ranks: only for a component written for
- * them (SLUICE_COMPONENT_ACROSS_RANKS, 1.8), which combines its ranks'
+ * them (SLUICE_COMPONENT_ACROSS_RANKS), which combines its ranks'
  * figures with api->ranks->reduce; any other is refused, never left to write one
  * rank's part as if it were the whole. */
 static int across_ranks_only(sluice_host *host, const char *what)
@@ -719,7 +719,7 @@ static int api_point_pass(sluice_host *host, const sluice_real *points, sluice_i
     return sluice_sim_run_point_pass(sim, host, points, count, kinds, 0, fn, context);
 }
 
-/* 1.9: points of the rank's own particles, with the halo's particles as
+/* Points of the rank's own particles, with the halo's particles as
  * pairs: one rank's result at every point within the component's margin of
  * the rank's box. */
 static int api_point_pass_local(sluice_host *host, const sluice_real *points, sluice_index count,
@@ -887,7 +887,7 @@ static int api_ranks(sluice_host *host, sluice_ranks *out)
     return SLUICE_OK;
 }
 
-/* api->state_* (1.5): only inside a component's own save_state or
+/* api->state->state_*: only inside a component's own save_state or
  * load_state, where the checkpoint library lends its store. */
 static int no_state_store(sluice_host *host, int writing)
 {

@@ -377,7 +377,7 @@ static int publish_core(sluice_sim *sim)
                       "m") != 0;
     errors += sluice_sim_publish(sim, SLUICE_CORE_INSTANCE, "rest_density", &sim->rest_density, 1,
                       "kg m^-3") != 0;
-    /* 1.4: the run's end time and the domain box */
+    /* the run's end time and the domain box */
     sluice_real end_time = (sluice_real)scene->time.end;
     errors += sluice_sim_publish(sim, SLUICE_CORE_INSTANCE, "end_time", &end_time, 1, "s") != 0;
     errors += sluice_sim_publish(sim, SLUICE_CORE_INSTANCE, "domain_min", scene->domain.min,

@@ -59,10 +59,10 @@ typedef struct sluice_instance {
     int created;
     sluice_host host;
     sluice_pair_pass *on_demand; /* SLUICE_COMPONENT_ON_DEMAND: its own pass */
-    sluice_real reach;           /* 1.6: pair radius beyond the support (m), 0: the support */
-    char reach_field[64];        /* 1.7: the reach pass's particles: this uint8 field... */
+    sluice_real reach;           /* pair radius beyond the support (m), 0: the support */
+    char reach_field[64];        /* the reach pass's particles: this uint8 field... */
     uint32_t reach_value;        /* ...holds this value ("" : every particle) */
-    int local_points;            /* 1.9: requested a point margin (reads its fields at
+    int local_points;            /* requested a point margin (reads its fields at
                                     other particles in api->evaluation->point_pass_local) */
 } sluice_instance;
 
@@ -165,7 +165,7 @@ struct sluice_sim {
     sluice_comm comm;         /* the ranks of a distributed run (one by default) */
     sluice_halo_lists halo;   /* this rank's slab and halo (ranks.h) */
     sluice_ranks_run ranks_run; /* the decomposition's view of the run (decomposition.c) */
-    sluice_real point_margin; /* 1.9: the largest api->evaluation->request_point_margin, m */
+    sluice_real point_margin; /* the largest api->evaluation->request_point_margin, m */
     sluice_pass *passes;
     uint32_t pass_count;
     uint32_t *prepare; /* instances with a prepare callback, scene order */

@@ -15,9 +15,9 @@
  *    sub-table, of sluice_component or of sluice_view, never elsewhere. Every
  *    host sub-table and the library descriptor carry their size: the core
  *    reads a plugin's components with the stride it was built with (members
- *    it does not know read as absent), and a plugin checks a table's size
- *    before it uses a member appended after its build (SLUICE_API_HAS). The
- *    core refuses a plugin built for a newer minor than its own.
+ *    it does not know read as absent). The core refuses a plugin built for a
+ *    newer minor than its own, so every host member a plugin's header
+ *    declares is there when it loads.
  *  - The build signature (size of sluice_real, of sluice_index, supported
  *    dimensions) must match the core exactly.
  *
@@ -314,10 +314,9 @@ typedef struct sluice_ranks {
 } sluice_ranks;
 
 /* The host API: the core's services, in sub-tables by concern. Each table
- * starts with its size (sizeof as the core was built), so that a later 2.x
- * core can append members to a table without moving any other; a plugin
- * reads a member appended after its own build only after checking the
- * table's size (SLUICE_API_HAS). Every function taking a host must be called
+ * starts with its size (sizeof as the core was built): a later 2.x minor
+ * appends members at the end of a table only, so no member ever moves and
+ * a table's extent is known at run time. Every function taking a host must be called
  * from the thread that called the component, except those marked
  * "thread-safe". */
 
@@ -335,12 +334,16 @@ typedef struct sluice_api_messages {
 typedef struct sluice_api_fields {
     uint32_t size;
     /* Declares a field beyond the component's static `fields` (one whose
-     * name or components depend on parameters). Only in create(): a
-     * declaration in bind() or later is an error, since the schedule, the
-     * integrated rates and the particle store are built from the
-     * declarations made by then. */
+     * name or components depend on parameters), in create(). The
+     * integrated fields are fixed when the integrator is created, after
+     * every other component: a rate (rate_of) declared after create() is an
+     * error. In bind() a component may still declare a field that depends
+     * on another plugin's (found with field_info), never a rate; after
+     * bind() nothing. */
     int (*declare_field)(sluice_host *host, const sluice_field_spec *spec);
-    /* The handle of a declared field, from bind() on; a field no component
+    /* The handle of a declared field (its column is fixed when it is
+     * declared: from bind() on for every field, in create() for those
+     * declared already, as an integrator does); a field no component
      * declared is an error. */
     int (*field)(sluice_host *host, const char *name, sluice_field *out);
     /* Every field, in declaration order (writers). */
@@ -546,12 +549,6 @@ typedef struct sluice_api {
     const sluice_api_ranks *ranks;
 } sluice_api;
 
-/* 1 when a (sub-)table of type `type` provides `member`: for members a
- * later 2.x minor appends, e.g.
- * SLUICE_API_HAS(api->fields, sluice_api_fields, some_new_member). */
-#define SLUICE_API_HAS(table, type, member)                                                    \
-    ((table)->size >= offsetof(type, member) + sizeof(((const type *)0)->member))
-
 /* ----------------------------------------------------------- components -- */
 
 enum sluice_component_flags {
@@ -572,8 +569,7 @@ enum sluice_component_flags {
 };
 
 /* SLUICE_FINISH_INTERRUPTED: the run was stopped by SIGINT/SIGTERM after a
- * whole step and a checkpoint was written; plugins built for an older minor
- * receive SLUICE_FINISH_COMPLETE instead. */
+ * whole step and a checkpoint was written. */
 enum sluice_finish_status {
     SLUICE_FINISH_COMPLETE = 0,
     SLUICE_FINISH_FAILED = 1,
