@@ -71,20 +71,15 @@ int sluice_sim_declare(sluice_sim *sim, uint32_t instance, const sluice_field_sp
                spec->name);
         return -1;
     }
-    if (sim->phase > SLUICE_PHASE_BIND ||
-        (sim->phase == SLUICE_PHASE_BIND && spec->rate_of)) {
+    if (sim->phase > SLUICE_PHASE_CREATE) {
         /* the integrated fields are fixed when the integrator is created
-         * (after every other component's create()), and the schedule and the
-         * particle store when bind() ends: a rate declared later would be
-         * accepted and silently never integrated */
+         * (after every other component), the schedule and the particle store
+         * when bind() ends: a field declared later would be accepted and
+         * silently never integrated, scheduled or stored */
         sluice_sim_report(sim, instance,
-                          spec->rate_of
-                              ? "plugin '%s' declares the rate field '%s' after create(); "
-                                "declare rates statically (the component's `fields`) or in "
-                                "create()"
-                              : "plugin '%s' declares field '%s' after bind(); declare fields "
-                                "statically, in create(), or (a field that depends on another "
-                                "plugin's) in bind()",
+                          "plugin '%s' declares field '%s' after create(); declare fields "
+                          "statically (the component's `fields`) or in create(), where every "
+                          "component's static fields can be looked up (field_info)",
                           who, spec->name);
         return -1;
     }

@@ -388,6 +388,18 @@ static int boundary_create(const sluice_api *api, sluice_host *host, const void 
             s->velocity_integral = c->velocity;
         }
     }
+    /* with two_phase loaded (its phase is a static field), the inlet writes
+     * the phase on the particles it creates, between steps, and an outlet
+     * that does not filter reads it (a filter declared it above already) */
+    sluice_field phase;
+    if ((inlet || s->phase_filter == SLUICE_PHASE_ALL) &&
+        sluice_util_optional_field(api, host, "phase", &phase)) {
+        static const sluice_field_spec spec = {
+            "phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_READ, 0, NULL, 0,
+            "phase of a fluid particle: 0 water, 1 air (set on the inflow particles)"};
+        if (api->fields->declare_field(host, &spec) != SLUICE_OK)
+            goto fail;
+    }
     *state = s;
     return SLUICE_OK;
 fail:
@@ -454,15 +466,7 @@ static int bind_phase(boundary_state *s, sluice_host *host, const char *needs_ai
         api->messages->error(host, "the field 'phase' must be uint8 with one component (0 water, 1 air)");
         return SLUICE_ERROR;
     }
-    /* the inlet writes it on the particles it creates, between steps; the
-     * outlet reads it (a filter declared it in create() already) */
-    if (s->inlet || s->phase_filter == SLUICE_PHASE_ALL) {
-        static const sluice_field_spec spec = {
-            "phase", SLUICE_TYPE_UINT8, 1, "1", SLUICE_READ, 0, NULL, 0,
-            "phase of a fluid particle: 0 water, 1 air (set on the inflow particles)"};
-        if (api->fields->declare_field(host, &spec) != SLUICE_OK)
-            return SLUICE_ERROR;
-    }
+    /* (declared in create() when two_phase is loaded) */
     if (api->fields->field(host, "phase", &s->phase_field) != SLUICE_OK)
         return SLUICE_ERROR;
     if (!needs_air)

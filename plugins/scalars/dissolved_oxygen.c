@@ -157,6 +157,44 @@ static const sluice_field_spec fields[] = {
      "dissolved_oxygen", SLUICE_KIND_MASK(SLUICE_KIND_FLUID), "dC/dt: diffusion and reaeration"},
 };
 
+static int do_declare(do_state *s, sluice_host *host, const char *name, uint32_t components,
+                      const char *units, uint32_t access, uint32_t flags, const char *doc,
+                      sluice_type type)
+{
+    const sluice_field_spec spec = {name, type, components, units, access, flags, NULL, 0, doc};
+    return s->api->fields->declare_field(host, &spec);
+}
+
+/* The fields that depend on the scene's other plugins, declared in create()
+ * (every component's static fields are declared by then): nu_t when a
+ * turbulence model declares it; with a phase (two_phase), the phase, the
+ * velocity of the Reynolds-number law and K a. The same conditions decide
+ * in bind() what the term computes. */
+static int declare_optional(do_state *s, sluice_host *host)
+{
+    const sluice_api *api = s->api;
+    sluice_field found;
+    if (sluice_util_optional_field(api, host, "eddy_viscosity", &found) &&
+        do_declare(s, host, "eddy_viscosity", 1, "m^2 s^-1", SLUICE_READ | SLUICE_READ_NEIGHBOUR,
+                   0, "kinematic eddy viscosity nu_T", SLUICE_TYPE_REAL) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (s->c.two_phase == TWO_PHASE_NO || !sluice_util_optional_field(api, host, "phase", &found))
+        return SLUICE_OK;
+    if (s->c.two_phase == TWO_PHASE_AUTO &&
+        do_declare(s, host, "phase", 1, "1", SLUICE_READ | SLUICE_READ_NEIGHBOUR, 0,
+                   "phase of a fluid particle: 0 water, 1 air", SLUICE_TYPE_UINT8) != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (!(s->c.transfer_velocity > 0) &&
+        do_declare(s, host, "velocity", SLUICE_COMPONENTS_DIM, "m s^-1",
+                   SLUICE_READ | SLUICE_READ_NEIGHBOUR, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
+                   "velocity", SLUICE_TYPE_REAL) != SLUICE_OK)
+        return SLUICE_ERROR;
+    return do_declare(s, host, "reaeration_coefficient", 1, "s^-1", SLUICE_WRITE,
+                      SLUICE_FIELD_OUTPUT,
+                      "K a_i: volumetric oxygen transfer coefficient (0 away from air)",
+                      SLUICE_TYPE_REAL);
+}
+
 static int do_create(const sluice_api *api, sluice_host *host, const void *config, void **state)
 {
     const do_config *c = config;
@@ -185,19 +223,14 @@ static int do_create(const sluice_api *api, sluice_host *host, const void *confi
             return SLUICE_ERROR;
         }
     }
+    if (declare_optional(s, host) != SLUICE_OK) {
+        free(s);
+        return SLUICE_ERROR;
+    }
     *state = s;
     return SLUICE_OK;
 }
 
-static int do_declare(do_state *s, sluice_host *host, const char *name, uint32_t components,
-                      const char *units, uint32_t access, uint32_t flags, const char *doc,
-                      sluice_type type, sluice_field *out)
-{
-    const sluice_field_spec spec = {name, type, components, units, access, flags, NULL, 0, doc};
-    if (s->api->fields->declare_field(host, &spec) != SLUICE_OK)
-        return SLUICE_ERROR;
-    return s->api->fields->field(host, name, out);
-}
 
 static int do_bind(void *state, sluice_host *host)
 {
@@ -225,10 +258,7 @@ static int do_bind(void *state, sluice_host *host)
     /* turbulent diffusion when a turbulence model declares nu_t */
     sluice_field nu_t;
     if (sluice_util_optional_field(api, host, "eddy_viscosity", &nu_t)) {
-        if (do_declare(s, host, "eddy_viscosity", 1, "m^2 s^-1",
-                       SLUICE_READ | SLUICE_READ_NEIGHBOUR, 0, "kinematic eddy viscosity nu_T",
-                       SLUICE_TYPE_REAL, &s->eddy_viscosity) != SLUICE_OK)
-            return SLUICE_ERROR;
+        s->eddy_viscosity = nu_t;
         s->eddy = 1;
     }
 
@@ -255,11 +285,6 @@ static int do_bind(void *state, sluice_host *host)
     if (!s->two_phase)
         return SLUICE_OK;
 
-    if (s->c.two_phase == TWO_PHASE_AUTO &&
-        do_declare(s, host, "phase", 1, "1", SLUICE_READ | SLUICE_READ_NEIGHBOUR, 0,
-                   "phase of a fluid particle: 0 water, 1 air", SLUICE_TYPE_UINT8,
-                   &s->phase) != SLUICE_OK)
-        return SLUICE_ERROR;
     s->phase = phase;
     const sluice_real d_b = s->bubble = s->c.bubble > 0 ? s->c.bubble : s->dx;
     s->bubble_area = (sluice_real)SLUICE_PI * d_b * (s->dims == 3 ? d_b : 1);
@@ -270,15 +295,10 @@ static int do_bind(void *state, sluice_host *host)
         if (!(s->c.diffusivity > 0))
             api->messages->warning(host, "molecular_diffusivity = 0 makes the transfer velocity of the "
                                "Reynolds-number law zero (K ~ Sc^(-1/2)): no reaeration");
-        if (do_declare(s, host, "velocity", SLUICE_COMPONENTS_DIM, "m s^-1",
-                       SLUICE_READ | SLUICE_READ_NEIGHBOUR,
-                       SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, "velocity", SLUICE_TYPE_REAL,
-                       &s->velocity) != SLUICE_OK)
+        if (api->fields->field(host, "velocity", &s->velocity) != SLUICE_OK)
             return SLUICE_ERROR;
     }
-    if (do_declare(s, host, "reaeration_coefficient", 1, "s^-1", SLUICE_WRITE,
-                   SLUICE_FIELD_OUTPUT, "K a_i: volumetric oxygen transfer coefficient (0 away "
-                   "from air)", SLUICE_TYPE_REAL, &s->ka) != SLUICE_OK)
+    if (api->fields->field(host, "reaeration_coefficient", &s->ka) != SLUICE_OK)
         return SLUICE_ERROR;
     if (api->fields->constant(host, "courant_number", &s->courant, 1) < 1) {
         api->messages->error(host, "the reaeration source needs the constant 'courant_number' for its "

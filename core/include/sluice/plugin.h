@@ -334,12 +334,12 @@ typedef struct sluice_api_messages {
 typedef struct sluice_api_fields {
     uint32_t size;
     /* Declares a field beyond the component's static `fields` (one whose
-     * name or components depend on parameters), in create(). The
-     * integrated fields are fixed when the integrator is created, after
-     * every other component: a rate (rate_of) declared after create() is an
-     * error. In bind() a component may still declare a field that depends
-     * on another plugin's (found with field_info), never a rate; after
-     * bind() nothing. */
+     * name or components depend on parameters, or on whether another plugin
+     * declares some field: every component's static fields are declared
+     * before any create() runs, so field_info finds them there). Only in
+     * create(): a declaration after it is an error, since the integrated
+     * fields are fixed when the integrator is created (after every other
+     * component) and the schedule and particle store when bind() ends. */
     int (*declare_field)(sluice_host *host, const sluice_field_spec *spec);
     /* The handle of a declared field (its column is fixed when it is
      * declared: from bind() on for every field, in create() for those

@@ -240,7 +240,7 @@ START_TEST(abi2_rules_refused)
     rules_scene("silent-eos", "silent_eos: {}, symplectic: {}",
                 "did not publish the constant 'speed_of_sound'");
     rules_scene("late-rate", "continuity: {}, late_rate: {}, symplectic: {}",
-                "declares the rate field 'late_rate' after create()");
+                "declares field 'late_rate' after create()");
     rules_scene("busy-integrator", "busy_integrator: {}",
                 "also has a particle callback");
 }
