@@ -15,11 +15,12 @@
 
 #include "sim_util.h"
 
-START_TEST(template_plugin_builds_loads_and_acts)
+/* Installs Sluice into DIR/stage (DIR a new scratch directory) and builds the
+ * plugins of `source` (a directory of the source tree with a Makefile) into
+ * DIR with pkg-config sluice from the stage alone. */
+static char *stage_and_build(const char *tag, const char *source)
 {
-    char *dir = test_scratch("outoftree");
-    char *command = NULL, *output = NULL;
-    /* 1. install into a staging directory */
+    char *dir = test_scratch(tag), *command = NULL;
     ck_assert_int_ge(asprintf(&command,
                               "meson install -C %s --no-rebuild --quiet --destdir %s/stage "
                               ">%s/install.log 2>&1",
@@ -27,15 +28,22 @@ START_TEST(template_plugin_builds_loads_and_acts)
                      0);
     ck_assert_msg(system(command) == 0, "meson install failed: see %s/install.log", dir);
     free(command);
-    /* 2. build the template with pkg-config pointing at the staged .pc */
     ck_assert_int_ge(asprintf(&command,
                               "pc=$(dirname $(find %s/stage -name sluice.pc | head -n 1)) && "
-                              "PKG_CONFIG_PATH=$pc make -s -C %s/tools/plugin-template OUT=%s "
-                              ">%s/make.log 2>&1",
-                              dir, test_source_dir(), dir, dir),
+                              "PKG_CONFIG_PATH=$pc make -s -C %s/%s OUT=%s >%s/make.log 2>&1",
+                              dir, test_source_dir(), source, dir, dir),
                      0);
-    ck_assert_msg(system(command) == 0, "building the template failed: see %s/make.log", dir);
+    ck_assert_msg(system(command) == 0, "building %s failed: see %s/make.log", source, dir);
     free(command);
+    return dir;
+}
+
+START_TEST(template_plugin_builds_loads_and_acts)
+{
+    /* 1-2. install into a staging directory, build the template with
+     * pkg-config pointing at the staged .pc */
+    char *dir = stage_and_build("outoftree", "tools/plugin-template");
+    char *command = NULL, *output = NULL;
     /* the build must not have used the source tree's headers: check the flags */
     ck_assert_int_ge(asprintf(&command,
                               "pc=$(dirname $(find %s/stage -name sluice.pc | head -n 1)) && "
@@ -126,28 +134,9 @@ START_TEST(template_plugin_builds_loads_and_acts)
 }
 END_TEST
 
-/* Installs Sluice into DIR/stage and builds tests/sdk/out_of_tree's plugins
- * into DIR with pkg-config sluice from the stage. */
-static char *stage_out_of_tree(const char *tag)
-{
-    char *dir = test_scratch(tag), *command = NULL;
-    ck_assert_int_ge(asprintf(&command,
-                              "meson install -C %s --no-rebuild --quiet --destdir %s/stage "
-                              ">%s/install.log 2>&1 && "
-                              "pc=$(dirname $(find %s/stage -name sluice.pc | head -n 1)) && "
-                              "PKG_CONFIG_PATH=$pc make -s -C %s/tests/sdk/out_of_tree OUT=%s "
-                              ">%s/make.log 2>&1",
-                              test_build_dir(), dir, dir, dir, test_source_dir(), dir, dir),
-                     0);
-    ck_assert_msg(system(command) == 0, "install or build failed: see %s/install.log, make.log",
-                  dir);
-    free(command);
-    return dir;
-}
-
 START_TEST(background_eos_hydrostatic)
 {
-    char *dir = stage_out_of_tree("outoftree-eos");
+    char *dir = stage_and_build("outoftree-eos", "tests/sdk/out_of_tree");
     const double rho0 = 1000, c0 = 30, pb = 5000, g = 9.81, H = 1.0;
     char yaml[2048];
     snprintf(yaml, sizeof yaml,
@@ -223,7 +212,7 @@ static double oscillation_error(const char *dir, double dt)
 
 START_TEST(body_force_reads_the_stage_time)
 {
-    char *dir = stage_out_of_tree("outoftree-force");
+    char *dir = stage_and_build("outoftree-force", "tests/sdk/out_of_tree");
     const double dt[3] = {0.01, 0.005, 0.0025};
     double error[3];
     for (int k = 0; k < 3; k++)
