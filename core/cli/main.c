@@ -252,6 +252,14 @@ static int command_check(int argc, char **argv)
     printf("%s: valid %uD scene%s, %u particles (%u fluid, %u wall%s), end time %g s\n", a.scene,
            v->dimensions, variant, v->count, kinds[SLUICE_KIND_FLUID], kinds[SLUICE_KIND_WALL],
            open, sluice_sim_end_time(sim));
+    /* plugins loaded under instance names */
+    const char *instance, *component;
+    int listed = 0;
+    for (uint32_t k = 0; (instance = sluice_sim_instance(sim, k, &component)); k++)
+        if (strcmp(instance, component) != 0)
+            printf("%s%s (%s)", listed++ ? ", " : "instances: ", instance, component);
+    if (listed)
+        printf("\n");
     if (a.schedule)
         sluice_sim_write_schedule(sim, stdout, 0);
     /* the base scene was checked: list its variants */

@@ -486,6 +486,7 @@ typedef struct binder {
     sluice_arena *arena;
     sluice_diag *diag;
     int errors;
+    const char *reserved; /* a key the caller reads itself (NULL: none) */
 } binder;
 
 static void error_at(binder *b, const sluice_node *node, const char *format, ...)
@@ -524,6 +525,8 @@ static int is_empty_plain(const sluice_node *node)
 
 static int known_key(const binder *b, const char *key)
 {
+    if (b->reserved && strcmp(b->reserved, key) == 0)
+        return 1;
     for (uint32_t i = 0; i < b->count; i++)
         if (b->specs[i].name && strcmp(b->specs[i].name, key) == 0)
             return 1;
@@ -702,7 +705,16 @@ int sluice_schema_bind(const sluice_param_spec *specs, uint32_t spec_count, slui
                        const sluice_node *owner, const char *path, uint32_t dimensions,
                        void *config, sluice_arena *arena, sluice_diag *diag)
 {
-    binder b = {specs, spec_count, owner, path ? path : "", dimensions, arena, diag, 0};
+    return sluice_schema_bind_except(specs, spec_count, section, owner, path, dimensions, config,
+                                     arena, diag, NULL);
+}
+
+int sluice_schema_bind_except(const sluice_param_spec *specs, uint32_t spec_count,
+                              sluice_node **section, const sluice_node *owner, const char *path,
+                              uint32_t dimensions, void *config, sluice_arena *arena,
+                              sluice_diag *diag, const char *reserved)
+{
+    binder b = {specs, spec_count, owner, path ? path : "", dimensions, arena, diag, 0, reserved};
     sluice_node *sec = section ? *section : NULL;
     if (sec && sec->kind != SLUICE_NODE_MAPPING && !is_empty_plain(sec)) {
         if (b.path[0])

@@ -24,6 +24,12 @@
 int sluice_schema_bind(const sluice_param_spec *specs, uint32_t spec_count, sluice_node **section,
                        const sluice_node *owner, const char *path, uint32_t dimensions,
                        void *config, sluice_arena *arena, sluice_diag *diag);
+/* As sluice_schema_bind, with one key of the section (`reserved`, e.g. the
+ * `plugin` of a plugin instance) left to the caller: not reported unknown. */
+int sluice_schema_bind_except(const sluice_param_spec *specs, uint32_t spec_count,
+                              sluice_node **section, const sluice_node *owner, const char *path,
+                              uint32_t dimensions, void *config, sluice_arena *arena,
+                              sluice_diag *diag, const char *reserved);
 
 /* Scalar conversions with the same rules as the binder (strict: the whole
  * text must be a finite number / integer / boolean). 0 on success. */

@@ -71,6 +71,15 @@ const char *sluice_sim_resolved_scene(const sluice_sim *sim)
     return sim->resolved_scene;
 }
 
+const char *sluice_sim_instance(const sluice_sim *sim, uint32_t index, const char **component)
+{
+    if (index >= sim->instance_count)
+        return NULL;
+    if (component)
+        *component = sim->instances[index].component->name;
+    return sim->instances[index].name;
+}
+
 const char *sluice_sim_variant(const sluice_sim *sim)
 {
     return sim->scene.variant;

@@ -511,6 +511,16 @@ static sluice_table *api_table_open(sluice_host *host, const char *file_name, co
                   file_name ? file_name : "");
         return NULL;
     }
+    for (size_t k = 0; k < sim->table_count; k++)
+        if (strcmp(sim->tables[k]->path, file_name) == 0) {
+            const sluice_instance *other = &sim->instances[sim->tables[k]->instance];
+            api_error(host,
+                      "table '%s' is also written by '%s' (%s:%d:%d): give one of them another "
+                      "'file'",
+                      file_name, other->name, other->key->file, other->key->line,
+                      other->key->column);
+            return NULL;
+        }
     sluice_table *t = calloc(1, sizeof *t);
     sluice_table **grown = realloc(sim->tables, (sim->table_count + 1) * sizeof *grown);
     if (grown)
@@ -521,6 +531,7 @@ static sluice_table *api_table_open(sluice_host *host, const char *file_name, co
         return NULL;
     }
     t->sim = sim;
+    t->instance = host->instance;
     t->fd = -1;
     /* the path is resolved at the first row: the output directory is created
      * after the components are initialised */

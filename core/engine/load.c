@@ -150,31 +150,41 @@ static int load_plugins(sluice_sim *sim)
         return 1;
     for (size_t p = 0; p < scene->plugin_count; p++) {
         const sluice_scene_plugin *sp = &scene->plugins[p];
-        const sluice_component_entry *entry = sluice_registry_find(&sim->registry, sp->name);
+        const sluice_component_entry *entry = sluice_registry_find(&sim->registry, sp->component);
+        if (entry && strcmp(sp->name, sp->component) != 0 &&
+            sluice_registry_find(&sim->registry, sp->name)) {
+            sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, sp->key->file, sp->key->line,
+                            sp->key->column,
+                            "'%s' names another plugin: give this instance of '%s' a name of "
+                            "its own",
+                            sp->name, sp->component);
+            errors++;
+            continue;
+        }
         if (!entry) {
             const char **names = calloc(sim->registry.component_count + 1, sizeof *names);
             for (size_t c = 0; names && c < sim->registry.component_count; c++)
                 names[c] = sim->registry.components[c].component->name;
             const char *close =
-                names ? sluice_closest(sp->name, names, sim->registry.component_count) : NULL;
+                names ? sluice_closest(sp->component, names, sim->registry.component_count) : NULL;
             char refused[2048];
-            sluice_registry_explain_missing(&sim->registry, sp->name, refused, sizeof refused);
+            sluice_registry_explain_missing(&sim->registry, sp->component, refused, sizeof refused);
             if (refused[0])
-                sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, sp->key->file, sp->key->line,
-                                sp->key->column, "plugin '%s' could not be loaded: %s", sp->name,
-                                refused);
+                sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, sp->component_node->file,
+                                sp->component_node->line, sp->component_node->column,
+                                "plugin '%s' could not be loaded: %s", sp->component, refused);
             else if (close)
-                sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, sp->key->file, sp->key->line,
-                                sp->key->column,
+                sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, sp->component_node->file,
+                                sp->component_node->line, sp->component_node->column,
                                 "no plugin named '%s' on the plugin path; did you mean '%s'? (run "
                                 "'sluice inspect' to list plugins)",
-                                sp->name, close);
+                                sp->component, close);
             else
-                sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, sp->key->file, sp->key->line,
-                                sp->key->column,
+                sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, sp->component_node->file,
+                                sp->component_node->line, sp->component_node->column,
                                 "no plugin named '%s' on the plugin path (%zu directories "
                                 "searched; run 'sluice inspect' to list plugins)",
-                                sp->name, sim->registry.directory_count);
+                                sp->component, sim->registry.directory_count);
             free(names);
             errors++;
             continue;
@@ -196,9 +206,9 @@ static int load_plugins(sluice_sim *sim)
             return errors + 1;
         char path[256];
         snprintf(path, sizeof path, "plugins.%s", sp->name);
-        errors += sluice_schema_bind(in->component->params, in->component->param_count, sp->section,
-                                     sp->key, path, scene->dimensions, in->config, scene->arena,
-                                     diag);
+        errors += sluice_schema_bind_except(in->component->params, in->component->param_count,
+                                            sp->section, sp->key, path, scene->dimensions,
+                                            in->config, scene->arena, diag, "plugin");
     }
     if (errors)
         return errors;
@@ -286,7 +296,7 @@ static int place_walls(sluice_sim *sim)
             if (wall_schemes == 1) {
                 for (uint32_t k = 0; k < sim->instance_count; k++)
                     if (sim->instances[k].component->flags & SLUICE_COMPONENT_WALL_SCHEME)
-                        scheme = sim->instances[k].name;
+                        scheme = sim->instances[k].component->name;
             } else {
                 sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, wall->node->file, wall->node->line,
                                 wall->node->column,
@@ -300,17 +310,21 @@ static int place_walls(sluice_sim *sim)
                 continue;
             }
         } else {
-            int found = 0;
+            /* named by its instance; published by its component's name (a wall scheme
+             * recognises its walls by its own name) */
+            const char *named = scheme;
+            scheme = NULL;
             for (uint32_t k = 0; k < sim->instance_count; k++)
-                found |= (sim->instances[k].component->flags & SLUICE_COMPONENT_WALL_SCHEME) &&
-                         strcmp(sim->instances[k].name, scheme) == 0;
-            if (!found) {
+                if ((sim->instances[k].component->flags & SLUICE_COMPONENT_WALL_SCHEME) &&
+                    strcmp(sim->instances[k].name, named) == 0)
+                    scheme = sim->instances[k].component->name;
+            if (!scheme) {
                 const sluice_node *s = sluice_node_get(wall->node, "scheme");
                 sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, s ? s->file : wall->node->file,
                                 s ? s->line : wall->node->line, s ? s->column : wall->node->column,
                                 "geometry.walls.%zu names wall scheme '%s', which is not a loaded "
                                 "wall-scheme plugin",
-                                w, scheme);
+                                w, named);
                 errors++;
                 continue;
             }

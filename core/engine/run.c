@@ -333,6 +333,8 @@ static int write_run_json(sluice_sim *sim, int status)
     for (uint32_t k = 0; k < sim->instance_count; k++) {
         const sluice_instance *in = &sim->instances[k];
         fprintf(f, "%s\n    {\"component\": ", k ? "," : "");
+        json_string(f, in->component->name);
+        fprintf(f, ", \"instance\": ");
         json_string(f, in->name);
         fprintf(f, ", \"library\": ");
         json_string(f, in->library->name);

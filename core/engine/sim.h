@@ -85,6 +85,9 @@ const char *sluice_sim_resolved_scene(const sluice_sim *sim);
 const char *sluice_sim_variant(const sluice_sim *sim);
 const char *sluice_sim_scene_variant(const sluice_sim *sim, size_t index,
                                      const char **description);
+/* The loaded plugins in scene order: instance `index`'s name (its key in
+ * `plugins`) and, in *component, the component it loads; NULL past the end. */
+const char *sluice_sim_instance(const sluice_sim *sim, uint32_t index, const char **component);
 /* Fields in declaration order: name and first column (for layout checks). */
 uint32_t sluice_sim_field_count(const sluice_sim *sim);
 const char *sluice_sim_field_name(const sluice_sim *sim, uint32_t index);

@@ -74,6 +74,7 @@ typedef struct sluice_pass {
 
 struct sluice_table {
     sluice_sim *sim;
+    uint32_t instance; /* the component instance that writes it */
     char *path;
     char *header;
     int fd;

@@ -1168,6 +1168,48 @@ static int load_walls(sluice_scene *scene, sluice_node *geometry, sluice_diag *d
     return errors;
 }
 
+/* A name in `plugins`: letters, digits, '_' and '-' (it is a segment of
+ * dotted paths, a checkpoint group and part of messages). */
+static int valid_instance_name(const char *name)
+{
+    if (!name || !*name)
+        return 0;
+    for (const char *c = name; *c; c++)
+        if (!((*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') || (*c >= '0' && *c <= '9') ||
+              *c == '_' || *c == '-'))
+            return 0;
+    return 1;
+}
+
+/* One entry of `plugins`: its key names the instance; an optional `plugin`
+ * key in its parameters names the component it loads (a plugin loaded
+ * several times under instance names), else the key does. */
+static int plugin_instance(sluice_scene *scene, sluice_scene_plugin *sp, sluice_diag *diag)
+{
+    if (!valid_instance_name(sp->name)) {
+        error_at(diag, scene, sp->key,
+                 "'%s' is not a valid name in 'plugins': use letters, digits, '_' and '-'",
+                 sp->name ? sp->name : "");
+        return 1;
+    }
+    const sluice_node *section = *sp->section;
+    if (!section || section->kind != SLUICE_NODE_MAPPING)
+        return 0;
+    const sluice_node *component = sluice_node_get(section, "plugin");
+    if (!component)
+        return 0;
+    if (component->kind != SLUICE_NODE_SCALAR || !valid_instance_name(component->value)) {
+        error_at(diag, scene, component,
+                 "plugins.%s.plugin must name the plugin this instance loads (e.g. "
+                 "wall_pressure)",
+                 sp->name);
+        return 1;
+    }
+    sp->component = component->value;
+    sp->component_node = component;
+    return 0;
+}
+
 static int load_plugins(sluice_scene *scene, sluice_diag *diag)
 {
     sluice_node **slot = section_slot(scene->root, "plugins", 0);
@@ -1188,12 +1230,19 @@ static int load_plugins(sluice_scene *scene, sluice_diag *diag)
                                                           sizeof *scene->plugins);
     if (!scene->plugins)
         return 1;
+    int errors = 0;
     for (size_t i = 0; i < map->count; i++) {
-        scene->plugins[i].name = map->keys[i]->value;
-        scene->plugins[i].key = map->keys[i];
-        scene->plugins[i].section = &map->items[i];
+        sluice_scene_plugin *sp = &scene->plugins[i];
+        sp->name = map->keys[i]->value;
+        sp->key = map->keys[i];
+        sp->section = &map->items[i];
+        sp->component = sp->name;
+        sp->component_node = sp->key;
+        errors += plugin_instance(scene, sp, diag);
     }
     scene->plugin_count = map->count;
+    if (errors)
+        return errors;
     if (map->count == 0) {
         error_at(diag, scene, map, "the scene loads no plugins");
         return 1;

@@ -35,7 +35,9 @@ typedef struct sluice_scene_wall {
 } sluice_scene_wall;
 
 typedef struct sluice_scene_plugin {
-    const char *name;
+    const char *name;      /* the instance: its key in `plugins` */
+    const char *component; /* the component it loads: its `plugin` key, else `name` */
+    const sluice_node *component_node; /* where the component is named (messages) */
     sluice_node *key;      /* the key node in `plugins` (position for messages) */
     sluice_node **section; /* slot of its parameter mapping in the tree */
 } sluice_scene_plugin;

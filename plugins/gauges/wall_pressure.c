@@ -457,7 +457,7 @@ static int write_description(wp_state *s, sluice_host *host)
     }
     size_t used = (size_t)snprintf(text, size,
                                    "name,x_m,y_m,z_m,normal_x,normal_y,normal_z,shape,size_m,"
-                                   "height_m,area,cells,wall\n");
+                                   "height_m,area_m2,cells,wall\n");
     for (uint32_t k = 0; k < s->sensor_count; k++) {
         const wp_sensor *q = &s->sensors[k];
         const sluice_wall *wall = api->walls->wall(host, q->wall);

@@ -112,8 +112,8 @@ START_TEST(template_plugin_builds_loads_and_acts)
     }
     ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
     sluice_sim_free(sim);
-    /* run.json's plugins: {"component": ..., "library": ..., "version": ...,
-     * "path": ...}, one object each */
+    /* run.json's plugins: {"component": ..., "instance": ..., "library": ...,
+     * "version": ..., "path": ...}, one object each */
     char *json_path = NULL;
     ck_assert_int_ge(asprintf(&json_path, "%s/run.json", run), 0);
     char *json = test_read_file(json_path);
