@@ -17,8 +17,19 @@
  * forces, so the sensor reads the same way for every wall scheme (dbc,
  * mdbc, ghost_particles, penalty_contact, repulsive_force).
  *
+ * The extrapolation reaches below atmospheric pressure only as far as the
+ * particles it uses do: p(x_s) >= min(0, min_j (p_j - p_ref)). Carried
+ * hydrostatically above a free surface the pressure falls through 0 where
+ * the surface is and would go on to invent suction (down to -rho g 2h at
+ * the kernel's reach); there it reads 0, while under impact suction the
+ * particles' own low pressures still come through.
+ *
  * A cell is wet where S >= min_kernel_sum; a dry cell reads 0 (a transducer
- * in air reads the atmosphere's gauge pressure, 0). The sensor's pressure is
+ * in air reads the atmosphere's gauge pressure, 0). At a flat wall under
+ * water S is about 0.45 (the fluid's first layer dx/2 from the wall), about
+ * 0.1 when a wall scheme holds the fluid 1.5 dx away (dbc after an impact),
+ * and less again in a concave corner: the default 0.05 counts those wet,
+ * and a cell more than about 2h above the water dry. The sensor's pressure is
  * the area-weighted mean over its cells, dry ones included, and its wet
  * fraction the share of its area that is wet: a dry face reads 0, never nan.
  *
@@ -78,6 +89,7 @@ typedef struct wp_state {
     double *weight; /* cell area (2D: length) */
     uint32_t *owner;
     double *sums; /* 2 per cell: S, sum_j V_j W (p_j - p_ref + rho_j g . (x_s - x_j)) */
+    double *lowest; /* per cell: min_j (p_j - p_ref) over the particles with W > 0 */
     double *row;
     uint32_t row_length;
     /* the filter: its output per sensor and the time of the last sample */
@@ -122,10 +134,10 @@ static const sluice_param_spec params[] = {
     {"sample_spacing", SLUICE_PARAM_REAL, offsetof(wp_config, sample_spacing), "0.25", 0, 1,
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_HAS_MAX, "1",
      "largest side of a face cell, in particle spacings dx", NULL, 0},
-    {"min_kernel_sum", SLUICE_PARAM_REAL, offsetof(wp_config, min_kernel_sum), "0.1", 0, 1,
+    {"min_kernel_sum", SLUICE_PARAM_REAL, offsetof(wp_config, min_kernel_sum), "0.05", 0, 1,
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_HAS_MAX, "1",
      "a cell whose fluid kernel sum sum_j V_j W is below this is dry and reads 0 (a flat wall "
-     "under water: about 0.5; a concave right-angled corner: about 0.25)",
+     "under water: about 0.45; fluid held 1.5 dx from the wall: about 0.1)",
      NULL, 0},
     {"interval", SLUICE_PARAM_REAL, offsetof(wp_config, interval), "0.001", 1e-7, 0,
      SLUICE_PARAM_HAS_MIN, "s", "time between samples", NULL, 0},
@@ -156,6 +168,7 @@ static void wp_destroy(void *state)
     free(s->weight);
     free(s->owner);
     free(s->sums);
+    free(s->lowest);
     free(s->row);
     free(s->filtered);
     free(s);
@@ -499,9 +512,10 @@ static int wp_initialise(void *state, sluice_host *host)
     s->weight = malloc(total * sizeof *s->weight);
     s->owner = malloc(total * sizeof *s->owner);
     s->sums = calloc(2 * total, sizeof *s->sums);
+    s->lowest = calloc(total ? total : 1, sizeof *s->lowest);
     s->row = calloc(s->row_length, sizeof *s->row);
     char *header = malloc(16 + (size_t)s->sensor_count * (3 * NAME_MAX_LENGTH + 40));
-    if (!s->points || !s->weight || !s->owner || !s->sums || !s->row || !header) {
+    if (!s->points || !s->weight || !s->owner || !s->sums || !s->lowest || !s->row || !header) {
         free(header);
         api->messages->error(host, "out of memory (%zu face cells)", total);
         return SLUICE_ERROR;
@@ -540,10 +554,10 @@ static void cell_sums(void *context, const sluice_view *v, const sluice_pair_bat
     const double *g = s->gravity;
     const int three = b->offset[2] != NULL;
     for (sluice_index t = 0; t < b->target_count; t++) {
-        double sum = 0, pressure = 0;
+        double sum = 0, pressure = 0, lowest = INFINITY;
         for (sluice_index k = b->pair_begin[t]; k < b->pair_begin[t + 1]; k++) {
             const sluice_index j = nb[k];
-            if (sluice_phase_skips(phase, wanted, j))
+            if (sluice_phase_skips(phase, wanted, j) || !(W[k] > 0))
                 continue;
             const double w = (double)(m[j] / rho[j] * W[k]);
             double g_dot_r = g[0] * (double)b->offset[0][k] + g[1] * (double)b->offset[1][k];
@@ -551,9 +565,11 @@ static void cell_sums(void *context, const sluice_view *v, const sluice_pair_bat
                 g_dot_r += g[2] * (double)b->offset[2][k];
             sum += w;
             pressure += w * ((double)p[j] - p_ref + (double)rho[j] * g_dot_r);
+            lowest = fmin(lowest, (double)p[j] - p_ref);
         }
         s->sums[2 * (size_t)b->target[t]] = sum;
         s->sums[2 * (size_t)b->target[t] + 1] = pressure;
+        s->lowest[b->target[t]] = lowest;
     }
 }
 
@@ -574,10 +590,13 @@ static int wp_after_step(void *state, sluice_host *host)
     if (api->evaluation->evaluate(host, v->time, 0) != SLUICE_OK)
         return SLUICE_ERROR;
     memset(s->sums, 0, 2 * (size_t)s->count * sizeof *s->sums);
+    for (sluice_index i = 0; i < s->count; i++)
+        s->lowest[i] = INFINITY;
     if (api->evaluation->point_pass(host, s->points, s->count, SLUICE_KIND_MASK(SLUICE_KIND_FLUID),
                                     cell_sums, s) != SLUICE_OK ||
         api->ranks->reduce(host, s->sums, (uint32_t)(2 * s->count), SLUICE_REDUCE_SUM) !=
-            SLUICE_OK)
+            SLUICE_OK ||
+        api->ranks->reduce(host, s->lowest, (uint32_t)s->count, SLUICE_REDUCE_MIN) != SLUICE_OK)
         return SLUICE_ERROR;
     v = api->particles->view(host);
     const int filter = s->time_constant > 0;
@@ -589,7 +608,7 @@ static int wp_after_step(void *state, sluice_host *host)
         if (!(S >= s->min_kernel_sum))
             continue;
         double *out = s->row + 1 + stride * (size_t)s->owner[i];
-        out[0] += s->weight[i] * s->sums[2 * (size_t)i + 1] / S;
+        out[0] += s->weight[i] * fmax(s->sums[2 * (size_t)i + 1] / S, fmin(0, s->lowest[i]));
         out[stride - 1] += s->weight[i];
     }
     const double gain = s->filter_started && filter
