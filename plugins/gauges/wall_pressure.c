@@ -671,8 +671,8 @@ static const sluice_component components[] = {{
                "(segment, disc or rectangle), extrapolated from the fluid as Adami et al. "
                "(2012), the same for every wall scheme, raw and filtered, as a CSV time series",
     .reference = "Adami, Hu & Adams (2012), J. Comput. Phys. 231, 7057-7075 (wall pressure "
-                 "extrapolation); Lobovsky et al. (2014), J. Fluids Struct. 48, 407-434 "
-                 "(sensor faces and filtering)",
+                 "extrapolation); compared with Lobovsky et al. (2014), J. Fluids Struct. 48, "
+                 "407-434 in docs/loads.md",
     .dimensions = SLUICE_DIMS_2 | SLUICE_DIMS_3,
     .flags = SLUICE_COMPONENT_ACROSS_RANKS,
     .params = params,

@@ -45,6 +45,10 @@
  *    2 |m - 1| Omega of 2 Omega; with renormalise (kernel_correction) 2 Omega
  *    at every fluid particle, free surface and corners included. 2D and 3D.
  *    On demand: the field is not recomputed between output times.
+ *  - wall_force in 3D (triangles cut into sub-triangles): the still tank's
+ *    floor carries the water's weight, its side rho0 g H^2/2 W, and the
+ *    side's moments about the origin rho0 g W H^3/6 and rho0 g H^2 W^2/4;
+ *    see wall_force_still_tank_3d.
  *  - Refusals: empty positions, a section gauge in 3D, vorticity listed
  *    after the hdf5 writer. */
 #include <math.h>
@@ -791,6 +795,87 @@ START_TEST(wall_force_still_tank)
 }
 END_TEST
 
+/* wall_force in 3D on a tank 0.4 x 0.2 m, H = 0.2 m, dx = 0.02 m, at t = 0
+ * (the hydrostatic start), with the same bounds as in 2D taken per metre
+ * of width and times the width W = 0.2 m (or the floor's area A): the
+ * whole tank gives Fz = -rho0 g H A, Fx = Fy = 0 to round-off (the tank and
+ * the lattice are symmetric); the left side alone (a box) Fx = -rho0 g H^2/2 W
+ * and, about the origin, My = sum z dFx = -rho0 g W H^3/6 and
+ * Mz = -sum y dFx = rho0 g H^2/2 W^2/2, within the force bound times the
+ * lever arm (H, and W/2). */
+static const char *wall_force_tank_scene_3d =
+    "dimensions: 3\n"
+    "particles: {spacing: 0.02, smoothing_length_ratio: 1.5}\n"
+    "time: {end: 0.01}\n"
+    "domain: {min: [-0.1, -0.1, -0.1], max: [0.5, 0.3, 0.4]}\n"
+    "geometry:\n"
+    "  fluid: [{shape: box, min: [0, 0, 0], max: [0.4, 0.2, 0.2]}]\n"
+    "  walls: [{shape: tank, min: [0, 0, 0], max: [0.4, 0.2, 0.3], name: tank}]\n"
+    "plugins:\n"
+    "  wendland_c2: {}\n"
+    "  tait: {speed_of_sound: 14}\n"
+    "  continuity: {}\n"
+    "  pressure_gradient: {}\n"
+    "  gravity: {}\n"
+    "  mdbc: {}\n"
+    "  time_step: {}\n"
+    "  symplectic: {}\n"
+    "  wall_force: {%s}\n";
+
+START_TEST(wall_force_still_tank_3d)
+{
+    const double rho0 = 1000, g = 9.81, H = 0.2, W = 0.2, A = 0.4 * 0.2, h = 0.03;
+    for (int side = 0; side < 2; side++) {
+        char *yaml = NULL;
+        ck_assert(asprintf(&yaml, wall_force_tank_scene_3d,
+                           side ? "walls: tank, box_min: [-0.1, -0.1, -0.1], box_max: [0.001, "
+                                  "0.3, 0.5], moments: true"
+                                : "walls: tank") > 0);
+        sluice_sim *sim = test_load(side ? "wf3-side" : "wf3-tank", yaml, NULL, 0);
+        free(yaml);
+        char *dir = sample_now(sim, side ? "wf3-side-out" : "wf3-tank-out");
+        char *path = out_file(dir, "wall_forces.csv");
+        FILE *f = fopen(path, "r");
+        ck_assert_ptr_nonnull(f);
+        char line[512];
+        ck_assert_ptr_nonnull(fgets(line, sizeof line, f));
+        ck_assert_str_eq(line, side ? "time,Fx_tank,Fy_tank,Fz_tank,wet_tank,Mx_tank,My_tank,"
+                                      "Mz_tank\n"
+                                    : "time,Fx_tank,Fy_tank,Fz_tank,wet_tank\n");
+        fclose(f);
+        double row[8];
+        ck_assert_int_eq(first_row(path, row, 8), side ? 8 : 5);
+        const double force = 4 * rho0 * g * h * h * W;
+        fprintf(stderr, "wall_force 3D at t = 0 (%s): F = (%.4f, %.4f, %.4f) N, wet %.5f m^2",
+                side ? "left side" : "whole tank", row[1], row[2], row[3], row[4]);
+        if (side) {
+            fprintf(stderr, ", M = (%.5f, %.5f, %.5f) N m; -rho0 g H^2/2 W = %.4f, "
+                            "-rho0 g W H^3/6 = %.5f, rho0 g H^2 W^2/4 = %.5f\n",
+                    row[5], row[6], row[7], -rho0 * g * H * H / 2 * W,
+                    -rho0 * g * W * H * H * H / 6, rho0 * g * H * H * W * W / 4);
+            ck_assert_msg(fabs(row[1] + rho0 * g * H * H / 2 * W) <= force, "Fx = %.4f", row[1]);
+            ck_assert_msg(row[2] == 0 && row[3] == 0, "Fy, Fz = %g, %g", row[2], row[3]);
+            ck_assert_msg(fabs(row[4] - H * W) <= 2 * h * W, "wet %g", row[4]);
+            ck_assert_msg(row[5] == 0, "Mx = %g", row[5]);
+            ck_assert_msg(fabs(row[6] + rho0 * g * W * H * H * H / 6) <= force * H, "My = %.5f",
+                          row[6]);
+            ck_assert_msg(fabs(row[7] - rho0 * g * H * H * W * W / 4) <= force * W / 2,
+                          "Mz = %.5f", row[7]);
+        } else {
+            fprintf(stderr, "; -rho0 g H A = %.4f\n", -rho0 * g * H * A);
+            ck_assert_msg(fabs(row[1]) <= 1e-9 * rho0 * g * H * A &&
+                              fabs(row[2]) <= 1e-9 * rho0 * g * H * A,
+                          "Fx, Fy = %g, %g", row[1], row[2]);
+            ck_assert_msg(fabs(row[3] + rho0 * g * H * A) <= rho0 * g * h * A, "Fz = %.4f",
+                          row[3]);
+        }
+        free(path);
+        free(dir);
+        sluice_sim_free(sim);
+    }
+}
+END_TEST
+
 /* ------------------------------------------------------- vorticity -- */
 
 /* -sum over lattice offsets of V F(r) r_x^2: the kernel's second moment m
@@ -1102,6 +1187,7 @@ int main(void)
     tcase_add_test(c, section_momentum_and_pressure);
     tcase_add_test(c, section_face_force_at_rest);
     tcase_add_test(c, wall_force_still_tank);
+    tcase_add_test(c, wall_force_still_tank_3d);
     tcase_add_test(c, vorticity_rigid_rotation_2d);
     tcase_add_test(c, vorticity_rigid_rotation_3d);
     tcase_add_test(c, vorticity_renormalised);
