@@ -23,6 +23,14 @@
 #             over t* in [3.5, 5];
 #             the same from the experiment's event 5
 #             (tests/scenes/data/lobovsky2014_h300_event5.csv).
+#   jump      configs/hydraulic_jump_jonsson2016.yaml (seed 000, Fr1 = 3.4,
+#             dx = d1/4) to JUMP_END s (default 10): its 21 floor sensors
+#             (bed_pressure.csv, x = 0.05-1.05 m); per sensor over
+#             2.5 s-JUMP_END the mean bed pressure against rho g eta, eta the
+#             free-surface gauge's mean elevation above the bed there, and the
+#             fluctuation coefficient C'p = p' / (rho V1^2 / 2), p' the
+#             standard deviation (V1 = 1.5 m/s); the toe and the roller's end
+#             from sluice-analyze toe and roller over the same window.
 # Runs are ordinary run directories under OUT (default
 # runs/wall-pressure-study); a finished run (run.json with status complete)
 # is not redone, and a failed or unstable one is recorded, not fatal.
@@ -34,7 +42,8 @@ cd "$(dirname "$0")/.."
 build=${1:-build}
 sluice="$build/sluice"
 out=${OUT:-runs/wall-pressure-study}
-cases=${CASES:-still lobovsky}
+cases=${CASES:-still lobovsky jump}
+jump_end=${JUMP_END:-10}
 schemes=${SCHEMES:-dbc mdbc ghost_particles penalty_contact repulsive_force}
 spacings_still=${SPACINGS_STILL:-0.02 0.01 0.005}
 spacings_lobovsky=${SPACINGS_LOBOVSKY:-0.01 0.005 0.0025}
@@ -86,9 +95,13 @@ run_one() {
     still) still_scene "$2" "$3" >"$dir.scene/scene.yaml" ;;
     lobovsky)
         sed "s/^  dbc: {}\$/  $2: {}/" configs/dam_break_lobovsky_2d.yaml >"$dir.scene/scene.yaml" ;;
+    jump)
+        sed "s/^  penalty_contact: {} .*\$/  $2: {}/" configs/hydraulic_jump_jonsson2016.yaml \
+            >"$dir.scene/scene.yaml" ;;
     esac
     extra=""
     [ "$1" = lobovsky ] && extra="--set time.end=1.0 --set plugins.wall_pressure.interval=1e-4 --set plugins.hdf5.interval=1.0"
+    [ "$1" = jump ] && extra="--set time.end=$jump_end --set plugins.hdf5.interval=$jump_end"
     # shellcheck disable=SC2086
     OMP_NUM_THREADS=${THREADS:-1} "$sluice" run "$dir.scene/scene.yaml" --out "$dir" --quiet \
         --set particles.spacing="$3" $extra >"$dir.scene/log.txt" 2>&1 || true
@@ -104,7 +117,7 @@ fi
 
 list=""
 for c in $cases; do
-    case "$c" in still) sp=$spacings_still ;; lobovsky) sp=$spacings_lobovsky ;;
+    case "$c" in still) sp=$spacings_still ;; lobovsky) sp=$spacings_lobovsky ;; jump) sp=0.005 ;;
     *) echo "wall-pressure-study: unknown case '$c'" >&2; exit 2 ;; esac
     for s in $schemes; do for dx in $sp; do list="$list $c:$s:$dx"; done; done
 done
@@ -160,10 +173,21 @@ experiment_measures() {
     done
 }
 
+# jump: "x mean_p rho_g_eta p_std" per floor sensor over [2.5, end]
+jump_measures() { # DIR
+    awk -F, -v end="$jump_end" '
+        FNR == 1 { file++; next }
+        file == 1 && $1 >= 2.5 && $1 <= end { for (k = 0; k < 21; k++) { e = $(2 * k + 3); if (e == e + 0) { eta[k] += e; ne[k]++ } } }
+        file == 2 && $1 >= 2.5 && $1 <= end { for (k = 0; k < 21; k++) { p = $(2 + 2 * k); s[k] += p; q[k] += p * p; n[k]++ } }
+        END { for (k = 0; k < 21; k++) { m = s[k] / n[k]; v = q[k] / n[k] - m * m; if (v < 0) v = 0
+                printf "%.2f %.6g %.6g %.6g\n", 0.05 * (k + 1), m, 1000 * 9.81 * eta[k] / ne[k], sqrt(v) } }' \
+        "$1/free_surface.csv" "$1/bed_pressure.csv"
+}
+
 summary="$out/summary.csv"
 echo "case,scheme,spacing_m,status,sensor,measure,value,reference,relative_error,observed_order" >"$summary"
 for c in $cases; do
-    case "$c" in still) sp=$spacings_still ;; lobovsky) sp=$spacings_lobovsky ;; esac
+    case "$c" in still) sp=$spacings_still ;; lobovsky) sp=$spacings_lobovsky ;; jump) sp=0.005 ;; esac
     [ "$c" = lobovsky ] && experiment_measures >"$out/experiment.txt"
     for s in $schemes; do
         vals=""
@@ -171,8 +195,25 @@ for c in $cases; do
             dir="$out/$c-$s-$dx"
             status=$(sed -n 's/.*"status": "\([a-z]*\)".*/\1/p' "$dir/run.json" 2>/dev/null | head -n 1)
             [ -n "$status" ] || status=missing
-            [ -f "$dir/wall_pressure.csv" ] || continue
-            if [ "$c" = still ]; then
+            [ -f "$dir/wall_pressure.csv" ] || [ -f "$dir/bed_pressure.csv" ] || continue
+            if [ "$c" = jump ]; then
+                "$build/tools/sluice-analyze" toe "$dir" --d1 0.02 --v1 1.5 --from 2.5 --to "$jump_end" \
+                    >"$dir.scene/toe.txt" 2>&1 || true
+                "$build/tools/sluice-analyze" roller "$dir" --d1 0.02 --v1 1.5 --from 2.5 --to "$jump_end" \
+                    >"$dir.scene/roller.txt" 2>&1 || true
+                x1=$(sed -n 's/^x1_mean = \([0-9.eE+-]*\).*/\1/p' "$dir.scene/toe.txt")
+                xr=$(sed -n 's/^x_roller_end = \([0-9.eE+-]*\).*/\1/p' "$dir.scene/roller.txt")
+                {
+                    echo "$c,$s,$dx,$status,toe,x1_mean_m,$x1,,,"
+                    echo "$c,$s,$dx,$status,roller,x_roller_end_m,$xr,,,"
+                    jump_measures "$dir" | while read -r x mean hydro std; do
+                        rel=$(awk -v v="$mean" -v r="$hydro" 'BEGIN { printf "%.4f", (v - r) / r }')
+                        echo "$c,$s,$dx,$status,bed_x$x,mean_bed_pressure_Pa,$mean,$hydro,$rel,"
+                        cp=$(awk -v v="$std" 'BEGIN { printf "%.5f", v / (1000 * 1.5 * 1.5 / 2) }')
+                        echo "$c,$s,$dx,$status,bed_x$x,Cp_fluctuation,$cp,,,"
+                    done
+                } >>"$summary"
+            elif [ "$c" = still ]; then
                 still_measures "$dir" | while read -r name ref mean dev; do
                     rel=$(awk -v v="$mean" -v r="$ref" 'BEGIN { printf "%.5f", (v - r) / r }')
                     echo "$c,$s,$dx,$status,$name,mean_Pa_5_10s,$mean,$ref,$rel,"
