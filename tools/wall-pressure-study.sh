@@ -3,6 +3,7 @@
 #
 #   tools/wall-pressure-study.sh [BUILD_DIR]          (default: build)
 #   CASES="still" SCHEMES="dbc mdbc" JOBS=2 tools/wall-pressure-study.sh
+#   SCHEMES="mdbc+backstop" ...                      (mdbc with wall_backstop)
 #   RUN=0 tools/wall-pressure-study.sh               (the summary of the runs there)
 #
 # Cases:
@@ -52,6 +53,21 @@ data=tests/scenes/data/lobovsky2014_h300_event5.csv
 mkdir -p "$out"
 [ -x "$sluice" ] || { echo "wall-pressure-study: no $sluice (build first)" >&2; exit 2; }
 
+# The plugin lines of a scheme: a plugin name, or NAME+backstop for the
+# scheme with penalty_contact's wall_backstop under it (the safety net that
+# keeps mdbc and ghost walls from leaking at an impact; docs/validation.md).
+scheme_lines() {
+    case "$1" in
+    *+backstop) printf '  %s: {}\n  wall_backstop: {}\n' "${1%+backstop}" ;;
+    *) printf '  %s: {}\n' "$1" ;;
+    esac
+}
+# swap_scheme LINE_REGEX SCHEME FILE: the line matching LINE_REGEX replaced
+swap_scheme() {
+    lines=$(scheme_lines "$2")
+    awk -v re="$1" -v lines="$lines" '$0 ~ re && !done { print lines; done = 1; next } { print }' "$3"
+}
+
 still_scene() { # SCHEME DX -> scene text on stdout
     cat <<EOF
 title: still tank with wall pressure sensors
@@ -71,7 +87,7 @@ plugins:
   pressure_gradient: {}
   artificial_viscosity: {alpha: 0.1}
   gravity: {}
-  $1: {}
+$(scheme_lines "$1")
   time_step: {}
   symplectic: {}
   wall_pressure:
@@ -94,9 +110,9 @@ run_one() {
     case "$1" in
     still) still_scene "$2" "$3" >"$dir.scene/scene.yaml" ;;
     lobovsky)
-        sed "s/^  dbc: {}\$/  $2: {}/" configs/dam_break_lobovsky_2d.yaml >"$dir.scene/scene.yaml" ;;
+        swap_scheme '^  dbc: [{][}]$' "$2" configs/dam_break_lobovsky_2d.yaml >"$dir.scene/scene.yaml" ;;
     jump)
-        sed "s/^  penalty_contact: {} .*\$/  $2: {}/" configs/hydraulic_jump_jonsson2016.yaml \
+        swap_scheme '^  penalty_contact: [{][}]' "$2" configs/hydraulic_jump_jonsson2016.yaml \
             >"$dir.scene/scene.yaml" ;;
     esac
     extra=""
