@@ -419,8 +419,9 @@ END_TEST
 /* ------------------------------------------------- output across ranks -- */
 
 /* The dam break with what a user writes: snapshots (parallel HDF5 across
- * ranks), a front gauge, a point gauge, a section gauge with its forces and
- * the tank's wall force (tables written by rank 0 from reduced sums), and a
+ * ranks), a front gauge, a point gauge, a section gauge with its forces,
+ * the tank's wall force and wall pressure sensors with their filter
+ * (tables written by rank 0 from reduced sums and minima), and a
  * checkpoint at t = 0.05 s (gathered on rank 0). */
 static const char *output_plugins =
     "  front_gauge: {interval: 0.01, origin: 0.0}\n"
@@ -428,6 +429,8 @@ static const char *output_plugins =
     "\"pressure,velocity\"}\n"
     "  section_gauge: {interval: 0.01, positions: [0.5, 1.5], forces: true}\n"
     "  wall_force: {interval: 0.01, walls: tank}\n"
+    "  wall_pressure: {interval: 0.01, time_constant: 0.02, positions: [[4.0, 0.05], [0, 0.5], "
+    "[2.0, 0]], size: [0.04]}\n"
     "  hdf5: {interval: 0.05}\n";
 
 static char *output_scene(void)
@@ -661,6 +664,8 @@ START_TEST(output_as_one_rank)
         ck_assert_int_eq(other_rows, 13);
         compare_table(one, across, "wall_forces.csv", &other_rows);
         ck_assert_int_eq(other_rows, 13);
+        compare_table(one, across, "wall_pressure.csv", &other_rows);
+        ck_assert_int_eq(other_rows, 13);
         for (int k = 0; k < 2; k++) {
             const char *restarted = k == 0 ? again : alone;
             compare_table(one, restarted, "front.csv", &front_rows);
@@ -670,6 +675,8 @@ START_TEST(output_as_one_rank)
             compare_table(one, restarted, "sections.csv", &other_rows);
             ck_assert_int_eq(other_rows, 13);
             compare_table(one, restarted, "wall_forces.csv", &other_rows);
+            ck_assert_int_eq(other_rows, 13);
+            compare_table(one, restarted, "wall_pressure.csv", &other_rows);
             ck_assert_int_eq(other_rows, 13);
         }
         /* run.json: the counts of every rank */
