@@ -183,7 +183,7 @@ static const char sensors_2d[] =
     "    positions: [[0.4, 0.05], [0.4, 0.1], [0.4, 0.15], [0.2, 0], [0.4, 0.25], [0, 0.2]]\n"
     "    names: side05,side10,side15,floor,dry,surface\n"
     "    size: [0.02, 0.02, 0.02, 0.1, 0.02, 0.06]\n"
-    "    interval: 0.01\n";
+    "    interval: 0.002\n";
 static const char sensors_3d[] =
     "  wall_pressure:\n"
     "    positions: [[0.4, 0.1, 0.05], [0.4, 0.1, 0.1], [0.4, 0.1, 0.15], [0.2, 0.1, 0], [0.4, "
@@ -192,7 +192,7 @@ static const char sensors_3d[] =
     "    shape: rectangle\n"
     "    size: [0.04]\n"
     "    height: [0.02, 0.02, 0.02, 0.06, 0.02, 0.06]\n"
-    "    interval: 0.01\n";
+    "    interval: 0.002\n";
 static const double expected[] = {RHO0 * G * (DEPTH - 0.05), RHO0 * G * (DEPTH - 0.1),
                                   RHO0 * G * (DEPTH - 0.15), RHO0 * G * DEPTH, -1, -2};
 
@@ -203,7 +203,7 @@ START_TEST(hydrostatic_every_scheme)
         for (size_t k = 0; k < sizeof schemes / sizeof *schemes; k++) {
             char tag[64];
             snprintf(tag, sizeof tag, "wp-hydro-%dd-%s", dims, schemes[k]);
-            char *yaml = tank_scene(dims, schemes[k], 0.02, dims == 2 ? sensors_2d : sensors_3d);
+            char *yaml = tank_scene(dims, schemes[k], 0.004, dims == 2 ? sensors_2d : sensors_3d);
             char *out = run_scene(tag, yaml);
             csv c = read_csv(out, "wall_pressure.csv");
             ck_assert_str_eq(c.header,
