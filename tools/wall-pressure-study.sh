@@ -185,7 +185,7 @@ experiment_measures() {
     for k in 1 2 4 5; do # columns: sensor1, sensor2, (sensor2L), sensor3, sensor4
         case $k in 1) s=1 ;; 2) s=2 ;; 4) s=3 ;; 5) s=4 ;; esac
         printf 'sensor%s ' "$s"
-        awk -F, -v c=$((k + 1)) 'NR > 1 { print $1, $c }' "$data" | awk "$impact_awk"
+        awk -F, -v c=$((k + 1)) '!/^#/ && !/^t_star/ { print $1, $c }' "$data" | awk "$impact_awk"
     done
 }
 
