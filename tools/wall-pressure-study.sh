@@ -5,6 +5,7 @@
 #   CASES="still" SCHEMES="dbc mdbc" JOBS=2 tools/wall-pressure-study.sh
 #   SCHEMES="mdbc+backstop" ...                      (mdbc with wall_backstop)
 #   RUN=0 tools/wall-pressure-study.sh               (the summary of the runs there)
+#   C0_STILL=31.4 OUT=runs/still-c0x2 CASES=still tools/wall-pressure-study.sh
 #
 # Cases:
 #   still     a still tank 0.5 m long, water H = 0.25 m, 10 s, at
@@ -45,6 +46,7 @@ sluice="$build/sluice"
 out=${OUT:-runs/wall-pressure-study}
 cases=${CASES:-still lobovsky jump}
 jump_end=${JUMP_END:-10}
+c0_still=${C0_STILL:-15.7}
 schemes=${SCHEMES:-dbc mdbc ghost_particles penalty_contact repulsive_force}
 spacings_still=${SPACINGS_STILL:-0.02 0.01 0.005}
 spacings_lobovsky=${SPACINGS_LOBOVSKY:-0.01 0.005 0.0025}
@@ -81,7 +83,7 @@ geometry:
 initial: {density: hydrostatic}
 plugins:
   wendland_c2: {}
-  tait: {speed_of_sound: 15.7}   # 10 (g H)^(1/2)
+  tait: {speed_of_sound: $c0_still}   # default 10 (g H)^(1/2)
   continuity: {}
   delta_sph: {delta: 0.1, form: fourtakas}
   pressure_gradient: {}
