@@ -43,8 +43,10 @@ echo "== MPI build (build-mpi/, -Dmpi=enabled): runs across 1, 2 and 4 ranks, an
 meson compile -C build-mpi
 # The runs across ranks in full; the rest of the suite (the same physics code
 # on one rank, built with MPI) without the long validations the release pass
-# has just asserted (Check tag `validation`, as in the sanitizer pass below).
-CK_EXCLUDE_TAGS=validation meson test -C build-mpi --print-errorlogs --num-processes "$jobs"
+# has just asserted (Check tag `validation`, as in the sanitizer pass below)
+# and without the seed scenes (meson suite `long`, tests/meson.build).
+CK_EXCLUDE_TAGS=validation meson test -C build-mpi --print-errorlogs --num-processes "$jobs" \
+    --no-suite long
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build (build-asan/)"
 [ -f build-asan/build.ninja ] || meson setup build-asan --buildtype=debugoptimized \
