@@ -17,10 +17,12 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "usage:\n"
-            "  sluice run SCENE.yaml --out DIR [--variant NAME] [--set key=value ...]\n"
+            "  sluice run SCENE.yaml --out DIR [--variant NAME] [--remove PATH ...]\n"
+            "             [--swap OLD=NEW ...] [--set key=value ...]\n"
             "             [--threads N] [--restart CHECKPOINT.h5] [--progress | --no-progress]\n"
             "             [--quiet]\n"
-            "  sluice check SCENE.yaml [--variant NAME] [--set key=value ...] [--schedule]\n"
+            "  sluice check SCENE.yaml [--variant NAME] [--remove PATH ...] [--swap OLD=NEW ...]\n"
+            "               [--set key=value ...] [--schedule]\n"
             "  sluice inspect [PLUGIN] [--markdown]\n"
             "  sluice version\n"
             "\n"
@@ -28,7 +30,10 @@ static void usage(FILE *out)
             "--set plugins.tait.speed_of_sound=60. Plugins are searched in the scene's\n"
             "plugin_path, SLUICE_PLUGIN_PATH, then next to the program.\n"
             "--variant applies one of the scene's named variants (its top-level 'variants':\n"
-            "keys removed and set) before the --set overrides; 'sluice check SCENE' lists them.\n"
+            "keys removed, plugins swapped, keys set); 'sluice check SCENE' lists them.\n"
+            "--remove PATH takes a key out (e.g. plugins.xsph); --swap OLD=NEW replaces the\n"
+            "plugin OLD by NEW with NEW's defaults, and the walls OLD handled follow it (e.g.\n"
+            "--swap dbc=mdbc). After the variant: the removals, the swaps, then the --set.\n"
             "--schedule prints the evaluation schedule: prepare, passes in order, on-demand\n"
             "terms, integrated fields (run.json holds it too).\n"
             "--restart continues the run of SCENE from a checkpoint (DIR/checkpoint_*.h5,\n"
@@ -39,15 +44,24 @@ static void usage(FILE *out)
 
 typedef struct arguments {
     const char *scene, *out, *plugin, *restart, *variant;
-    const char **sets;
-    size_t set_count;
+    const char **sets, **removals, **swaps;
+    size_t set_count, removal_count, swap_count;
     int threads, progress, quiet, markdown, schedule;
 } arguments;
+
+static void free_arguments(arguments *a)
+{
+    free(a->sets);
+    free(a->removals);
+    free(a->swaps);
+}
 
 static int parse(int argc, char **argv, int first, arguments *a, int allow_out)
 {
     a->sets = calloc((size_t)argc + 1, sizeof *a->sets);
-    if (!a->sets) {
+    a->removals = calloc((size_t)argc + 1, sizeof *a->removals);
+    a->swaps = calloc((size_t)argc + 1, sizeof *a->swaps);
+    if (!a->sets || !a->removals || !a->swaps) {
         fprintf(stderr, "sluice: error: out of memory\n");
         return -1;
     }
@@ -62,6 +76,21 @@ static int parse(int argc, char **argv, int first, arguments *a, int allow_out)
             a->sets[a->set_count++] = argv[++i];
         } else if (strncmp(arg, "--set=", 6) == 0) {
             a->sets[a->set_count++] = arg + 6;
+        } else if (strcmp(arg, "--remove") == 0 || strncmp(arg, "--remove=", 9) == 0) {
+            const char *path = arg[8] == '=' ? arg + 9 : i + 1 < argc ? argv[++i] : NULL;
+            if (!path || !*path) {
+                fprintf(stderr, "sluice: error: --remove needs a dotted path, e.g. "
+                                "plugins.xsph\n");
+                return -1;
+            }
+            a->removals[a->removal_count++] = path;
+        } else if (strcmp(arg, "--swap") == 0 || strncmp(arg, "--swap=", 7) == 0) {
+            const char *swap = arg[6] == '=' ? arg + 7 : i + 1 < argc ? argv[++i] : NULL;
+            if (!swap || !*swap) {
+                fprintf(stderr, "sluice: error: --swap needs OLD=NEW, e.g. dbc=mdbc\n");
+                return -1;
+            }
+            a->swaps[a->swap_count++] = swap;
         } else if (strcmp(arg, "--variant") == 0 || strncmp(arg, "--variant=", 10) == 0) {
             const char *name = arg[9] == '=' ? arg + 10 : i + 1 < argc ? argv[++i] : NULL;
             if (!name || !*name) {
@@ -146,7 +175,15 @@ static sluice_sim *load(const arguments *a, int check_only, const void *communic
         fprintf(stderr, "sluice: error: out of memory\n");
         return NULL;
     }
-    sluice_load_options options = {a->sets, a->set_count, a->threads, check_only, 0, communicator};
+    sluice_load_options options = {.overrides = a->sets,
+                                   .override_count = a->set_count,
+                                   .threads = a->threads,
+                                   .check_only = check_only,
+                                   .communicator = communicator,
+                                   .removals = a->removals,
+                                   .removal_count = a->removal_count,
+                                   .swaps = a->swaps,
+                                   .swap_count = a->swap_count};
     sluice_sim *sim = sluice_sim_load_variant(a->scene, a->variant, &options, diag);
     if (world_rank() == 0)
         sluice_diag_print(diag, stderr);
@@ -159,13 +196,13 @@ static int command_run(int argc, char **argv, int across_ranks)
     arguments a;
     memset(&a, 0, sizeof a);
     if (parse(argc, argv, 2, &a, 1) != 0) {
-        free(a.sets);
+        free_arguments(&a);
         usage(stderr);
         return 2;
     }
     if (!a.out) {
         fprintf(stderr, "sluice: error: 'sluice run' needs --out DIR\n");
-        free(a.sets);
+        free_arguments(&a);
         return 2;
     }
 #ifdef SLUICE_MPI
@@ -177,7 +214,7 @@ static int command_run(int argc, char **argv, int across_ranks)
     sluice_sim *sim = load(&a, 0, NULL);
 #endif
     const int quiet_rank = world_rank() != 0;
-    free(a.sets);
+    free_arguments(&a);
     if (!sim)
         return 2;
     if (a.restart) {
@@ -231,12 +268,12 @@ static int command_check(int argc, char **argv)
     arguments a;
     memset(&a, 0, sizeof a);
     if (parse(argc, argv, 2, &a, 0) != 0) {
-        free(a.sets);
+        free_arguments(&a);
         usage(stderr);
         return 2;
     }
     sluice_sim *sim = load(&a, 1, NULL);
-    free(a.sets);
+    free_arguments(&a);
     if (!sim)
         return 2;
     const sluice_view *v = sluice_sim_view(sim);

@@ -689,9 +689,12 @@ static int load(sluice_sim *sim, const char *scene_path, const char *variant,
 {
     sluice_scene *scene = &sim->scene;
     sluice_diag *diag = sim->diag;
-    int errors = sluice_scene_load_variant(scene, scene_path, variant,
-                                           options ? options->overrides : NULL,
-                                           options ? options->override_count : 0, diag);
+    sluice_scene_edits edits = {0};
+    if (options)
+        edits = (sluice_scene_edits){options->removals, options->removal_count, options->swaps,
+                                     options->swap_count, options->overrides,
+                                     options->override_count};
+    int errors = sluice_scene_load_edited(scene, scene_path, variant, &edits, diag);
     if (errors || !scene->root)
         return errors ? errors : 1;
     if (check_scene_size(sim, options ? options->max_particles : 0) != 0)

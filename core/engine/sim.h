@@ -13,7 +13,7 @@
 typedef struct sluice_sim sluice_sim;
 
 typedef struct sluice_load_options {
-    const char *const *overrides; /* "dotted.key=value" */
+    const char *const *overrides; /* "dotted.key=value" (--set) */
     size_t override_count;
     int threads;                  /* 0: OpenMP default */
     int check_only;               /* validate and build the initial state, no output */
@@ -22,6 +22,10 @@ typedef struct sluice_load_options {
     const void *communicator;     /* a distributed run: the MPI_Comm (address of) whose
                                      ranks share the scene (docs/scaling.md); needs a
                                      build with -Dmpi=enabled. NULL: one rank */
+    const char *const *removals;  /* dotted paths (--remove), applied before the swaps */
+    size_t removal_count;
+    const char *const *swaps;     /* "OLD=NEW" (--swap), applied before the overrides */
+    size_t swap_count;
 } sluice_load_options;
 
 typedef struct sluice_run_options {

@@ -1303,7 +1303,7 @@ static int check_variants(sluice_scene *scene, const sluice_node *variants, slui
     if (variants->kind != SLUICE_NODE_MAPPING) {
         error_at(diag, scene, variants,
                  "'variants' must be a mapping from variant names to their changes "
-                 "(description, remove, set)");
+                 "(description, remove, swap, set)");
         return 1;
     }
     scene->variants = sluice_arena_alloc(scene->arena, (variants->count ? variants->count : 1) *
@@ -1312,7 +1312,7 @@ static int check_variants(sluice_scene *scene, const sluice_node *variants, slui
         error_at(diag, scene, variants, "out of memory");
         return 1;
     }
-    static const char *const keys[] = {"description", "remove", "set"};
+    static const char *const keys[] = {"description", "remove", "swap", "set"};
     int errors = 0;
     for (size_t i = 0; i < variants->count; i++) {
         const char *name = variants->keys[i]->value;
@@ -1333,8 +1333,8 @@ static int check_variants(sluice_scene *scene, const sluice_node *variants, slui
             continue;
         if (variant->kind != SLUICE_NODE_MAPPING) {
             error_at(diag, scene, variant,
-                     "variants.%s must be a mapping with the optional keys description, remove "
-                     "and set",
+                     "variants.%s must be a mapping with the optional keys description, remove, "
+                     "swap and set",
                      name);
             errors++;
             continue;
@@ -1373,6 +1373,19 @@ static int check_variants(sluice_scene *scene, const sluice_node *variants, slui
                         errors++;
                     }
                 }
+            } else if (strcmp(key, "swap") == 0) {
+                if (empty_value(value))
+                    continue;
+                int form = value->kind == SLUICE_NODE_MAPPING;
+                for (size_t j = 0; form && j < value->count; j++)
+                    form = value->items[j]->kind == SLUICE_NODE_SCALAR;
+                if (!form) {
+                    error_at(diag, scene, value,
+                             "variants.%s.swap must be a mapping from loaded plugins to the "
+                             "plugins that replace them, e.g. {dbc: mdbc}",
+                             name);
+                    errors++;
+                }
             } else if (strcmp(key, "set") == 0) {
                 if (!empty_value(value) && value->kind != SLUICE_NODE_MAPPING) {
                     error_at(diag, scene, value,
@@ -1390,12 +1403,97 @@ static int check_variants(sluice_scene *scene, const sluice_node *variants, slui
                 else
                     error_at(diag, scene, variant->keys[k],
                              "unknown key '%s' in variants.%s (valid keys: description, remove, "
-                             "set)",
+                             "swap, set)",
                              key, name);
                 errors++;
             }
         }
     }
+    return errors;
+}
+
+/* --------------------------------------------------------------- swaps -- */
+
+/* Replaces the entry `old` of the scene's `plugins` (a plugin or an
+ * instance name) by `replacement: {}`, the other plugin with its own
+ * defaults, in the same place, and points every wall whose `scheme` is `old`
+ * to it (docs/scene-format.md, Swapping a plugin). New nodes sit at `at`. */
+static int swap_plugin(sluice_scene *scene, const char *old, const char *replacement,
+                       const sluice_node *at, const char *context, sluice_diag *diag)
+{
+    sluice_node *plugins = sluice_node_get(scene->root, "plugins");
+    if (!plugins || plugins->kind != SLUICE_NODE_MAPPING) {
+        error_at(diag, scene, at, "%s: cannot swap '%s': the scene has no 'plugins' mapping",
+                 context, old);
+        return 1;
+    }
+    if (!valid_instance_name(replacement)) {
+        error_at(diag, scene, at,
+                 "%s: '%s' is not a plugin name (letters, digits, '_' and '-'); write "
+                 "OLD=NEW, e.g. dbc=mdbc",
+                 context, replacement);
+        return 1;
+    }
+    size_t index = 0;
+    while (index < plugins->count && strcmp(plugins->keys[index]->value, old) != 0)
+        index++;
+    if (index == plugins->count) {
+        const char **names = sluice_arena_alloc(scene->arena, (plugins->count + 1) * sizeof *names);
+        for (size_t i = 0; names && i < plugins->count; i++)
+            names[i] = plugins->keys[i]->value;
+        const char *close = names ? sluice_closest(old, names, plugins->count) : NULL;
+        if (close)
+            error_at(diag, scene, at,
+                     "%s: cannot swap '%s': the scene loads no plugin of that name; did you "
+                     "mean '%s'?",
+                     context, old, close);
+        else
+            error_at(diag, scene, at, "%s: cannot swap '%s': the scene loads no plugin of that name",
+                     context, old);
+        return 1;
+    }
+    if (strcmp(old, replacement) != 0 && sluice_node_get(plugins, replacement)) {
+        error_at(diag, scene, at, "%s: cannot swap '%s' for '%s': the scene loads '%s' already",
+                 context, old, replacement, replacement);
+        return 1;
+    }
+    sluice_node *key = sluice_node_new_scalar(replacement, 1, at->file, at->line, at->column);
+    sluice_node *value = sluice_node_new_mapping(at->file, at->line, at->column);
+    if (!key || !value) {
+        sluice_node_free(key);
+        sluice_node_free(value);
+        error_at(diag, scene, at, "out of memory");
+        return 1;
+    }
+    sluice_node_free(plugins->keys[index]);
+    sluice_node_free(plugins->items[index]);
+    plugins->keys[index] = key;
+    plugins->items[index] = value;
+    /* the walls it handled follow it */
+    sluice_node *geometry = sluice_node_get(scene->root, "geometry");
+    sluice_node *walls = geometry ? sluice_node_get(geometry, "walls") : NULL;
+    for (size_t i = 0; walls && walls->kind == SLUICE_NODE_SEQUENCE && i < walls->count; i++) {
+        sluice_node *wall = walls->items[i];
+        sluice_node *scheme = sluice_node_get(wall, "scheme");
+        if (!scheme || scheme->kind != SLUICE_NODE_SCALAR || strcmp(scheme->value, old) != 0)
+            continue;
+        sluice_node *name = sluice_node_new_scalar(replacement, 1, at->file, at->line, at->column);
+        if (!name || sluice_node_set(wall, "scheme", name) != 0) {
+            error_at(diag, scene, at, "out of memory");
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* The swaps of a variant (a mapping OLD: NEW), in order. */
+static int apply_swaps(sluice_scene *scene, const sluice_node *swaps, const char *context,
+                       sluice_diag *diag)
+{
+    int errors = 0;
+    for (size_t i = 0; swaps && swaps->kind == SLUICE_NODE_MAPPING && i < swaps->count; i++)
+        errors += swap_plugin(scene, swaps->keys[i]->value, swaps->items[i]->value,
+                              swaps->items[i], context, diag);
     return errors;
 }
 
@@ -1455,6 +1553,8 @@ static int apply_variant(sluice_scene *scene, const char *name, sluice_diag *dia
         char context[256];
         snprintf(context, sizeof context, "variant '%.200s'", name);
         errors += sluice_yaml_remove(root, sluice_node_get(variant, "remove"), context, diag);
+        if (!errors)
+            errors += apply_swaps(scene, sluice_node_get(variant, "swap"), context, diag);
         /* then the settings, in order, on the scene without the removed keys; a setting
          * that fails changes nothing, so the later ones are still checked */
         const sluice_node *set = errors ? NULL : sluice_node_get(variant, "set");
@@ -1662,9 +1762,70 @@ static int load_geometry(sluice_scene *scene, sluice_diag *diag)
     return errors;
 }
 
+/* The command line's edits: --remove (all found before any is removed, as
+ * a variant's), --swap in order, then --set in order. */
+static int apply_edits(sluice_scene *scene, const sluice_scene_edits *edits, sluice_diag *diag)
+{
+    int errors = 0;
+    if (edits->removal_count) {
+        sluice_node *paths = sluice_node_new_sequence("--remove", 1, 1);
+        for (size_t i = 0; paths && i < edits->removal_count; i++) {
+            char origin[32];
+            snprintf(origin, sizeof origin, "--remove #%zu", i + 1);
+            sluice_node *item = sluice_node_new_scalar(edits->removals[i], 1, origin, 1, 1);
+            if (!item || sluice_node_append(paths, item) != 0) { /* append frees item */
+                sluice_node_free(paths);
+                paths = NULL;
+            }
+        }
+        if (!paths) {
+            sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, scene->path, 0, 0, "out of memory");
+            return 1;
+        }
+        errors += sluice_yaml_remove(scene->root, paths, "--remove", diag);
+        sluice_node_free(paths);
+    }
+    for (size_t i = 0; !errors && i < edits->swap_count; i++) {
+        char origin[32];
+        snprintf(origin, sizeof origin, "--swap #%zu", i + 1);
+        const char *text = edits->swaps[i];
+        const char *eq = strchr(text, '=');
+        sluice_node *at = sluice_node_new_scalar(text, 1, origin, 1, 1);
+        char *old = eq ? strndup(text, (size_t)(eq - text)) : NULL;
+        if (!at || (eq && !old)) {
+            sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, origin, 0, 0, "out of memory");
+            errors++;
+        } else if (!eq || eq == text || !eq[1]) {
+            error_at(diag, scene, at,
+                     "--swap '%s': write OLD=NEW, a plugin the scene loads and the plugin "
+                     "that replaces it (e.g. --swap dbc=mdbc)",
+                     text);
+            errors++;
+        } else {
+            errors += swap_plugin(scene, old, eq + 1, at, "--swap", diag);
+        }
+        free(old);
+        sluice_node_free(at);
+    }
+    for (size_t i = 0; !errors && i < edits->override_count; i++) {
+        char origin[32];
+        snprintf(origin, sizeof origin, "--set #%zu", i + 1);
+        if (sluice_yaml_override(scene->root, edits->overrides[i], origin, diag) != 0)
+            errors++;
+    }
+    return errors;
+}
+
 int sluice_scene_load_variant(sluice_scene *scene, const char *path, const char *variant,
                               const char *const *overrides, size_t override_count,
                               sluice_diag *diag)
+{
+    sluice_scene_edits edits = {.overrides = overrides, .override_count = override_count};
+    return sluice_scene_load_edited(scene, path, variant, &edits, diag);
+}
+
+int sluice_scene_load_edited(sluice_scene *scene, const char *path, const char *variant,
+                             const sluice_scene_edits *edits, sluice_diag *diag)
 {
     memset(scene, 0, sizeof *scene);
     scene->arena = sluice_arena_create();
@@ -1691,23 +1852,19 @@ int sluice_scene_load_variant(sluice_scene *scene, const char *path, const char 
         error_at(diag, scene, scene->root, "a scene must be a mapping of sections");
         return 1;
     }
-    /* the variant first, then the overrides */
+    /* the variant first, then the command line's edits */
     int errors = apply_variant(scene, variant, diag);
     if (errors)
         return errors;
-    for (size_t i = 0; i < override_count; i++) {
-        char origin[32];
-        snprintf(origin, sizeof origin, "--set #%zu", i + 1);
-        if (sluice_yaml_override(scene->root, overrides[i], origin, diag) != 0)
-            errors++;
-    }
+    if (edits)
+        errors = apply_edits(scene, edits, diag);
     if (errors)
         return errors;
     const sluice_node *late = sluice_node_get_key(scene->root, "variants");
     if (late) {
         error_at(diag, scene, late,
                  "'variants' can only be written in the scene file: it is taken out before a "
-                 "variant and the --set overrides are applied");
+                 "variant and the --remove, --swap and --set edits are applied");
         return 1;
     }
 

@@ -115,6 +115,20 @@ int sluice_scene_load(sluice_scene *scene, const char *path, const char *const *
 int sluice_scene_load_variant(sluice_scene *scene, const char *path, const char *variant,
                               const char *const *overrides, size_t override_count,
                               sluice_diag *diag);
+/* The command line's edits of a scene, applied after the variant: the
+ * removals (dotted paths), then the swaps ("OLD=NEW": plugins entry OLD
+ * replaced by plugin NEW with its defaults, walls handled by OLD handled by
+ * NEW), then the overrides ("dotted.key=value"), each in order. */
+typedef struct sluice_scene_edits {
+    const char *const *removals;
+    size_t removal_count;
+    const char *const *swaps;
+    size_t swap_count;
+    const char *const *overrides;
+    size_t override_count;
+} sluice_scene_edits;
+int sluice_scene_load_edited(sluice_scene *scene, const char *path, const char *variant,
+                             const sluice_scene_edits *edits, sluice_diag *diag);
 void sluice_scene_free(sluice_scene *scene);
 
 /* Position helpers for messages about a node. */

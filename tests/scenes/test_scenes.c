@@ -134,7 +134,7 @@ START_TEST(still_water_2d)
     sluice_sim *sim = NULL;
     {
         sluice_diag *diag = sluice_diag_create();
-        sluice_load_options options = {NULL, 0, 0, 0, 0, NULL};
+        sluice_load_options options = {0};
         sim = sluice_sim_load(scene, &options, diag);
         sluice_diag_print(diag, stderr);
         sluice_diag_destroy(diag);

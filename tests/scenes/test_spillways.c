@@ -40,7 +40,7 @@ static sluice_sim *load_variant(const char *config, const char *variant,
     char *path = test_config(config);
     ck_assert_ptr_nonnull(path);
     sluice_diag *diag = sluice_diag_create();
-    sluice_load_options options = {sets, set_count, 0, 0, 0, NULL};
+    sluice_load_options options = {.overrides = sets, .override_count = set_count};
     sluice_sim *sim = sluice_sim_load_variant(path, variant, &options, diag);
     if (!sim)
         for (size_t i = 0; i < sluice_diag_count(diag); i++)

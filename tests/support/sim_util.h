@@ -17,7 +17,7 @@ static inline sluice_sim *test_load(const char *tag, const char *yaml, const cha
     char *path = test_write_file(dir, "scene.yaml", yaml);
     ck_assert_ptr_nonnull(path);
     sluice_diag *diag = sluice_diag_create();
-    sluice_load_options options = {sets, set_count, 0, 0, 0, NULL};
+    sluice_load_options options = {.overrides = sets, .override_count = set_count};
     sluice_sim *sim = sluice_sim_load(path, &options, diag);
     if (!sim) {
         for (size_t i = 0; i < sluice_diag_count(diag); i++)
@@ -39,7 +39,7 @@ static inline void test_load_refused(const char *tag, const char *yaml, const ch
     char *path = test_write_file(dir, "scene.yaml", yaml);
     ck_assert_ptr_nonnull(path);
     sluice_diag *diag = sluice_diag_create();
-    sluice_load_options options = {NULL, 0, 0, 0, 0, NULL};
+    sluice_load_options options = {0};
     sluice_sim *sim = sluice_sim_load(path, &options, diag);
     int found = 0;
     for (size_t i = 0; i < sluice_diag_count(diag); i++) {

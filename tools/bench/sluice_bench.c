@@ -41,7 +41,7 @@ typedef struct options {
 static sluice_sim *load(const options *o)
 {
     sluice_diag *diag = sluice_diag_create();
-    sluice_load_options lo = {o->sets, o->set_count, 0, 0, 0, NULL};
+    sluice_load_options lo = {.overrides = o->sets, .override_count = o->set_count};
     sluice_sim *sim = sluice_sim_load(o->scene, &lo, diag);
     sluice_diag_print(diag, stderr);
     sluice_diag_destroy(diag);

@@ -1132,7 +1132,7 @@ START_TEST(variant_errors)
                                           "  v: {drop: [plugins.two_phase]}\n",
                              v, NULL, NULL, 17, 7,
                              "unknown key 'drop' in variants.v (valid keys: description, remove, "
-                             "set)");
+                             "swap, set)");
         expect_variant_error(VARIANT_HEAD "variants:\n"
                                           "  v: {description: [a, b]}\n",
                              v, NULL, NULL, 17, 20, "variants.v.description must be a string");
@@ -1155,10 +1155,10 @@ START_TEST(variant_errors)
                                           "  v: [plugins.two_phase]\n",
                              v, NULL, NULL, 17, 6,
                              "variants.v must be a mapping with the optional keys description, "
-                             "remove and set");
+                             "remove, swap and set");
         expect_variant_error(VARIANT_HEAD "variants: [v]\n", v, NULL, NULL, 16, 11,
                              "'variants' must be a mapping from variant names to their changes "
-                             "(description, remove, set)");
+                             "(description, remove, swap, set)");
         /* a record of a resolved scene beside variants */
         expect_variant_error(VARIANT_HEAD "variants: {v: {}}\nvariant: v\n", v, NULL, NULL, 17, 1,
                              "'variant' records the variant a resolved scene was made from and "
@@ -1169,11 +1169,166 @@ START_TEST(variant_errors)
     expect_variant_error(variant_scene, NULL, "variants.v.remove=[plugins.tait]", "--set #1", 1,
                          1,
                          "'variants' can only be written in the scene file: it is taken out "
-                         "before a variant and the --set overrides are applied");
+                         "before a variant and the --remove, --swap and --set edits are "
+                         "applied");
     /* a resolved scene's record is a string */
     expect_variant_error(VARIANT_HEAD "variant: [a]\n", NULL, NULL, NULL, 16, 10,
                          "variant must be a string (it records the variant a resolved scene was "
                          "made from)");
+}
+END_TEST
+
+/* ---------------------------------------------------------------- swaps -- */
+
+#define SWAP_HEAD                                                                      \
+    "dimensions: 2\n"                                                    /* 1 */      \
+    "particles: {spacing: 0.05}\n"                                       /* 2 */      \
+    "time: {end: 1}\n"                                                   /* 3 */      \
+    "domain: {min: [-0.2, -0.2], max: [1.2, 1.2]}\n"                     /* 4 */      \
+    "geometry:\n"                                                        /* 5 */      \
+    "  fluid:\n"                                                         /* 6 */      \
+    "    - {shape: box, min: [0, 0], max: [0.5, 0.5]}\n"                 /* 7 */      \
+    "  walls:\n"                                                         /* 8 */      \
+    "    - {shape: tank, min: [0, 0], max: [1, 1], scheme: dbc}\n"       /* 9 */      \
+    "    - {shape: box, min: [0.6, 0], max: [0.7, 0.2], name: sill, scheme: plate}\n" \
+    "plugins:\n"                                                         /* 11 */     \
+    "  tait: {speed_of_sound: 20}\n"                                     /* 12 */     \
+    "  dbc: {}\n"                                                        /* 13 */     \
+    "  plate: {plugin: penalty_contact, stiffness: 2}\n"                 /* 14 */     \
+    "  gravity: {}\n"                                                    /* 15 */
+
+/* The scene with `replacement` in the place of `plugins` entry `entry`
+ * (line 13 or 14) and the walls' schemes given. */
+static char *swapped_scene(const char *dbc_line, const char *plate_line, const char *tank_scheme,
+                           const char *sill_scheme, const char *gravity_line)
+{
+    char *text = NULL;
+    ck_assert_int_ge(
+        asprintf(&text,
+                 "dimensions: 2\n"
+                 "particles: {spacing: 0.05}\n"
+                 "time: {end: 1}\n"
+                 "domain: {min: [-0.2, -0.2], max: [1.2, 1.2]}\n"
+                 "geometry:\n"
+                 "  fluid:\n"
+                 "    - {shape: box, min: [0, 0], max: [0.5, 0.5]}\n"
+                 "  walls:\n"
+                 "    - {shape: tank, min: [0, 0], max: [1, 1], scheme: %s}\n"
+                 "    - {shape: box, min: [0.6, 0], max: [0.7, 0.2], name: sill, scheme: %s}\n"
+                 "plugins:\n"
+                 "  tait: {speed_of_sound: 20}\n"
+                 "  %s\n"
+                 "  %s\n"
+                 "%s",
+                 tank_scheme, sill_scheme, dbc_line, plate_line, gravity_line),
+        0);
+    return text;
+}
+
+static void expect_same_tree(sluice_scene *a, const char *expected)
+{
+    sluice_scene b;
+    load_scene(&b, expected, NULL, NULL, 0);
+    char *ta = sluice_yaml_emit(a->root), *tb = sluice_yaml_emit(b.root);
+    ck_assert_msg(strcmp(ta, tb) == 0, "the edited scene is:\n%s\nexpected:\n%s", ta, tb);
+    free(ta);
+    free(tb);
+    sluice_scene_free(&b);
+}
+
+START_TEST(swaps_replace_plugins_and_walls_follow)
+{
+    /* a variant's swap: the instance 'plate' becomes mdbc with mdbc's defaults in its
+     * place; the sill it handled follows; then the variant's settings apply to it */
+    sluice_scene scene;
+    load_scene(&scene,
+               SWAP_HEAD "variants:\n"
+                         "  v: {swap: {plate: mdbc}, set: {plugins.mdbc.reference: wall}}\n",
+               "v", NULL, 0);
+    char *expected = swapped_scene("dbc: {}", "mdbc: {reference: wall}", "dbc", "mdbc",
+                                   "  gravity: {}\n");
+    char *with_record = NULL;
+    ck_assert_int_ge(asprintf(&with_record, "%svariant: v\n", expected), 0);
+    expect_same_tree(&scene, with_record);
+    ck_assert_str_eq(scene.walls[1].scheme, "mdbc");
+    ck_assert_str_eq(scene.walls[0].scheme, "dbc");
+    sluice_scene_free(&scene);
+    free(expected);
+    free(with_record);
+
+    /* the command line's: removals first, then swaps in order, then the settings */
+    char *path = write_scene("swap", SWAP_HEAD);
+    static const char *const removals[] = {"plugins.gravity"};
+    static const char *const swaps[] = {"dbc=ghost_particles", "plate=repulsive_force"};
+    static const char *const sets[] = {"plugins.ghost_particles.slip=free_slip"};
+    sluice_scene_edits edits = {removals, 1, swaps, 2, sets, 1};
+    sluice_diag *diag = sluice_diag_create();
+    ck_assert_int_eq(sluice_scene_load_edited(&scene, path, NULL, &edits, diag), 0);
+    sluice_diag_destroy(diag);
+    remove_scene(path);
+    expected = swapped_scene("ghost_particles: {slip: free_slip}", "repulsive_force: {}",
+                             "ghost_particles", "repulsive_force", "");
+    expect_same_tree(&scene, expected);
+    /* the new entry sits where the swap was written */
+    const sluice_node *key = sluice_node_get_key(sluice_node_get(scene.root, "plugins"),
+                                                 "repulsive_force");
+    ck_assert_str_eq(key->file, "--swap #2");
+    sluice_scene_free(&scene);
+    free(expected);
+}
+END_TEST
+
+/* Loads SWAP_HEAD + tail with the command-line swap `swap` (NULL: none) and
+ * variant v when the tail has one; expects exactly one error. */
+static void expect_swap_error(const char *tail, const char *swap, const char *origin, int line,
+                              int column, const char *message)
+{
+    char *text = NULL;
+    ck_assert_int_ge(asprintf(&text, "%s%s", SWAP_HEAD, tail), 0);
+    char *path = write_scene("swap-error", text);
+    sluice_scene_edits edits = {.swaps = &swap, .swap_count = swap ? 1 : 0};
+    sluice_diag *diag = sluice_diag_create();
+    sluice_scene scene;
+    int errors = sluice_scene_load_edited(&scene, path, *tail ? "v" : NULL, &edits, diag);
+    for (size_t i = 0; i < sluice_diag_count(diag); i++)
+        fprintf(stderr, "%s\n", sluice_diag_message(diag, i));
+    ck_assert_int_eq(errors, 1);
+    ck_assert_uint_eq(sluice_diag_count(diag), 1);
+    char *expected = NULL;
+    ck_assert_int_ge(asprintf(&expected, "%s:%d:%d: error: %s", origin ? origin : path, line,
+                              column, message),
+                     0);
+    ck_assert_str_eq(sluice_diag_message(diag, 0), expected);
+    free(expected);
+    free(text);
+    sluice_scene_free(&scene);
+    sluice_diag_destroy(diag);
+    remove_scene(path);
+}
+
+START_TEST(swap_errors)
+{
+    expect_swap_error("", "dcb=mdbc", "--swap #1", 1, 1,
+                      "--swap: cannot swap 'dcb': the scene loads no plugin of that name; did "
+                      "you mean 'dbc'?");
+    expect_swap_error("", "plate=dbc", "--swap #1", 1, 1,
+                      "--swap: cannot swap 'plate' for 'dbc': the scene loads 'dbc' already");
+    expect_swap_error("", "dbc", "--swap #1", 1, 1,
+                      "--swap 'dbc': write OLD=NEW, a plugin the scene loads and the plugin "
+                      "that replaces it (e.g. --swap dbc=mdbc)");
+    expect_swap_error("", "dbc=", "--swap #1", 1, 1,
+                      "--swap 'dbc=': write OLD=NEW, a plugin the scene loads and the plugin "
+                      "that replaces it (e.g. --swap dbc=mdbc)");
+    expect_swap_error("", "dbc=m dbc", "--swap #1", 1, 1,
+                      "--swap: 'm dbc' is not a plugin name (letters, digits, '_' and '-'); "
+                      "write OLD=NEW, e.g. dbc=mdbc");
+    /* in a variant: at the value */
+    expect_swap_error("variants:\n  v: {swap: {gravty: none}}\n", NULL, NULL, 17, 22,
+                      "variant 'v': cannot swap 'gravty': the scene loads no plugin of that "
+                      "name; did you mean 'gravity'?");
+    expect_swap_error("variants:\n  v: {swap: [dbc, mdbc]}\n", NULL, NULL, 17, 13,
+                      "variants.v.swap must be a mapping from loaded plugins to the plugins "
+                      "that replace them, e.g. {dbc: mdbc}");
 }
 END_TEST
 
@@ -1252,6 +1407,8 @@ int main(void)
     tcase_add_test(variants, variants_change_exactly_the_named_keys);
     tcase_add_test(variants, variant_then_overrides);
     tcase_add_test(variants, variant_errors);
+    tcase_add_test(variants, swaps_replace_plugins_and_walls_follow);
+    tcase_add_test(variants, swap_errors);
     suite_add_tcase(s, variants);
     TCase *suggest = tcase_create("suggest");
     tcase_add_test(suggest, edit_distance);

@@ -398,7 +398,7 @@ static void check_schedule(const char *scene, uint32_t expected_pair_passes)
     const char *root = getenv("SLUICE_SOURCE_DIR");
     snprintf(path, sizeof path, "%s/configs/%s", root ? root : "..", scene);
     sluice_diag *diag = sluice_diag_create();
-    sluice_load_options options = {NULL, 0, 0, 0, 0, NULL};
+    sluice_load_options options = {0};
     sluice_sim *sim = sluice_sim_load(path, &options, diag);
     ck_assert_msg(sim != NULL, "%s failed to load", path);
     sluice_diag_destroy(diag);

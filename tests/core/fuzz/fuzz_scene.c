@@ -68,7 +68,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     sluice_diag *diag = sluice_diag_create();
     if (!diag)
         return 0;
-    sluice_load_options options = {NULL, 0, 1, 0, FUZZ_MAX_PARTICLES, NULL};
+    sluice_load_options options = {.threads = 1, .max_particles = FUZZ_MAX_PARTICLES};
     sluice_sim *sim = sluice_sim_load(path, &options, diag);
     if (sim) {
         /* a valid scene: a couple of steps through every loaded term, with

@@ -44,7 +44,7 @@ static sluice_sim *load_text(const char *text, const MPI_Comm *comm, const char 
     char *dir = test_scratch("ranks");
     char *path = test_write_file(dir, "scene.yaml", text);
     sluice_diag *diag = sluice_diag_create();
-    sluice_load_options options = {NULL, 0, 1, 0, 0, comm};
+    sluice_load_options options = {.threads = 1, .communicator = comm};
     sluice_sim *sim = sluice_sim_load(path, &options, diag);
     int found = 0;
     for (size_t i = 0; i < sluice_diag_count(diag); i++) {

@@ -1252,7 +1252,7 @@ START_TEST(density_from_pressure_without_eos)
     char *dir = test_scratch("no-eos");
     char *path = test_write_file(dir, "scene.yaml", yaml);
     sluice_diag *diag = sluice_diag_create();
-    sluice_load_options options = {NULL, 0, 0, 0, 0, NULL};
+    sluice_load_options options = {0};
     sluice_sim *sim = sluice_sim_load(path, &options, diag);
     ck_assert_ptr_null(sim);
     int found = 0;

@@ -1121,7 +1121,7 @@ static void expect_refusal(const char *tag, const char *yaml, const char *needle
     char *dir = test_scratch(tag);
     char *path = test_write_file(dir, "scene.yaml", yaml);
     sluice_diag *diag = sluice_diag_create();
-    sluice_load_options options = {NULL, 0, 0, 0, 0, NULL};
+    sluice_load_options options = {0};
     sluice_sim *sim = sluice_sim_load(path, &options, diag);
     if (sim)
         sluice_sim_free(sim);
