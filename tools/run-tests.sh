@@ -10,7 +10,7 @@ set -eu
 cd "$(dirname "$0")/.."
 
 missing=""
-for tool in gcc clang make meson ninja pkg-config mpicc mpiexec; do
+for tool in gcc clang make meson ninja pkg-config mpicc mpiexec gnuplot; do
     command -v "$tool" >/dev/null 2>&1 || missing=yes
 done
 if [ -z "$missing" ]; then
@@ -27,7 +27,7 @@ if [ -n "$missing" ]; then
     apt-get update -qq
     apt-get install -y -qq --no-install-recommends build-essential meson ninja-build \
         pkg-config libyaml-dev libhdf5-dev check clang libclang-rt-14-dev libopenmpi-dev \
-        openmpi-bin libhdf5-openmpi-dev >/dev/null
+        openmpi-bin libhdf5-openmpi-dev gnuplot-nox >/dev/null
 fi
 
 jobs=$(nproc 2>/dev/null || echo 2)

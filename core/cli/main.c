@@ -24,6 +24,7 @@ static void usage(FILE *out)
             "  sluice check SCENE.yaml [--variant NAME] [--remove PATH ...] [--swap OLD=NEW ...]\n"
             "               [--set key=value ...] [--schedule]\n"
             "  sluice inspect [PLUGIN] [--markdown]\n"
+            "  sluice study STUDY.yaml [--out DIR] [--jobs N] [--dry-run] [--summary]\n"
             "  sluice version\n"
             "\n"
             "--set overrides any scene key by its dotted path, e.g. --set time.end=0.2 or\n"
@@ -336,6 +337,36 @@ static int command_inspect(int argc, char **argv)
     return sluice_inspect(stdout, plugin, markdown) == 0 ? 0 : 2;
 }
 
+/* `sluice study ...` runs the study tool (tools/study, docs/studies.md), found
+ * next to this program (the build tree's tools/, or an install's bindir),
+ * with SLUICE naming this program so that the study runs it. */
+static int command_study(char **argv)
+{
+    char self[4096];
+    ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+    if (n <= 0) {
+        fprintf(stderr, "sluice: error: cannot find this program's directory\n");
+        return 4;
+    }
+    self[n] = '\0';
+    setenv("SLUICE", self, 0);
+    char *slash = strrchr(self, '/');
+    *slash = '\0';
+    static const char *const places[] = {"tools/sluice-study", "sluice-study"};
+    for (size_t i = 0; i < 2; i++) {
+        char path[4200];
+        snprintf(path, sizeof path, "%s/%s", self, places[i]);
+        if (access(path, X_OK) == 0) {
+            argv[1] = path;
+            execv(path, argv + 1);
+        }
+    }
+    fprintf(stderr, "sluice: error: the study tool sluice-study is not next to this program "
+                    "(%s/tools or %s)\n",
+            self, self);
+    return 4;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -365,6 +396,8 @@ int main(int argc, char **argv)
         return command_check(argc, argv);
     if (strcmp(command, "inspect") == 0)
         return command_inspect(argc, argv);
+    if (strcmp(command, "study") == 0)
+        return command_study(argv);
     if (strcmp(command, "version") == 0 || strcmp(command, "--version") == 0) {
         printf("sluice %s (plugin ABI %d.%d)\n", SLUICE_VERSION, SLUICE_ABI_MAJOR,
                SLUICE_ABI_MINOR);

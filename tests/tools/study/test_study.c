@@ -1,0 +1,382 @@
+/* sluice study (tools/study, docs/studies.md): a two-axis study on a tiny
+ * still tank runs, writes its table, orders and plots, and resumes without
+ * redoing a run; an unstable run is recorded, not fatal; bad study files are
+ * refused with file:line:column before anything runs. */
+#include <check.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "test_util.h"
+
+/* Runs `sluice study ARGS` with stderr and stdout in *output. */
+static int study(const char *args, char **output)
+{
+    return test_sluice(args, output);
+}
+
+/* The field of the row whose first field is `run`, in the column `column`. */
+static char *csv_field(const char *csv, const char *run, const char *column)
+{
+    char *copy = strdup(csv);
+    char *save = NULL, *line = strtok_r(copy, "\n", &save);
+    int index = -1, i = 0;
+    char *header = strdup(line);
+    for (char *s2 = NULL, *f = strtok_r(header, ",", &s2); f; f = strtok_r(NULL, ",", &s2), i++)
+        if (strcmp(f, column) == 0)
+            index = i;
+    free(header);
+    char *result = NULL;
+    while (index >= 0 && (line = strtok_r(NULL, "\n", &save))) {
+        char *fields[256];
+        int n = 0;
+        char *row = strdup(line);
+        for (char *s3 = NULL, *f = strtok_r(row, ",", &s3); f && n < 256; f = strtok_r(NULL, ",", &s3))
+            fields[n++] = f;
+        if (n > index && strcmp(fields[0], run) == 0)
+            result = strdup(fields[index]);
+        free(row);
+        if (result)
+            break;
+    }
+    free(copy);
+    return result;
+}
+
+static double csv_number(const char *csv, const char *run, const char *column)
+{
+    char *field = csv_field(csv, run, column);
+    double v = field ? strtod(field, NULL) : NAN;
+    free(field);
+    return v;
+}
+
+/* The mean of a column of a gauge CSV over t in [from, to], computed here
+ * independently of the study tool. */
+static double column_mean(const char *path, const char *column, double from, double to)
+{
+    FILE *f = fopen(path, "r");
+    ck_assert_ptr_nonnull(f);
+    char line[8192];
+    ck_assert_ptr_nonnull(fgets(line, sizeof line, f));
+    int index = -1, i = 0;
+    for (char *s = NULL, *c = strtok_r(line, ",\n", &s); c; c = strtok_r(NULL, ",\n", &s), i++)
+        if (strcmp(c, column) == 0)
+            index = i;
+    ck_assert_int_ge(index, 1);
+    double sum = 0;
+    int count = 0;
+    while (fgets(line, sizeof line, f)) {
+        double t = strtod(line, NULL), v = NAN;
+        char *p = line;
+        for (int k = 0; k < index && p; k++)
+            p = strchr(p, ',') ? strchr(p, ',') + 1 : NULL;
+        if (p)
+            v = strtod(p, NULL);
+        if (t >= from && t <= to && isfinite(v)) {
+            sum += v;
+            count++;
+        }
+    }
+    fclose(f);
+    ck_assert_int_gt(count, 0);
+    return sum / count;
+}
+
+static long long mtime_ns(const char *path)
+{
+    struct stat st;
+    ck_assert_int_eq(stat(path, &st), 0);
+    return (long long)st.st_mtim.tv_sec * 1000000000LL + st.st_mtim.tv_nsec;
+}
+
+static int is_png(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 0;
+    unsigned char magic[8] = {0};
+    size_t n = fread(magic, 1, 8, f);
+    fclose(f);
+    return n == 8 && memcmp(magic, "\x89PNG\r\n\x1a\n", 8) == 0;
+}
+
+/* The still tank (H = 0.5 m) briefly, with a floor sensor; wall schemes by
+ * swap, three spacings. */
+static const char *two_axis_study =
+    "title: tiny still tank\n"
+    "scene: %s\n"
+    "set:\n"
+    "  time.end: 0.04\n"
+    "  plugins.hdf5.interval: 0.04\n"
+    "  plugins.floor: {plugin: wall_pressure, positions: [[0.5, 0]], names: p, size: [0.4], "
+    "interval: 0.005}\n"
+    "jobs: 2\n"
+    "axes:\n"
+    "  - name: wall\n"
+    "    values:\n"
+    "      dbc: {}\n"
+    "      mdbc: {swap: {dbc: mdbc}}\n"
+    "  - name: dx\n"
+    "    spacing: [0.05, 0.025, 0.0125]\n"
+    "measures:\n"
+    "  - {name: kept, run: particles_final}\n"
+    "  - {name: h, unit: m, run: smoothing_length, reference: 0}\n"
+    "  - {name: p_floor, unit: Pa, gauge: wall_pressure.csv, column: p_Pa, from: 0.02, "
+    "reference: 4905}\n";
+
+START_TEST(two_axis_study_runs_resumes_and_reports)
+{
+    char *dir = test_scratch("study");
+    char *scene = test_config("still_water_2d.yaml");
+    char *text = NULL;
+    ck_assert_int_ge(asprintf(&text, two_axis_study, scene), 0);
+    char *file = test_write_file(dir, "tiny.yaml", text);
+    char *args = NULL, *out = NULL;
+    ck_assert_int_ge(asprintf(&args, "study %s --out %s/out", file, dir), 0);
+    char *output = NULL;
+    int status = study(args, &output);
+    fprintf(stderr, "%s", output);
+    ck_assert_int_eq(status, 0);
+    /* progress for the whole study */
+    ck_assert_ptr_nonnull(strstr(output, "study: 6/6 runs done (0 failed, 0 running, 0 from before)"));
+    free(output);
+
+    ck_assert_int_ge(asprintf(&out, "%s/out/study.csv", dir), 0);
+    char *csv = test_read_file(out);
+    ck_assert_ptr_nonnull(csv);
+    ck_assert_int_eq(test_count_lines(csv, ",complete,"), 6);
+    static const char *const runs[] = {"dbc_0.05", "dbc_0.025", "dbc_0.0125",
+                                       "mdbc_0.05", "mdbc_0.025", "mdbc_0.0125"};
+    static const double spacings[] = {0.05, 0.025, 0.0125};
+    for (int i = 0; i < 6; i++) {
+        /* a still tank loses no particle */
+        char *json_path = NULL;
+        ck_assert_int_ge(asprintf(&json_path, "%s/out/runs/%s/run.json", dir, runs[i]), 0);
+        char *json = test_read_file(json_path);
+        ck_assert_ptr_nonnull(json);
+        ck_assert_double_eq(csv_number(csv, runs[i], "kept"),
+                            test_json_number(json, "particles_initial"));
+        /* h = 1.5 dx exactly, its error against 0 absolute */
+        ck_assert_double_eq_tol(csv_number(csv, runs[i], "h"), 1.5 * spacings[i % 3], 1e-12);
+        ck_assert_double_eq_tol(csv_number(csv, runs[i], "h_error"), 1.5 * spacings[i % 3], 1e-12);
+        /* the reduction is the mean of the gauge column over the window */
+        char *gauge = NULL;
+        ck_assert_int_ge(asprintf(&gauge, "%s/out/runs/%s/wall_pressure.csv", dir, runs[i]), 0);
+        double mean = column_mean(gauge, "p_Pa", 0.02, INFINITY);
+        ck_assert_double_eq_tol(csv_number(csv, runs[i], "p_floor"), mean, 1e-6 * fabs(mean));
+        ck_assert_double_eq_tol(csv_number(csv, runs[i], "p_floor_error"), mean / 4905 - 1, 1e-8);
+        /* CPU time and the rate are measured */
+        ck_assert(csv_number(csv, runs[i], "cpu_s") > 0);
+        ck_assert(csv_number(csv, runs[i], "particle_steps_per_cpu_s") > 0);
+        free(gauge);
+        free(json);
+        free(json_path);
+    }
+    /* orders: h = 1.5 dx converges to 0 at exactly first order */
+    free(out);
+    ck_assert_int_ge(asprintf(&out, "%s/out/orders.csv", dir), 0);
+    char *orders = test_read_file(out);
+    ck_assert_ptr_nonnull(orders);
+    ck_assert_ptr_nonnull(strstr(orders, "dbc,h,0.05;0.025;0.0125,0.075;0.0375;0.01875,"
+                                         "0.075;0.0375;0.01875,1.00;1.00,1,0\n"));
+    ck_assert_ptr_nonnull(strstr(orders, "mdbc,h,"));
+    free(orders);
+    free(out);
+    ck_assert_int_ge(asprintf(&out, "%s/out/study.md", dir), 0);
+    char *md = test_read_file(out);
+    ck_assert_ptr_nonnull(md);
+    ck_assert_ptr_nonnull(strstr(md, "| dbc_0.0125 | dbc | 0.0125 | complete |"));
+    ck_assert_ptr_nonnull(strstr(md, "## Observed orders of convergence"));
+    free(md);
+    static const char *const plots[] = {"p_floor_cost.png", "p_floor_spacing.png", "h_cost.png",
+                                        "h_spacing.png"};
+    for (int i = 0; i < 4; i++) {
+        free(out);
+        ck_assert_int_ge(asprintf(&out, "%s/out/plots/%s", dir, plots[i]), 0);
+        ck_assert_msg(is_png(out), "%s is not a PNG (is gnuplot installed?)", out);
+    }
+
+    /* the same command again: nothing is redone */
+    free(out);
+    ck_assert_int_ge(asprintf(&out, "%s/out/runs/mdbc_0.0125/run.json", dir), 0);
+    long long before = mtime_ns(out);
+    status = study(args, &output);
+    ck_assert_int_eq(status, 0);
+    ck_assert_ptr_nonnull(strstr(output, "6/6 runs done (0 failed, 0 running, 6 from before)"));
+    ck_assert_int_eq(mtime_ns(out), before);
+    free(output);
+    /* a run whose record is gone is run again, the others not */
+    char *record = NULL;
+    ck_assert_int_ge(asprintf(&record, "%s/out/records/dbc_0.05.txt", dir), 0);
+    ck_assert_int_eq(unlink(record), 0);
+    status = study(args, &output);
+    ck_assert_int_eq(status, 0);
+    ck_assert_ptr_nonnull(strstr(output, "6/6 runs done (0 failed, 0 running, 5 from before)"));
+    ck_assert_int_eq(mtime_ns(out), before);
+    char *again = test_read_file(record);
+    ck_assert_ptr_nonnull(again);
+    ck_assert_ptr_nonnull(strstr(again, "exit: 0\n"));
+    free(again);
+    free(record);
+    free(output);
+    free(csv);
+    free(out);
+    free(args);
+    free(file);
+    free(text);
+    free(scene);
+    free(dir);
+}
+END_TEST
+
+START_TEST(unstable_run_is_recorded_not_fatal)
+{
+    /* c0 = 1 m/s in a 0.5 m deep tank: the density leaves the watchdog's band in
+     * the first step (rho g H / c0^2 = 4.9 rho0) */
+    char *dir = test_scratch("study-unstable");
+    char *scene = test_config("still_water_2d.yaml");
+    char *text = NULL;
+    ck_assert_int_ge(asprintf(&text,
+                              "scene: %s\n"
+                              "set: {time.end: 0.02, particles.spacing: 0.05}\n"
+                              "axes:\n"
+                              "  - {name: c0, parameter: plugins.tait.speed_of_sound, values: "
+                              "[22.1, 1]}\n"
+                              "measures:\n"
+                              "  - {name: steps, run: steps}\n",
+                              scene),
+                     0);
+    char *file = test_write_file(dir, "c0.yaml", text);
+    char *args = NULL, *output = NULL;
+    ck_assert_int_ge(asprintf(&args, "study %s --out %s/out", file, dir), 0);
+    ck_assert_int_eq(study(args, &output), 0);
+    ck_assert_ptr_nonnull(strstr(output, "run 1 failed (exit 3: step 1"));
+    free(output);
+    char *path = NULL;
+    ck_assert_int_ge(asprintf(&path, "%s/out/study.csv", dir), 0);
+    char *csv = test_read_file(path);
+    ck_assert_ptr_nonnull(csv);
+    char *state = csv_field(csv, "1", "status");
+    ck_assert_str_eq(state, "unstable");
+    free(state);
+    state = csv_field(csv, "22.1", "status");
+    ck_assert_str_eq(state, "complete");
+    free(state);
+    ck_assert(csv_number(csv, "22.1", "steps") > 0);
+    ck_assert(isnan(csv_number(csv, "1", "steps"))); /* no measure of a failed run */
+    /* a failed run is kept as failed; --retry-failed runs it again */
+    ck_assert_int_eq(study(args, &output), 0);
+    ck_assert_ptr_nonnull(strstr(output, "2/2 runs done (1 failed, 0 running, 2 from before)"));
+    free(output);
+    free(csv);
+    free(path);
+    free(args);
+    free(file);
+    free(text);
+    free(scene);
+    free(dir);
+}
+END_TEST
+
+/* A study file that is refused: exit 2, the message at file:line:column,
+ * nothing written. */
+static void expect_refused(const char *body, const char *position, const char *message)
+{
+    char *dir = test_scratch("study-refused");
+    char *scene = test_config("still_water_2d.yaml");
+    char *text = NULL;
+    ck_assert_int_ge(asprintf(&text, body, scene), 0);
+    char *file = test_write_file(dir, "bad.yaml", text);
+    char *args = NULL, *output = NULL;
+    ck_assert_int_ge(asprintf(&args, "study %s --out %s/out", file, dir), 0);
+    int status = study(args, &output);
+    char *expected = NULL;
+    ck_assert_int_ge(asprintf(&expected, "%s:%s: error: %s", file, position, message), 0);
+    ck_assert_msg(status == 2 && strstr(output, expected),
+                  "exit %d, output:\n%s\nexpected:\n%s", status, output, expected);
+    char *out = NULL;
+    ck_assert_int_ge(asprintf(&out, "%s/out", dir), 0);
+    ck_assert(!test_exists(out));
+    free(out);
+    free(expected);
+    free(output);
+    free(args);
+    free(file);
+    free(text);
+    free(scene);
+    free(dir);
+}
+
+#define AXIS "axes:\n  - {name: dx, spacing: [0.05]}\n"
+
+START_TEST(bad_study_files_are_refused)
+{
+    expect_refused("scene: %s\n" AXIS "mesures: []\n", "4:1",
+                   "unknown key 'mesures' in the study; did you mean 'measures'?");
+    expect_refused("scene: %s/nothing.yaml\n" AXIS, "1:8",
+                   "the scene '");
+    expect_refused("title: no scene %s\n" AXIS, "1:1",
+                   "a study needs 'scene': the path of its base scene (relative to the study "
+                   "file)");
+    expect_refused("scene: %s\n", "1:1", "a study needs 'axes' (a list)");
+    expect_refused("scene: %s\naxes:\n  - {name: dx, spacing: [0.1, -1]}\n", "3:31",
+                   "axis 'dx': a spacing is a positive number of metres, got '-1'");
+    expect_refused("scene: %s\naxes:\n  - {name: t, threads: [1.5]}\n", "3:25",
+                   "axis 't': a thread count is a whole number from 1 to 4096, got '1.5'");
+    expect_refused("scene: %s\naxes:\n  - {name: x, spacing: [0.1], threads: [1]}\n", "3:5",
+                   "axis 'x' needs exactly one of: values (labels and their scene edits), "
+                   "parameter with values (a list), spacing (a list), threads (a list)");
+    expect_refused("scene: %s\naxes:\n  - {spacing: [0.1]}\n", "3:5",
+                   "an axis needs a name (a column of the table)");
+    expect_refused("scene: %s\naxes:\n  - {name: c, parameter: plugins.tait.speed_of_sound, "
+                   "values: [20, 20]}\n",
+                   "3:68", "axis 'c' has the value '20' twice");
+    expect_refused("scene: %s\naxes:\n  - {name: w, values: {dbc: {}, m: {swap: {dbx: mdbc}}}}\n",
+                   "3:49",
+                   "cannot swap 'dbx': the scene loads no plugin of that name; did you "
+                   "mean 'dbc'?");
+    expect_refused("scene: %s\naxes:\n  - {name: c, parameter: plugins.tait.speed_of_sound, "
+                   "values: [-3]}\n",
+                   "3:64",
+                   "plugins.tait.speed_of_sound = -3 m s^-1 is out of range: it must be > 0 m s^-1");
+    expect_refused("scene: %s\naxes:\n  - {name: w, values: {a: {swap: [dbc]}}}\n", "3:34",
+                   "axes.w.values.a.swap must be a mapping from plugins the scene loads to the "
+                   "plugins that replace them, e.g. {dbc: mdbc}");
+    expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p, gauge: a.csv, column: p, "
+                   "reduce: maen}\n",
+                   "5:48",
+                   "measure 'p': reduce must be one of mean, max, min, first, last, std, rms, "
+                   "integral, time_of_max, time_of_min; did you mean 'mean'?");
+    expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p}\n", "5:5",
+                   "measure 'p' needs exactly one source: gauge (a CSV file of the run, with "
+                   "column), analysis (sluice-analyze arguments, with key) or run (a figure of "
+                   "run.json)");
+    expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p, run: steps}\n  - {name: p, run: "
+                   "steps}\n",
+                   "6:5", "two measures are named 'p'");
+    expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p, run: steps, error: absolute}\n",
+                   "5:34", "measure 'p': error needs a reference");
+    expect_refused("scene: %s\naxes:\n  - {name: w, values: {a/b: {}}}\n", "3:24",
+                   "axis 'w': the label 'a/b' names run directories: letters, digits, '.', '_', "
+                   "'+' and '-' only");
+    expect_refused("scene: %s\naxes: [\n", "3:1",
+                   "YAML syntax error: did not find expected node content");
+}
+END_TEST
+
+int main(void)
+{
+    Suite *s = suite_create("study");
+    TCase *runs = tcase_create("runs");
+    tcase_set_timeout(runs, 600);
+    tcase_add_test(runs, two_axis_study_runs_resumes_and_reports);
+    tcase_add_test(runs, unstable_run_is_recorded_not_fatal);
+    suite_add_tcase(s, runs);
+    TCase *refusals = tcase_create("refusals");
+    tcase_add_test(refusals, bad_study_files_are_refused);
+    suite_add_tcase(s, refusals);
+    return test_run_suite(s);
+}

@@ -1,0 +1,190 @@
+/* sluice-study (also `sluice study`): runs a comparative study (study.h,
+ * docs/studies.md).
+ *
+ *   sluice study STUDY.yaml [--out DIR] [--jobs N] [--dry-run] [--summary]
+ *                [--retry-failed] [--quiet]
+ *
+ * Exit status: 0 the study ran (runs that failed or went unstable are
+ * recorded in its table), 2 bad input (every problem as file:line:column,
+ * nothing run), 4 another failure, 5 stopped by SIGINT/SIGTERM (finished
+ * runs are kept; the same command goes on). */
+#define _GNU_SOURCE
+#include <libgen.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "study.h"
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "usage: sluice study STUDY.yaml [--out DIR] [--jobs N] [--dry-run] [--summary]\n"
+            "                    [--retry-failed] [--quiet]\n"
+            "Runs every combination of the study's axes as a run directory DIR/runs/NAME\n"
+            "(default DIR: runs/<study file name>), then writes DIR/study.csv, DIR/study.md,\n"
+            "DIR/orders.csv and PNG plots in DIR/plots (gnuplot). A run finished by an earlier\n"
+            "invocation with the same command is not redone; a failed one is kept as failed\n"
+            "(--retry-failed runs it again). --jobs N: runs at a time (default: the study's\n"
+            "'jobs', 1). --dry-run: check the study and every run's scene, list the runs.\n"
+            "--summary: no runs; the reports from what is there. docs/studies.md\n");
+}
+
+/* The sluice program and sluice-analyze: $SLUICE and $SLUICE_ANALYZE, or
+ * next to this program (the build tree: ../sluice; an install: ./sluice). */
+static char *program_beside(const char *env, const char *const *relative, size_t count)
+{
+    const char *given = getenv(env);
+    if (given && *given)
+        return study_strdup(given);
+    char self[PATH_MAX];
+    ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+    if (n <= 0)
+        return NULL;
+    self[n] = '\0';
+    char *dir = dirname(self);
+    for (size_t i = 0; i < count; i++) {
+        char *path = study_printf("%s/%s", dir, relative[i]);
+        if (access(path, X_OK) == 0)
+            return path;
+        free(path);
+    }
+    return NULL;
+}
+
+static int parse(int argc, char **argv, study *s, const char **file)
+{
+    for (int i = 1; i < argc; i++) {
+        const char *arg = argv[i];
+        if ((strcmp(arg, "--out") == 0 || strcmp(arg, "-o") == 0) && i + 1 < argc)
+            s->out = study_strdup(argv[++i]);
+        else if (strcmp(arg, "--jobs") == 0 || strcmp(arg, "-j") == 0) {
+            char *end = NULL;
+            long jobs = i + 1 < argc ? strtol(argv[++i], &end, 10) : 0;
+            if (!end || *end || jobs < 1 || jobs > 4096) {
+                fprintf(stderr, "sluice-study: error: --jobs needs a whole number from 1 to "
+                                "4096\n");
+                return -1;
+            }
+            s->jobs = (int)jobs;
+        } else if (strcmp(arg, "--dry-run") == 0)
+            s->dry_run = 1;
+        else if (strcmp(arg, "--summary") == 0)
+            s->summary_only = 1;
+        else if (strcmp(arg, "--retry-failed") == 0)
+            s->retry_failed = 1;
+        else if (strcmp(arg, "--quiet") == 0 || strcmp(arg, "-q") == 0)
+            s->quiet = 1;
+        else if (strcmp(arg, "--help") == 0 || strcmp(arg, "-h") == 0) {
+            usage(stdout);
+            exit(0);
+        } else if (arg[0] == '-') {
+            fprintf(stderr, "sluice-study: error: unknown option '%s'\n", arg);
+            return -1;
+        } else if (!*file)
+            *file = arg;
+        else {
+            fprintf(stderr, "sluice-study: error: unexpected argument '%s'\n", arg);
+            return -1;
+        }
+    }
+    if (!*file) {
+        fprintf(stderr, "sluice-study: error: no study file given\n");
+        return -1;
+    }
+    return 0;
+}
+
+static void list_runs(const study *s)
+{
+    double total = 0;
+    for (size_t i = 0; i < s->run_count; i++)
+        total += s->runs[i].work;
+    printf("%s: %zu runs into %s/runs\n", s->path, s->run_count, s->out);
+    for (size_t i = 0; i < s->run_count; i++) {
+        const study_run *r = &s->runs[i];
+        if (r->reused)
+            printf("  %-40s finished before (exit %d)\n", r->name, r->exit_code);
+        else
+            printf("  %-40s %9.0f particles, %g s, %5.1f %% of the work\n", r->name,
+                   r->particles, r->end_time, total > 0 ? 100 * r->work / total : 0);
+        printf("    %s\n", r->command);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    study s;
+    memset(&s, 0, sizeof s);
+    const char *file = NULL;
+    int jobs_given = 0;
+    if (parse(argc, argv, &s, &file) != 0) {
+        usage(stderr);
+        return 2;
+    }
+    jobs_given = s.jobs;
+    s.diag = sluice_diag_create();
+    static const char *const sluice_places[] = {"../sluice", "sluice"};
+    static const char *const analyze_places[] = {"sluice-analyze", "../tools/sluice-analyze"};
+    char *sluice = program_beside("SLUICE", sluice_places, 2);
+    char *analyze = program_beside("SLUICE_ANALYZE", analyze_places, 2);
+    s.sluice = sluice;
+    s.analyze = analyze ? analyze : "sluice-analyze";
+    if (!s.diag || !sluice) {
+        fprintf(stderr, "sluice-study: error: cannot find the sluice program (set SLUICE)\n");
+        return 4;
+    }
+    int status = 0;
+    if (study_load(&s, file) != 0) {
+        status = 2;
+        goto done;
+    }
+    if (jobs_given)
+        s.jobs = jobs_given;
+    if (!s.out) {
+        char *copy = study_strdup(file);
+        char *stem = basename(copy);
+        char *dot = strrchr(stem, '.');
+        if (dot && dot != stem)
+            *dot = '\0';
+        s.out = study_printf("runs/%s", stem);
+        free(copy);
+    }
+    if (study_expand(&s) != 0 || study_check_runs(&s) != 0) {
+        status = 2;
+        goto done;
+    }
+    if (s.dry_run) {
+        list_runs(&s);
+        goto done;
+    }
+    if (!s.summary_only) {
+        int rc = study_execute(&s);
+        if (rc < 0) {
+            status = 4;
+            goto done;
+        }
+        if (rc > 0)
+            status = 5;
+    } else
+        for (size_t i = 0; i < s.run_count; i++)
+            if (!s.runs[i].reused && study_read_run_json(&s, &s.runs[i]) == 0)
+                s.runs[i].state = RUN_DONE;
+    if (study_measure_runs(&s) != 0 || study_write_reports(&s) != 0) {
+        fprintf(stderr, "sluice-study: error: cannot write the reports into %s\n", s.out);
+        status = 4;
+        goto done;
+    }
+    if (!s.quiet)
+        fprintf(stderr, "sluice-study: wrote %s/study.csv, %s/study.md, %s/orders.csv\n", s.out,
+                s.out, s.out);
+done:
+    sluice_diag_print(s.diag, stderr);
+    sluice_diag_destroy(s.diag);
+    study_free(&s);
+    free(sluice);
+    free(analyze);
+    return status;
+}

@@ -1,0 +1,561 @@
+/* The measures of a study's runs, their observed orders of convergence over
+ * the spacing axis, and the reports: OUT/study.csv, OUT/orders.csv,
+ * OUT/study.md and (gnuplot permitting) PNG plots in OUT/plots. */
+#define _GNU_SOURCE
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "study.h"
+
+/* ------------------------------------------------------------ measures -- */
+
+/* Splits a CSV line in place; returns the number of fields. */
+static size_t split(char *line, char **fields, size_t max)
+{
+    size_t n = 0;
+    line[strcspn(line, "\r\n")] = '\0';
+    for (char *p = line; n < max;) {
+        while (*p == ' ')
+            p++;
+        fields[n++] = p;
+        char *comma = strchr(p, ',');
+        if (!comma)
+            break;
+        *comma = '\0';
+        p = comma + 1;
+    }
+    return n;
+}
+
+/* A gauge column of the run reduced over the measure's window. */
+static double gauge_value(const study *s, const study_run *r, const study_measure *m)
+{
+    char *path = study_printf("%s/runs/%s/%s", s->out, r->name, m->file);
+    FILE *f = fopen(path, "r");
+    free(path);
+    if (!f)
+        return NAN;
+    enum { MAX_FIELDS = 4096 };
+    char **fields = malloc(MAX_FIELDS * sizeof *fields);
+    size_t size = 1 << 16;
+    char *line = malloc(size);
+    double result = NAN;
+    long time_col = -1, col = -1;
+    double sum = 0, sum2 = 0, count = 0, integral = 0, extreme = NAN, at = NAN, first = NAN,
+           last = NAN, previous_t = NAN, previous_v = NAN;
+    while (fields && line && getline(&line, &size, f) > 0) {
+        if (line[0] == '#' || line[0] == '\n')
+            continue;
+        size_t n = split(line, fields, MAX_FIELDS);
+        if (col < 0) { /* the header */
+            for (size_t i = 0; i < n; i++) {
+                if (strcmp(fields[i], m->column) == 0)
+                    col = (long)i;
+                if (strcmp(fields[i], "time") == 0 || strcmp(fields[i], "time_s") == 0 ||
+                    strcmp(fields[i], "t") == 0)
+                    time_col = (long)i;
+            }
+            if (col < 0)
+                break;
+            if (time_col < 0)
+                time_col = 0;
+            continue;
+        }
+        if ((size_t)col >= n || (size_t)time_col >= n)
+            continue;
+        double t = strtod(fields[time_col], NULL), v = strtod(fields[col], NULL);
+        if (!(t >= m->from && t <= m->to) || !isfinite(v))
+            continue;
+        if (count == 0)
+            first = v;
+        last = v;
+        sum += v;
+        sum2 += v * v;
+        count++;
+        if (isfinite(previous_t))
+            integral += 0.5 * (v + previous_v) * (t - previous_t);
+        previous_t = t;
+        previous_v = v;
+        int take_max = m->reduce == REDUCE_MAX || m->reduce == REDUCE_TIME_OF_MAX;
+        if (isnan(extreme) || (take_max ? v > extreme : v < extreme)) {
+            extreme = v;
+            at = t;
+        }
+    }
+    fclose(f);
+    free(fields);
+    free(line);
+    if (count == 0)
+        return NAN;
+    double mean = sum / count;
+    switch (m->reduce) {
+    case REDUCE_MEAN: result = mean; break;
+    case REDUCE_MAX:
+    case REDUCE_MIN: result = extreme; break;
+    case REDUCE_FIRST: result = first; break;
+    case REDUCE_LAST: result = last; break;
+    case REDUCE_STD: result = sqrt(fmax(0, sum2 / count - mean * mean)); break;
+    case REDUCE_RMS: result = sqrt(sum2 / count); break;
+    case REDUCE_INTEGRAL: result = integral; break;
+    case REDUCE_TIME_OF_MAX:
+    case REDUCE_TIME_OF_MIN: result = at; break;
+    default: break;
+    }
+    return result;
+}
+
+/* A figure `key = value` printed by sluice-analyze on the run. */
+static double analysis_value(const study *s, const study_run *r, const study_measure *m)
+{
+    char **argv = calloc(m->argument_count + 3, sizeof *argv);
+    if (!argv)
+        return NAN;
+    char *dir = study_printf("%s/runs/%s", s->out, r->name);
+    size_t n = 0;
+    argv[n++] = (char *)s->analyze;
+    argv[n++] = m->arguments[0];
+    argv[n++] = dir;
+    for (size_t i = 1; i < m->argument_count; i++)
+        argv[n++] = m->arguments[i];
+    argv[n] = NULL;
+    int pipefd[2];
+    double value = NAN;
+    if (pipe(pipefd) == 0) {
+        pid_t pid = fork();
+        if (pid == 0) {
+            dup2(pipefd[1], STDOUT_FILENO);
+            int null = open("/dev/null", O_WRONLY);
+            if (null >= 0)
+                dup2(null, STDERR_FILENO);
+            close(pipefd[0]);
+            execv(argv[0], argv);
+            _exit(127);
+        }
+        close(pipefd[1]);
+        FILE *f = fdopen(pipefd[0], "r");
+        char line[4096];
+        size_t key_length = strlen(m->key);
+        while (f && fgets(line, sizeof line, f))
+            if (strncmp(line, m->key, key_length) == 0 &&
+                strncmp(line + key_length, " = ", 3) == 0)
+                value = strtod(line + key_length + 3, NULL);
+        if (f)
+            fclose(f);
+        int status = 0;
+        if (pid > 0)
+            waitpid(pid, &status, 0);
+        if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+            value = NAN;
+    }
+    free(dir);
+    free(argv);
+    return value;
+}
+
+/* A top-level number of run.json. */
+static double run_value(const study *s, const study_run *r, const char *key)
+{
+    char *path = study_printf("%s/runs/%s/run.json", s->out, r->name);
+    FILE *f = fopen(path, "r");
+    free(path);
+    if (!f)
+        return NAN;
+    char text[8192];
+    size_t n = fread(text, 1, sizeof text - 1, f);
+    fclose(f);
+    text[n] = '\0';
+    char *plugins = strstr(text, "\"plugins\"");
+    if (plugins)
+        *plugins = '\0';
+    char *pattern = study_printf("\"%s\": ", key);
+    const char *at = strstr(text, pattern);
+    double value = at ? strtod(at + strlen(pattern), NULL) : NAN;
+    free(pattern);
+    return value;
+}
+
+int study_measure_runs(study *s)
+{
+    for (size_t i = 0; i < s->run_count; i++) {
+        study_run *r = &s->runs[i];
+        free(r->values);
+        free(r->errors);
+        r->values = calloc(s->measure_count + 1, sizeof *r->values);
+        r->errors = calloc(s->measure_count + 1, sizeof *r->errors);
+        if (!r->values || !r->errors)
+            return -1;
+        for (size_t k = 0; k < s->measure_count; k++) {
+            const study_measure *m = &s->measures[k];
+            double v = NAN;
+            if (r->state == RUN_DONE)
+                v = m->source == SOURCE_GAUGE      ? gauge_value(s, r, m)
+                    : m->source == SOURCE_ANALYSIS ? analysis_value(s, r, m)
+                                                   : run_value(s, r, m->key);
+            r->values[k] = v;
+            r->errors[k] = !m->has_reference ? NAN
+                           : m->absolute     ? v - m->reference
+                                             : v / m->reference - 1;
+        }
+    }
+    return 0;
+}
+
+/* -------------------------------------------------------------- orders -- */
+
+static size_t spacing_axis(const study *s)
+{
+    for (size_t a = 0; a < s->axis_count; a++)
+        if (s->axes[a].kind == AXIS_SPACING)
+            return a;
+    return s->axis_count;
+}
+
+/* Whether runs a and b differ only in the spacing. */
+static int same_group(const study *s, const study_run *a, const study_run *b)
+{
+    size_t sp = spacing_axis(s);
+    for (size_t k = 0; k < s->axis_count; k++)
+        if (k != sp && a->choice[k] != b->choice[k])
+            return 0;
+    return 1;
+}
+
+/* The group's label: the values of the axes other than the spacing. */
+static char *group_label(const study *s, const study_run *r)
+{
+    size_t sp = spacing_axis(s);
+    char *label = study_strdup("");
+    for (size_t a = 0; a < s->axis_count; a++) {
+        if (a == sp)
+            continue;
+        char *longer = study_printf("%s%s%s", label, *label ? "/" : "",
+                                    s->axes[a].values[r->choice[a]].label);
+        free(label);
+        label = longer;
+    }
+    if (!*label) {
+        free(label);
+        label = study_strdup("all");
+    }
+    return label;
+}
+
+/* The runs of r's group with a value of measure k, coarse to fine. */
+static size_t group_members(const study *s, const study_run *r, size_t k, const study_run **out)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < s->run_count; i++) {
+        const study_run *o = &s->runs[i];
+        if (same_group(s, r, o) && isfinite(o->values[k]) && isfinite(o->spacing))
+            out[n++] = o;
+    }
+    for (size_t i = 1; i < n; i++) /* insertion sort by spacing, descending */
+        for (size_t j = i; j > 0 && out[j]->spacing > out[j - 1]->spacing; j--) {
+            const study_run *t = out[j];
+            out[j] = out[j - 1];
+            out[j - 1] = t;
+        }
+    return n;
+}
+
+/* Writes the observed orders of every group and measure: from the errors
+ * against the reference between successive spacings, or (no reference)
+ * Richardson's from three successive values with its extrapolated value. */
+static void write_orders(study *s, FILE *csv, FILE *md)
+{
+    size_t sp = spacing_axis(s);
+    if (sp == s->axis_count)
+        return;
+    const study_run **members = calloc(s->run_count + 1, sizeof *members);
+    if (!members)
+        return;
+    fprintf(csv, "group,measure,spacings,values,errors,observed_orders,richardson_order,"
+                 "richardson_value\n");
+    fprintf(md, "\n## Observed orders of convergence\n\n"
+                "Between successive spacings (coarse to fine): p = ln(|e_coarse| / |e_fine|) / "
+                "ln(dx_coarse / dx_fine) for the error e against the reference; without a "
+                "reference, Richardson's p = ln(|f1 - f2| / |f2 - f3|) / ln(r) from three values "
+                "and the value it extrapolates to (monotone sequences at a constant spacing ratio only: "
+                "nan where the values oscillate).\n\n"
+                "| group | measure | spacings (m) | errors | observed orders | Richardson p | "
+                "extrapolated |\n|---|---|---|---|---|---|---|\n");
+    for (size_t i = 0; i < s->run_count; i++) {
+        const study_run *r = &s->runs[i];
+        int first = 1; /* only the group's first run writes it */
+        for (size_t j = 0; j < i; j++)
+            if (same_group(s, r, &s->runs[j]))
+                first = 0;
+        if (!first)
+            continue;
+        char *label = group_label(s, r);
+        for (size_t k = 0; k < s->measure_count; k++) {
+            const study_measure *m = &s->measures[k];
+            size_t n = group_members(s, r, k, members);
+            if (n < 2)
+                continue;
+            char spacings[512] = "", values[512] = "", errors[512] = "", orders[512] = "";
+            size_t us = 0, uv = 0, ue = 0, uo = 0;
+            for (size_t j = 0; j < n; j++) {
+                us += (size_t)snprintf(spacings + us, sizeof spacings - (us < sizeof spacings ? us : sizeof spacings), "%s%g", j ? ";" : "", members[j]->spacing);
+                uv += (size_t)snprintf(values + uv, sizeof values - (uv < sizeof values ? uv : sizeof values), "%s%.6g", j ? ";" : "", members[j]->values[k]);
+                if (m->has_reference)
+                    ue += (size_t)snprintf(errors + ue, sizeof errors - (ue < sizeof errors ? ue : sizeof errors), "%s%.4g", j ? ";" : "", members[j]->errors[k]);
+                if (j && m->has_reference) {
+                    double p = log(fabs(members[j - 1]->errors[k]) / fabs(members[j]->errors[k])) /
+                               log(members[j - 1]->spacing / members[j]->spacing);
+                    uo += (size_t)snprintf(orders + uo, sizeof orders - (uo < sizeof orders ? uo : sizeof orders), "%s%.2f", j > 1 ? ";" : "", p);
+                }
+            }
+            double richardson = NAN, extrapolated = NAN;
+            if (n >= 3) {
+                double f1 = members[n - 3]->values[k], f2 = members[n - 2]->values[k],
+                       f3 = members[n - 1]->values[k];
+                double ratio = members[n - 3]->spacing / members[n - 2]->spacing;
+                /* monotone convergence only: an oscillating sequence has no order */
+                double ratio2 = members[n - 2]->spacing / members[n - 1]->spacing;
+                if ((f1 - f2) * (f2 - f3) > 0 && fabs(ratio / ratio2 - 1) < 0.01)
+                    richardson = log(fabs(f1 - f2) / fabs(f2 - f3)) / log(ratio);
+                if (isfinite(richardson) && richardson > 0)
+                    extrapolated = f3 + (f3 - f2) / (pow(ratio, richardson) - 1);
+            }
+            fprintf(csv, "%s,%s,%s,%s,%s,%s,%.4g,%.6g\n", label, m->name, spacings, values,
+                    errors, orders, richardson, extrapolated);
+            fprintf(md, "| %s | %s | %s | %s | %s | %.2f | %.6g |\n", label, m->name, spacings,
+                    m->has_reference ? errors : "-", m->has_reference ? orders : "-", richardson,
+                    extrapolated);
+        }
+        free(label);
+    }
+    free(members);
+}
+
+/* ---------------------------------------------------------------- tables -- */
+
+static const char *state_name(const study_run *r)
+{
+    switch (r->state) {
+    case RUN_DONE: return "complete";
+    case RUN_FAILED: return r->exit_code == 3 ? "unstable" : "failed";
+    case RUN_INTERRUPTED: return "interrupted";
+    case RUN_RUNNING: return "running";
+    default: return "not run";
+    }
+}
+
+static void write_table(study *s, FILE *csv, FILE *md)
+{
+    fprintf(csv, "run");
+    fprintf(md, "| run |");
+    for (size_t a = 0; a < s->axis_count; a++) {
+        fprintf(csv, ",%s", s->axes[a].name);
+        fprintf(md, " %s |", s->axes[a].name);
+    }
+    fprintf(csv, ",status,exit,particles,steps,cpu_s,wall_s,particle_steps_per_cpu_s");
+    fprintf(md, " status | particles | CPU s | particle-steps / CPU s |");
+    for (size_t k = 0; k < s->measure_count; k++) {
+        const study_measure *m = &s->measures[k];
+        fprintf(csv, ",%s", m->name);
+        fprintf(md, " %s%s%s%s |", m->name, *m->unit ? " (" : "", m->unit, *m->unit ? ")" : "");
+        if (m->has_reference) {
+            fprintf(csv, ",%s_error", m->name);
+            fprintf(md, " error%s |", m->absolute ? "" : " (%)");
+        }
+    }
+    fprintf(csv, "\n");
+    fprintf(md, "\n|---|");
+    for (size_t a = 0; a < s->axis_count; a++)
+        fprintf(md, "---|");
+    fprintf(md, "---|---:|---:|---:|");
+    for (size_t k = 0; k < s->measure_count; k++)
+        fprintf(md, s->measures[k].has_reference ? "---:|---:|" : "---:|");
+    fprintf(md, "\n");
+    for (size_t i = 0; i < s->run_count; i++) {
+        const study_run *r = &s->runs[i];
+        double rate = r->particle_steps / r->cpu_seconds;
+        fprintf(csv, "%s", r->name);
+        fprintf(md, "| %s |", r->name);
+        for (size_t a = 0; a < s->axis_count; a++) {
+            fprintf(csv, ",%s", s->axes[a].values[r->choice[a]].label);
+            fprintf(md, " %s |", s->axes[a].values[r->choice[a]].label);
+        }
+        fprintf(csv, ",%s,%d,%.0f,%.0f,%.3f,%.3f,%.4g", state_name(r), r->exit_code, r->particles,
+                r->steps, r->cpu_seconds, r->wall_seconds, rate);
+        fprintf(md, " %s | %.0f | %.1f | %.3g |", state_name(r), r->particles, r->cpu_seconds,
+                rate);
+        for (size_t k = 0; k < s->measure_count; k++) {
+            fprintf(csv, ",%.10g", r->values[k]);
+            fprintf(md, " %.5g |", r->values[k]);
+            if (s->measures[k].has_reference) {
+                fprintf(csv, ",%.10g", r->errors[k]);
+                if (s->measures[k].absolute)
+                    fprintf(md, " %.3g |", r->errors[k]);
+                else
+                    fprintf(md, " %+.2f |", 100 * r->errors[k]);
+            }
+        }
+        fprintf(csv, "\n");
+        fprintf(md, "\n");
+    }
+}
+
+/* ----------------------------------------------------------------- plots -- */
+
+static int have_program(const char *name, char *path, size_t size)
+{
+    const char *env = getenv("PATH");
+    char *copy = study_strdup(env ? env : "/usr/bin:/bin");
+    int found = 0;
+    for (char *save = NULL, *dir = strtok_r(copy, ":", &save); dir && !found;
+         dir = strtok_r(NULL, ":", &save)) {
+        snprintf(path, size, "%s/%s", dir, name);
+        found = access(path, X_OK) == 0;
+    }
+    free(copy);
+    return found;
+}
+
+/* One gnuplot script per measure: against CPU time, and (with a spacing
+ * axis) against the spacing, one line per group. Returns the PNGs made. */
+static int write_plots(study *s, FILE *md)
+{
+    char gnuplot[4096];
+    if (!have_program("gnuplot", gnuplot, sizeof gnuplot)) {
+        fprintf(md, "\n(No plots: gnuplot was not found; `apt-get install gnuplot-nox`.)\n");
+        fprintf(stderr, "sluice-study: gnuplot not found: plots skipped (apt-get install "
+                        "gnuplot-nox)\n");
+        return 0;
+    }
+    char *dir = study_printf("%s/plots", s->out);
+    study_mkdirs(dir);
+    int made = 0;
+    int spacing = spacing_axis(s) < s->axis_count;
+    fprintf(md, "\n## Plots\n\n");
+    for (size_t k = 0; k < s->measure_count; k++) {
+        const study_measure *m = &s->measures[k];
+        char *data = study_printf("%s/%s.dat", dir, m->name);
+        FILE *f = fopen(data, "w");
+        if (!f) {
+            free(data);
+            continue;
+        }
+        /* blocks: one per group, "cpu_s spacing y"; y = |error| (in % when relative) or the value */
+        size_t blocks = 0;
+        char *titles = study_strdup("");
+        for (size_t i = 0; i < s->run_count; i++) {
+            const study_run *r = &s->runs[i];
+            int first = 1;
+            for (size_t j = 0; j < i; j++)
+                if (same_group(s, r, &s->runs[j]))
+                    first = 0;
+            if (!first)
+                continue;
+            char *label = group_label(s, r);
+            char *more = study_printf("%s%s%s", titles, blocks ? " " : "", label);
+            free(titles);
+            titles = more;
+            free(label);
+            fprintf(f, "%s# group %zu\n", blocks ? "\n\n" : "", blocks);
+            blocks++;
+            for (size_t j = 0; j < s->run_count; j++) {
+                const study_run *o = &s->runs[j];
+                if (!same_group(s, r, o) || !isfinite(o->values[k]))
+                    continue;
+                double y = m->has_reference ? fabs(o->errors[k]) * (m->absolute ? 1 : 100)
+                                            : o->values[k];
+                fprintf(f, "%.6g %.6g %.8g\n", o->cpu_seconds, isfinite(o->spacing) ? o->spacing : 0, y);
+            }
+        }
+        fclose(f);
+        const char *ylabel = m->has_reference ? (m->absolute ? "|error|" : "|error| (%)") : m->name;
+        char *script = study_printf("%s/%s.gp", dir, m->name);
+        f = fopen(script, "w");
+        if (f) {
+            fprintf(f,
+                    "set terminal pngcairo size 800,560 noenhanced\nset grid\nset key outside "
+                    "right\ntitles = '%s'\nset logscale x\n%s"
+                    "set xlabel 'CPU time of the run (s)'\nset ylabel '%s%s%s%s'\n"
+                    "set title '%s: %s against cost'\nset output '%s/%s_cost.png'\n"
+                    "plot for [i=0:%zu] '%s' index i using 1:3 with linespoints title "
+                    "word(titles, i+1)\n",
+                    titles, m->has_reference ? "set logscale y\n" : "", ylabel,
+                    *m->unit && !m->has_reference ? " (" : "", m->has_reference ? "" : m->unit,
+                    *m->unit && !m->has_reference ? ")" : "", s->title[0] ? s->title : "study",
+                    m->name, dir, m->name, blocks - 1, data);
+            if (spacing)
+                fprintf(f,
+                        "set xlabel 'particle spacing dx (m)'\nset title '%s: %s against "
+                        "spacing'\nset output '%s/%s_spacing.png'\nplot for [i=0:%zu] '%s' "
+                        "index i using 2:3 with linespoints title word(titles, i+1)\n",
+                        s->title[0] ? s->title : "study", m->name, dir, m->name, blocks - 1,
+                        data);
+            fclose(f);
+            char *argv[] = {gnuplot, script, NULL};
+            pid_t pid = fork();
+            if (pid == 0) {
+                execv(argv[0], argv);
+                _exit(127);
+            }
+            int status = 1;
+            if (pid > 0)
+                waitpid(pid, &status, 0);
+            if (WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+                made += 1 + spacing;
+                fprintf(md, "![%s against cost](plots/%s_cost.png)\n", m->name, m->name);
+                if (spacing)
+                    fprintf(md, "![%s against spacing](plots/%s_spacing.png)\n", m->name,
+                            m->name);
+            } else
+                fprintf(stderr, "sluice-study: gnuplot failed on %s\n", script);
+        }
+        free(titles);
+        free(script);
+        free(data);
+    }
+    free(dir);
+    return made;
+}
+
+int study_write_reports(study *s)
+{
+    char *paths[3] = {study_printf("%s/study.csv", s->out), study_printf("%s/orders.csv", s->out),
+                      study_printf("%s/study.md", s->out)};
+    char *temporary[3];
+    FILE *files[3];
+    int rc = 0;
+    for (int i = 0; i < 3; i++) {
+        temporary[i] = study_printf("%s.tmp", paths[i]);
+        files[i] = fopen(temporary[i], "w");
+        if (!files[i])
+            rc = -1;
+    }
+    if (rc == 0) {
+        FILE *md = files[2];
+        fprintf(md, "# %s\n\n", s->title[0] ? s->title : "Study");
+        if (s->description[0])
+            fprintf(md, "%s\n\n", s->description);
+        fprintf(md, "Study file `%s`, base scene `%s`; %zu runs. Reproduce: `sluice study %s "
+                    "--out %s`.\n\n",
+                s->path, s->scene, s->run_count, s->path, s->out);
+        write_table(s, files[0], md);
+        write_orders(s, files[1], md);
+        write_plots(s, md);
+        for (int i = 0; i < 3; i++)
+            if (fclose(files[i]) != 0 || rename(temporary[i], paths[i]) != 0)
+                rc = -1;
+    } else
+        for (int i = 0; i < 3; i++)
+            if (files[i])
+                fclose(files[i]);
+    for (int i = 0; i < 3; i++) {
+        free(temporary[i]);
+        free(paths[i]);
+    }
+    return rc;
+}
