@@ -1416,8 +1416,9 @@ static int check_variants(sluice_scene *scene, const sluice_node *variants, slui
 
 /* Replaces the entry `old` of the scene's `plugins` (a plugin or an
  * instance name) by `replacement: {}`, the other plugin with its own
- * defaults, in the same place, and points every wall whose `scheme` is `old`
- * to it (docs/scene-format.md, Swapping a plugin). New nodes sit at `at`. */
+ * defaults, in the same place (when the scene loads `replacement` already,
+ * `old` is only taken out), and points every wall whose `scheme` is `old`
+ * to it (docs/scene-format.md, Variants). New nodes sit at `at`. */
 static int swap_plugin(sluice_scene *scene, const char *old, const char *replacement,
                        const sluice_node *at, const char *context, sluice_diag *diag)
 {
@@ -1452,23 +1453,27 @@ static int swap_plugin(sluice_scene *scene, const char *old, const char *replace
                      context, old);
         return 1;
     }
-    if (strcmp(old, replacement) != 0 && sluice_node_get(plugins, replacement)) {
-        error_at(diag, scene, at, "%s: cannot swap '%s' for '%s': the scene loads '%s' already",
-                 context, old, replacement, replacement);
-        return 1;
+    if (strcmp(old, replacement) == 0)
+        return 0;
+    if (sluice_node_get(plugins, replacement)) {
+        /* NEW is loaded already: OLD goes, its walls join NEW (as configured) */
+        detached_key d = detach(plugins, old);
+        sluice_node_free(d.key);
+        sluice_node_free(d.value);
+    } else {
+        sluice_node *key = sluice_node_new_scalar(replacement, 1, at->file, at->line, at->column);
+        sluice_node *value = sluice_node_new_mapping(at->file, at->line, at->column);
+        if (!key || !value) {
+            sluice_node_free(key);
+            sluice_node_free(value);
+            error_at(diag, scene, at, "out of memory");
+            return 1;
+        }
+        sluice_node_free(plugins->keys[index]);
+        sluice_node_free(plugins->items[index]);
+        plugins->keys[index] = key;
+        plugins->items[index] = value;
     }
-    sluice_node *key = sluice_node_new_scalar(replacement, 1, at->file, at->line, at->column);
-    sluice_node *value = sluice_node_new_mapping(at->file, at->line, at->column);
-    if (!key || !value) {
-        sluice_node_free(key);
-        sluice_node_free(value);
-        error_at(diag, scene, at, "out of memory");
-        return 1;
-    }
-    sluice_node_free(plugins->keys[index]);
-    sluice_node_free(plugins->items[index]);
-    plugins->keys[index] = key;
-    plugins->items[index] = value;
     /* the walls it handled follow it */
     sluice_node *geometry = sluice_node_get(scene->root, "geometry");
     sluice_node *walls = geometry ? sluice_node_get(geometry, "walls") : NULL;

@@ -1,8 +1,8 @@
 /* sluice-study (also `sluice study`): runs a comparative study (study.h,
  * docs/studies.md).
  *
- *   sluice study STUDY.yaml [--out DIR] [--jobs N] [--dry-run] [--summary]
- *                [--retry-failed] [--quiet]
+ *   sluice study STUDY.yaml [STUDY.yaml ...] [--out DIR] [--profile NAME]
+ *                [--jobs N] [--dry-run] [--summary] [--retry-failed] [--quiet]
  *
  * Exit status: 0 the study ran (runs that failed or went unstable are
  * recorded in its table), 2 bad input (every problem as file:line:column,
@@ -21,15 +21,17 @@
 static void usage(FILE *out)
 {
     fprintf(out,
-            "usage: sluice study STUDY.yaml [--out DIR] [--jobs N] [--dry-run] [--summary]\n"
-            "                    [--retry-failed] [--quiet]\n"
+            "usage: sluice study STUDY.yaml [STUDY.yaml ...] [--out DIR] [--profile NAME]\n"
+            "                    [--jobs N] [--dry-run] [--summary] [--retry-failed] [--quiet]\n"
             "Runs every combination of the study's axes as a run directory DIR/runs/NAME\n"
-            "(default DIR: runs/<study file name>), then writes DIR/study.csv, DIR/study.md,\n"
+            "(default DIR: runs/<study file name>[-<profile>]; with several study files,\n"
+            "DIR/<study file name> for each), then writes DIR/study.csv, DIR/study.md,\n"
             "DIR/orders.csv and PNG plots in DIR/plots (gnuplot). A run finished by an earlier\n"
             "invocation with the same command is not redone; a failed one is kept as failed\n"
             "(--retry-failed runs it again). --jobs N: runs at a time (default: the study's\n"
             "'jobs', 1). --dry-run: check the study and every run's scene, list the runs.\n"
-            "--summary: no runs; the reports from what is there. docs/studies.md\n");
+            "--summary: no runs; the reports from what is there. --profile NAME: one of the\n"
+            "study's profiles (its edits and axis values, e.g. a quick one). docs/studies.md\n");
 }
 
 /* The sluice program and sluice-analyze: $SLUICE and $SLUICE_ANALYZE, or
@@ -54,12 +56,24 @@ static char *program_beside(const char *env, const char *const *relative, size_t
     return NULL;
 }
 
-static int parse(int argc, char **argv, study *s, const char **file)
+typedef struct command_line {
+    const char **files;
+    size_t file_count;
+    const char *out, *profile;
+    int jobs, dry_run, summary_only, retry_failed, quiet;
+} command_line;
+
+static int parse(int argc, char **argv, command_line *c)
 {
+    c->files = calloc((size_t)argc + 1, sizeof *c->files);
+    if (!c->files)
+        return -1;
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i];
         if ((strcmp(arg, "--out") == 0 || strcmp(arg, "-o") == 0) && i + 1 < argc)
-            s->out = study_strdup(argv[++i]);
+            c->out = argv[++i];
+        else if (strcmp(arg, "--profile") == 0 && i + 1 < argc)
+            c->profile = argv[++i];
         else if (strcmp(arg, "--jobs") == 0 || strcmp(arg, "-j") == 0) {
             char *end = NULL;
             long jobs = i + 1 < argc ? strtol(argv[++i], &end, 10) : 0;
@@ -68,29 +82,25 @@ static int parse(int argc, char **argv, study *s, const char **file)
                                 "4096\n");
                 return -1;
             }
-            s->jobs = (int)jobs;
+            c->jobs = (int)jobs;
         } else if (strcmp(arg, "--dry-run") == 0)
-            s->dry_run = 1;
+            c->dry_run = 1;
         else if (strcmp(arg, "--summary") == 0)
-            s->summary_only = 1;
+            c->summary_only = 1;
         else if (strcmp(arg, "--retry-failed") == 0)
-            s->retry_failed = 1;
+            c->retry_failed = 1;
         else if (strcmp(arg, "--quiet") == 0 || strcmp(arg, "-q") == 0)
-            s->quiet = 1;
+            c->quiet = 1;
         else if (strcmp(arg, "--help") == 0 || strcmp(arg, "-h") == 0) {
             usage(stdout);
             exit(0);
         } else if (arg[0] == '-') {
             fprintf(stderr, "sluice-study: error: unknown option '%s'\n", arg);
             return -1;
-        } else if (!*file)
-            *file = arg;
-        else {
-            fprintf(stderr, "sluice-study: error: unexpected argument '%s'\n", arg);
-            return -1;
-        }
+        } else
+            c->files[c->file_count++] = arg;
     }
-    if (!*file) {
+    if (!c->file_count) {
         fprintf(stderr, "sluice-study: error: no study file given\n");
         return -1;
     }
@@ -114,76 +124,107 @@ static void list_runs(const study *s)
     }
 }
 
+/* The output directory of one study: --out (DIR/<stem> with several study
+ * files), else runs/<stem>[-<profile>]. */
+static char *output_directory(const command_line *c, const char *file)
+{
+    char *copy = study_strdup(file);
+    char *stem = basename(copy);
+    char *dot = strrchr(stem, '.');
+    if (dot && dot != stem)
+        *dot = '\0';
+    char *out = c->out && c->file_count == 1 ? study_strdup(c->out)
+                : c->out ? study_printf("%s/%s", c->out, stem)
+                : study_printf("runs/%s%s%s", stem, c->profile ? "-" : "",
+                               c->profile ? c->profile : "");
+    free(copy);
+    return out;
+}
+
+/* Loads, expands and checks one study; 0 or 2 (messages in its diag). */
+static int prepare(study *s, const command_line *c, const char *file)
+{
+    s->profile = c->profile;
+    s->dry_run = c->dry_run;
+    s->summary_only = c->summary_only;
+    s->retry_failed = c->retry_failed;
+    s->quiet = c->quiet;
+    if (study_load(s, file) != 0)
+        return 2;
+    if (c->jobs)
+        s->jobs = c->jobs;
+    s->out = output_directory(c, file);
+    if (study_expand(s) != 0 || study_check_runs(s) != 0)
+        return 2;
+    return 0;
+}
+
+/* Runs a prepared study and writes its reports: 0, 4 or 5. */
+static int perform(study *s)
+{
+    int status = 0;
+    if (!s->summary_only) {
+        int rc = study_execute(s);
+        if (rc < 0)
+            return 4;
+        if (rc > 0)
+            status = 5;
+    } else
+        for (size_t i = 0; i < s->run_count; i++)
+            if (!s->runs[i].reused && study_read_run_json(s, &s->runs[i]) == 0)
+                s->runs[i].state = RUN_DONE;
+    if (study_measure_runs(s) != 0 || study_write_reports(s) != 0) {
+        fprintf(stderr, "sluice-study: error: cannot write the reports into %s\n", s->out);
+        return 4;
+    }
+    if (!s->quiet)
+        fprintf(stderr, "sluice-study: wrote %s/study.csv, %s/study.md, %s/orders.csv\n", s->out,
+                s->out, s->out);
+    return status;
+}
+
 int main(int argc, char **argv)
 {
-    study s;
-    memset(&s, 0, sizeof s);
-    const char *file = NULL;
-    int jobs_given = 0;
-    if (parse(argc, argv, &s, &file) != 0) {
+    command_line c;
+    memset(&c, 0, sizeof c);
+    if (parse(argc, argv, &c) != 0) {
         usage(stderr);
+        free(c.files);
         return 2;
     }
-    jobs_given = s.jobs;
-    s.diag = sluice_diag_create();
     static const char *const sluice_places[] = {"../sluice", "sluice"};
     static const char *const analyze_places[] = {"sluice-analyze", "../tools/sluice-analyze"};
     char *sluice = program_beside("SLUICE", sluice_places, 2);
     char *analyze = program_beside("SLUICE_ANALYZE", analyze_places, 2);
-    s.sluice = sluice;
-    s.analyze = analyze ? analyze : "sluice-analyze";
-    if (!s.diag || !sluice) {
+    study *studies = calloc(c.file_count, sizeof *studies);
+    if (!sluice || !studies) {
         fprintf(stderr, "sluice-study: error: cannot find the sluice program (set SLUICE)\n");
         return 4;
     }
+    /* every study is checked before any runs */
     int status = 0;
-    if (study_load(&s, file) != 0) {
-        status = 2;
-        goto done;
+    for (size_t i = 0; i < c.file_count; i++) {
+        study *s = &studies[i];
+        s->diag = sluice_diag_create();
+        s->sluice = sluice;
+        s->analyze = analyze ? analyze : "sluice-analyze";
+        if (!s->diag || prepare(s, &c, c.files[i]) != 0)
+            status = 2;
+        if (s->diag)
+            sluice_diag_print(s->diag, stderr);
     }
-    if (jobs_given)
-        s.jobs = jobs_given;
-    if (!s.out) {
-        char *copy = study_strdup(file);
-        char *stem = basename(copy);
-        char *dot = strrchr(stem, '.');
-        if (dot && dot != stem)
-            *dot = '\0';
-        s.out = study_printf("runs/%s", stem);
-        free(copy);
+    for (size_t i = 0; status == 0 && i < c.file_count; i++) {
+        if (c.dry_run)
+            list_runs(&studies[i]);
+        else
+            status = perform(&studies[i]);
     }
-    if (study_expand(&s) != 0 || study_check_runs(&s) != 0) {
-        status = 2;
-        goto done;
+    for (size_t i = 0; i < c.file_count; i++) {
+        sluice_diag_destroy(studies[i].diag);
+        study_free(&studies[i]);
     }
-    if (s.dry_run) {
-        list_runs(&s);
-        goto done;
-    }
-    if (!s.summary_only) {
-        int rc = study_execute(&s);
-        if (rc < 0) {
-            status = 4;
-            goto done;
-        }
-        if (rc > 0)
-            status = 5;
-    } else
-        for (size_t i = 0; i < s.run_count; i++)
-            if (!s.runs[i].reused && study_read_run_json(&s, &s.runs[i]) == 0)
-                s.runs[i].state = RUN_DONE;
-    if (study_measure_runs(&s) != 0 || study_write_reports(&s) != 0) {
-        fprintf(stderr, "sluice-study: error: cannot write the reports into %s\n", s.out);
-        status = 4;
-        goto done;
-    }
-    if (!s.quiet)
-        fprintf(stderr, "sluice-study: wrote %s/study.csv, %s/study.md, %s/orders.csv\n", s.out,
-                s.out, s.out);
-done:
-    sluice_diag_print(s.diag, stderr);
-    sluice_diag_destroy(s.diag);
-    study_free(&s);
+    free(studies);
+    free(c.files);
     free(sluice);
     free(analyze);
     return status;

@@ -129,6 +129,7 @@ typedef struct study {
     size_t run_count;
     /* the command line */
     char *out;
+    const char *profile;       /* --profile NAME, or NULL */
     const char *sluice, *analyze;
     int dry_run, summary_only, retry_failed, quiet;
 } study;

@@ -596,10 +596,145 @@ static int check_names(study *s)
     return errors;
 }
 
+/* ------------------------------------------------------------ profiles -- */
+
+static void free_values(study_axis *a)
+{
+    for (size_t v = 0; v < a->count; v++) {
+        for (size_t e = 0; e < a->values[v].edits.count; e++)
+            free(a->values[v].edits.items[e].text);
+        free(a->values[v].edits.items);
+        free(a->values[v].label);
+    }
+    free(a->values);
+    a->values = NULL;
+    a->count = 0;
+}
+
+/* A profile's `axes: {NAME: [...]}`: the labels kept of an axis of edits (in
+ * the order given), or the new values of a list axis. */
+static int apply_profile_axes(study *s, const sluice_node *axes, const char *profile)
+{
+    if (!axes)
+        return 0;
+    if (axes->kind != SLUICE_NODE_MAPPING) {
+        study_error(s, axes, "profiles.%s.axes must map axis names to lists of values", profile);
+        return 1;
+    }
+    int errors = 0;
+    for (size_t i = 0; i < axes->count; i++) {
+        const char *name = axes->keys[i]->value;
+        const sluice_node *list = axes->items[i];
+        study_axis *a = NULL;
+        for (size_t k = 0; k < s->axis_count; k++)
+            if (strcmp(s->axes[k].name, name) == 0)
+                a = &s->axes[k];
+        if (!a) {
+            study_error(s, axes->keys[i], "profiles.%s.axes: the study has no axis '%s'", profile,
+                        name);
+            errors++;
+            continue;
+        }
+        if (list->kind != SLUICE_NODE_SEQUENCE || list->count == 0) {
+            study_error(s, list, "profiles.%s.axes.%s must be a non-empty list", profile, name);
+            errors++;
+            continue;
+        }
+        if (a->kind != AXIS_EDITS) {
+            /* the parameter's path is in the first value's edit: PATH=VALUE */
+            char *path = NULL;
+            if (a->kind == AXIS_PARAMETER) {
+                const char *text = a->values[0].edits.items[0].text;
+                path = strndup(text, strcspn(text, "="));
+            }
+            free_values(a);
+            errors += read_list_values(s, a, list,
+                                       a->kind == AXIS_SPACING ? "particles.spacing" : path);
+            free(path);
+            continue;
+        }
+        study_value *kept = calloc(list->count, sizeof *kept);
+        if (!kept)
+            exit(4);
+        size_t count = 0;
+        for (size_t j = 0; j < list->count; j++) {
+            size_t v = 0;
+            while (v < a->count && (!a->values[v].label || list->items[j]->kind != SLUICE_NODE_SCALAR ||
+                                    strcmp(a->values[v].label, list->items[j]->value) != 0))
+                v++;
+            if (v == a->count) {
+                study_error(s, list->items[j], "profiles.%s.axes.%s: the axis has no value '%s'",
+                            profile, name,
+                            list->items[j]->kind == SLUICE_NODE_SCALAR ? list->items[j]->value
+                                                                       : "(a collection)");
+                errors++;
+                continue;
+            }
+            kept[count++] = a->values[v];
+            a->values[v].label = NULL; /* moved */
+            a->values[v].edits.items = NULL;
+            a->values[v].edits.count = 0;
+        }
+        free_values(a);
+        a->values = kept;
+        a->count = count;
+    }
+    return errors;
+}
+
+/* `profiles: {NAME: {description, remove, swap, set, axes}}`: the one chosen
+ * by --profile adds its edits after the study's and narrows or replaces
+ * axes' values; every profile's form is checked. */
+static int read_profiles(study *s)
+{
+    static const char *const keys[] = {"description", "remove", "swap", "set", "axes"};
+    const sluice_node *profiles = sluice_node_get(s->root, "profiles");
+    if (profiles && profiles->kind != SLUICE_NODE_MAPPING) {
+        study_error(s, profiles, "'profiles' must map profile names to their changes "
+                                 "(description, remove, swap, set, axes)");
+        return 1;
+    }
+    int errors = 0;
+    const sluice_node *chosen = NULL;
+    for (size_t i = 0; profiles && i < profiles->count; i++) {
+        const sluice_node *p = profiles->items[i];
+        char *where = study_printf("profiles.%s", profiles->keys[i]->value);
+        if (p->kind != SLUICE_NODE_MAPPING) {
+            study_error(s, p, "%s must be a mapping (description, remove, swap, set, axes)",
+                        where);
+            errors++;
+        } else
+            errors += check_keys(s, p, where, keys, 5);
+        free(where);
+        if (s->profile && strcmp(profiles->keys[i]->value, s->profile) == 0)
+            chosen = p;
+    }
+    if (errors || !s->profile)
+        return errors;
+    if (!chosen) {
+        const char *names[64];
+        size_t count = 0;
+        for (size_t i = 0; profiles && i < profiles->count && count < 64; i++)
+            names[count++] = profiles->keys[i]->value;
+        const char *close = sluice_closest(s->profile, names, count);
+        study_error(s, profiles ? profiles : s->root,
+                    "--profile '%s': the study defines %s%s%s%s", s->profile,
+                    profiles ? "no such profile" : "no profiles (a top-level 'profiles' mapping)",
+                    close ? "; did you mean '" : "", close ? close : "", close ? "'?" : "");
+        return 1;
+    }
+    char *where = study_printf("profiles.%s", s->profile);
+    errors += read_edits(s, chosen, where, &s->base);
+    errors += apply_profile_axes(s, sluice_node_get(chosen, "axes"), s->profile);
+    free(where);
+    return errors;
+}
+
 static int read_top(study *s)
 {
     static const char *const keys[] = {"title", "description", "scene", "variant", "remove",
-                                       "swap", "set", "threads", "jobs", "axes", "measures"};
+                                       "swap", "set", "threads", "jobs", "axes", "measures",
+                                       "profiles"};
     int errors = check_keys(s, s->root, "the study", keys, SLUICE_COUNT(keys));
     const sluice_node *title = sluice_node_get(s->root, "title");
     const sluice_node *description = sluice_node_get(s->root, "description");
@@ -636,6 +771,8 @@ static int read_top(study *s)
     }
     errors += read_list(s, "axes", 1);
     errors += read_list(s, "measures", 0);
+    if (!errors)
+        errors += read_profiles(s);
     if (!errors)
         errors += check_names(s);
     return errors;

@@ -1275,6 +1275,20 @@ START_TEST(swaps_replace_plugins_and_walls_follow)
     ck_assert_str_eq(key->file, "--swap #2");
     sluice_scene_free(&scene);
     free(expected);
+
+    /* into a plugin the scene loads already: the instance goes, the sill joins dbc
+     * (with dbc's parameters) */
+    path = write_scene("swap-merge", SWAP_HEAD);
+    static const char *const merge[] = {"plate=dbc"};
+    edits = (sluice_scene_edits){.swaps = merge, .swap_count = 1};
+    diag = sluice_diag_create();
+    ck_assert_int_eq(sluice_scene_load_edited(&scene, path, NULL, &edits, diag), 0);
+    sluice_diag_destroy(diag);
+    remove_scene(path);
+    ck_assert_ptr_null(sluice_node_get(sluice_node_get(scene.root, "plugins"), "plate"));
+    ck_assert_uint_eq(sluice_node_get(scene.root, "plugins")->count, 3);
+    ck_assert_str_eq(scene.walls[1].scheme, "dbc");
+    sluice_scene_free(&scene);
 }
 END_TEST
 
@@ -1311,8 +1325,6 @@ START_TEST(swap_errors)
     expect_swap_error("", "dcb=mdbc", "--swap #1", 1, 1,
                       "--swap: cannot swap 'dcb': the scene loads no plugin of that name; did "
                       "you mean 'dbc'?");
-    expect_swap_error("", "plate=dbc", "--swap #1", 1, 1,
-                      "--swap: cannot swap 'plate' for 'dbc': the scene loads 'dbc' already");
     expect_swap_error("", "dbc", "--swap #1", 1, 1,
                       "--swap 'dbc': write OLD=NEW, a plugin the scene loads and the plugin "
                       "that replaces it (e.g. --swap dbc=mdbc)");
