@@ -375,6 +375,35 @@ int analyze_scene_setting(const analyze_scene *scene, const char *section, const
     return scalar_number(map_get(d, map_get(d, root, section), key), value);
 }
 
+int analyze_scene_region(const analyze_scene *scene, const char *kind, size_t index,
+                         double min[3], double max[3])
+{
+    if (!scene)
+        return -1;
+    yaml_document_t *d = (yaml_document_t *)&scene->document;
+    yaml_node_t *root = yaml_document_get_root_node(d);
+    yaml_node_t *list = map_get(d, map_get(d, root, "geometry"), kind);
+    if (!list || list->type != YAML_SEQUENCE_NODE ||
+        index >= (size_t)(list->data.sequence.items.top - list->data.sequence.items.start))
+        return -1;
+    yaml_node_t *region = yaml_document_get_node(d, list->data.sequence.items.start[index]);
+    yaml_node_t *corners[2] = {map_get(d, region, "min"), map_get(d, region, "max")};
+    double *out[2] = {min, max};
+    for (int c = 0; c < 2; c++) {
+        if (!corners[c] || corners[c]->type != YAML_SEQUENCE_NODE)
+            return -1;
+        size_t n = (size_t)(corners[c]->data.sequence.items.top -
+                            corners[c]->data.sequence.items.start);
+        for (size_t k = 0; k < 3; k++)
+            out[c][k] = 0;
+        for (size_t k = 0; k < n && k < 3; k++)
+            if (scalar_number(yaml_document_get_node(d, corners[c]->data.sequence.items.start[k]),
+                              &out[c][k]) != 0)
+                return -1;
+    }
+    return 0;
+}
+
 long analyze_scene_numbers(analyze_ctx *cx, const analyze_scene *scene, const char *plugin,
                            const char *key, double **values)
 {

@@ -48,6 +48,10 @@ void analyze_table_copy(const analyze_table *table, size_t c, double *out);
 typedef struct analyze_scene analyze_scene;
 int analyze_scene_load(analyze_ctx *cx, const char *path, analyze_scene **scene);
 void analyze_scene_free(analyze_scene *scene);
+/* geometry.<kind>[index]'s corners (kind "fluid" or "walls"; a region with
+ * min and max): 0, or -1 when absent. */
+int analyze_scene_region(const analyze_scene *scene, const char *kind, size_t index,
+                         double min[3], double max[3]);
 long analyze_scene_numbers(analyze_ctx *cx, const analyze_scene *scene, const char *plugin,
                            const char *key, double **values);
 long analyze_scene_points(analyze_ctx *cx, const analyze_scene *scene, const char *plugin,

@@ -10,6 +10,7 @@
  *   sluice-analyze spectrum  RUN --column NAME [--d1 D --v1 V]
  *   sluice-analyze correlate A.csv:COL B.csv:COL
  *   sluice-analyze l2        RUN --reference REF.csv [--time T ...]
+ *   sluice-analyze front     RUN --reference REF.csv [--shift DT] [--width A]
  *   sluice-analyze classify  --y1 Y1 --yt YT --v1 V --drop S
  *   sluice-analyze drop-type RUN --drop-x X [--drop S]
  *   sluice-analyze step-profiles POINTS.csv --per-line N --edges x,y;.. --theta DEG
@@ -42,7 +43,7 @@ typedef struct options {
     size_t positional_count;
     double d1, v1, fr, g, x, from, to, fraction, x1, bed, drop, y1, yt, min_wet, fmin, fmax,
         tolerance, drop_x, wave_min, per_line, theta, dc, uc, threshold, h, first_step, cs, cu,
-        calibrate, target;
+        calibrate, target, width, shift, series;
     const char *column, *reference, *out, *positions, *points, *field, *edges;
     double times[MAX_TIMES];
     size_t time_count;
@@ -85,6 +86,9 @@ static const struct option_spec {
     {"cs", OPT_NUMBER, offsetof(options, cs)},
     {"cu", OPT_NUMBER, offsetof(options, cu)},
     {"calibrate", OPT_NUMBER, offsetof(options, calibrate)},
+    {"width", OPT_NUMBER, offsetof(options, width)},
+    {"shift", OPT_NUMBER, offsetof(options, shift)},
+    {"series", OPT_NUMBER, offsetof(options, series)},
     {"target", OPT_NUMBER, offsetof(options, target)},
     {"edges", OPT_STRING, offsetof(options, edges)},
     {"column", OPT_STRING, offsetof(options, column)},
@@ -108,6 +112,9 @@ static const char usage[] =
     "  spectrum  RUN --column [FILE:]NAME          amplitude spectrum, Strouhal number\n"
     "  correlate A.csv:COL B.csv:COL               Pearson r (seed 004)\n"
     "  l2        RUN --reference REF.csv [--time]  free-surface L2 error, RMSE (seed 002)\n"
+    "  front     RUN --reference REF.csv [--shift DT] [--width A] [--series A_IN]\n"
+    "                                              dam-break front vs Martin & Moyce: raw,\n"
+    "                                              shifted and best-fit time origin\n"
     "  classify  --y1 --yt --v1 --drop S           jump at an abrupt drop (momentum limits)\n"
     "  drop-type RUN --drop-x X [--drop S]         jump type at an abrupt drop from a run\n"
     "  momentum  RUN                               mean momentum function M + P per section\n"
@@ -1363,6 +1370,170 @@ done:
     return status;
 }
 
+/* ---------------------------------------------------------------- front -- */
+
+/* The run's front Z = x/a at dimensionless time T = t sqrt(2 g / a),
+ * interpolated in the front table (NaN outside it). */
+static double front_at(const double *t, const double *x, size_t n, double a, double g, double T)
+{
+    double time = T / sqrt(2 * g / a);
+    if (n == 0 || time < t[0] || time > t[n - 1])
+        return NAN;
+    return sluice_hyd_interpolate(t, x, n, time) / a;
+}
+
+/* Relative errors of the run's front against the experiment's points with
+ * the experiment's time taken `shift` earlier: max (signed), mean |e|, rms. */
+static size_t front_errors(const double *t, const double *x, size_t n, const double *te,
+                           const double *ze, size_t m, double a, double g, double shift,
+                           double *worst, double *mean, double *rms)
+{
+    size_t used = 0;
+    double sum = 0, sum2 = 0;
+    *worst = 0;
+    for (size_t i = 0; i < m; i++) {
+        double z = front_at(t, x, n, a, g, te[i] - shift);
+        if (!isfinite(z) || te[i] - shift < 0)
+            continue;
+        double e = z / ze[i] - 1;
+        if (fabs(e) > fabs(*worst))
+            *worst = e;
+        sum += fabs(e);
+        sum2 += e * e;
+        used++;
+    }
+    *mean = used ? sum / (double)used : NAN;
+    *rms = used ? sqrt(sum2 / (double)used) : NAN;
+    if (!used)
+        *worst = NAN;
+    return used;
+}
+
+/* The surge front of a collapsing column against an experiment (Martin &
+ * Moyce 1952: rows a_in,T,Z): raw, with --shift (the experiment's time
+ * origin taken ShIFT later, dimensionless), and the shift that fits best. */
+static int cmd_front(analyze_ctx *cx, const options *o)
+{
+    const char *run = run_dir(cx, o);
+    if (!run)
+        return -1;
+    if (!o->reference)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "front needs --reference REF.csv (columns T and Z, optionally a_in)");
+    run_data r;
+    if (run_open(cx, run, &r) != 0)
+        return -1;
+    int status = -1;
+    analyze_table ref = {0}, front = {0};
+    double *t = NULL, *x = NULL, *te = NULL, *ze = NULL, *series = NULL;
+    char *path = analyze_format(cx, "%s/front.csv", run), *dir = NULL, *csv = NULL;
+    if (!path || analyze_table_load(cx, path, &front) != 0 ||
+        analyze_table_load(cx, o->reference, &ref) != 0)
+        goto done;
+    long ct = analyze_table_column(cx, &front, "time"), cxf = analyze_table_column(cx, &front, "x_front");
+    long cT = analyze_table_column(cx, &ref, "T"), cZ = analyze_table_column(cx, &ref, "Z");
+    long ca = analyze_table_find(&ref, "a_in");
+    if (ct < 0 || cxf < 0 || cT < 0 || cZ < 0)
+        goto done;
+    double a = o->width;
+    double fluid_min[3], fluid_max[3];
+    if (!(a > 0) && r.scene && analyze_scene_region(r.scene, "fluid", 0, fluid_min, fluid_max) == 0)
+        a = fluid_max[0] - fluid_min[0];
+    if (!(a > 0)) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                     "the column width is unknown: give --width A (m) or a run with its "
+                     "scene.resolved.yaml");
+        goto done;
+    }
+    t = analyze_alloc(cx, front.rows + 1, sizeof *t);
+    x = analyze_alloc(cx, front.rows + 1, sizeof *x);
+    te = analyze_alloc(cx, ref.rows + 1, sizeof *te);
+    ze = analyze_alloc(cx, ref.rows + 1, sizeof *ze);
+    series = analyze_alloc(cx, ref.rows + 1, sizeof *series);
+    if (!t || !x || !te || !ze || !series)
+        goto done;
+    analyze_table_copy(&front, (size_t)ct, t);
+    analyze_table_copy(&front, (size_t)cxf, x);
+    if (ca >= 0)
+        analyze_table_copy(&ref, (size_t)ca, series);
+    double chosen = o->series > 0 ? o->series : ca >= 0 && ref.rows ? series[0] : 0;
+    size_t m = 0;
+    for (size_t i = 0; i < ref.rows; i++)
+        if (ca < 0 || series[i] == chosen) {
+            te[m] = ref.data[i * ref.cols + (size_t)cT];
+            ze[m] = ref.data[i * ref.cols + (size_t)cZ];
+            if (te[m] >= 0 && ze[m] > 0 && (isinf(o->from) || te[m] >= o->from) &&
+                (isinf(o->to) || te[m] <= o->to))
+                m++;
+        }
+    double worst, mean, rms;
+    size_t used = front_errors(t, x, front.rows, te, ze, m, a, o->g, 0, &worst, &mean, &rms);
+    if (used == 0) {
+        analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND,
+                     "no experimental point lies within the run's front table (T up to %.3g)",
+                     front.rows ? t[front.rows - 1] * sqrt(2 * o->g / a) : 0);
+        goto done;
+    }
+    printf("source = %s\n", path);
+    headline("a", a, "m");
+    if (ca >= 0)
+        headline("series_a_in", chosen, NULL);
+    printf("points = %zu\n", used);
+    headline("front_error_max", worst, NULL);
+    headline("front_error_mean", mean, NULL);
+    headline("front_error_rms", rms, NULL);
+    if (o->shift != 0) {
+        double w2, m2, r2;
+        size_t u2 = front_errors(t, x, front.rows, te, ze, m, a, o->g, o->shift, &w2, &m2, &r2);
+        headline("shift", o->shift, NULL);
+        printf("points_shifted = %zu\n", u2);
+        headline("front_error_max_shifted", w2, NULL);
+        headline("front_error_mean_shifted", m2, NULL);
+        headline("front_error_rms_shifted", r2, NULL);
+    }
+    /* the experiment's time origin that fits the run best (rms over the points
+     * both cover), searched over T in [-1, 1] by 0.001 */
+    double best = NAN, best_rms = INFINITY;
+    for (int k = -1000; k <= 1000; k++) {
+        double w3, m3, r3;
+        size_t u3 = front_errors(t, x, front.rows, te, ze, m, a, o->g, 0.001 * k, &w3, &m3, &r3);
+        if (u3 * 2 >= used && r3 < best_rms) {
+            best_rms = r3;
+            best = 0.001 * k;
+        }
+    }
+    headline("shift_fitted", best, NULL);
+    headline("front_error_rms_fitted", best_rms, NULL);
+    dir = out_dir(cx, o, run);
+    FILE *f = dir ? open_csv(cx, dir, "front.csv", &csv) : NULL;
+    if (!f) {
+        free(csv);
+        goto done;
+    }
+    fprintf(f, "T,Z_experiment,Z_run,error,Z_run_shifted,error_shifted\n");
+    for (size_t i = 0; i < m; i++) {
+        double z = front_at(t, x, front.rows, a, o->g, te[i]);
+        double zs = front_at(t, x, front.rows, a, o->g, te[i] - o->shift);
+        fprintf(f, "%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n", te[i], ze[i], z, z / ze[i] - 1, zs,
+                zs / ze[i] - 1);
+    }
+    if (close_csv(cx, f, csv) != 0)
+        goto done;
+    status = 0;
+done:
+    free(t);
+    free(x);
+    free(te);
+    free(ze);
+    free(series);
+    free(path);
+    free(dir);
+    analyze_table_free(&ref);
+    analyze_table_free(&front);
+    analyze_scene_free(r.scene);
+    return status;
+}
+
 static int cmd_l2(analyze_ctx *cx, const options *o)
 {
     const char *run = run_dir(cx, o);
@@ -2431,6 +2602,7 @@ int main(int argc, char **argv)
         {"spectrum", cmd_spectrum}, {"correlate", cmd_correlate}, {"l2", cmd_l2},
         {"classify", cmd_classify}, {"drop-type", cmd_drop_type}, {"momentum", cmd_momentum},
         {"step-profiles", cmd_step_profiles}, {"dissolved-oxygen", cmd_dissolved_oxygen},
+        {"front", cmd_front},
     };
     int (*command)(analyze_ctx *, const options *) = NULL;
     for (size_t k = 0; k < sizeof commands / sizeof *commands; k++)

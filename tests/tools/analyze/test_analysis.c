@@ -796,6 +796,77 @@ static char *make_run(double d2b)
     return dir;
 }
 
+/* front: a synthetic front Z(T) = 1 + T^2 / 2 (a = 1 m, g = 9.81, sampled
+ * every 1 ms) against "experimental" points of the same curve taken 0.2
+ * later in T (the experiment lags): the raw errors are Z(T)/Z(T - 0.2) - 1
+ * (linear interpolation of the 1 ms table: relative error < 1e-5), --shift 0.2
+ * removes them, and the fitted shift is 0.2 on the search's 0.001 grid. */
+static double synthetic_front(double T)
+{
+    return 1 + 0.5 * T * T;
+}
+
+START_TEST(cli_front)
+{
+    char *run = test_scratch("front");
+    ck_assert_ptr_nonnull(run);
+    char *path = NULL;
+    ck_assert(asprintf(&path, "%s/front.csv", run) > 0);
+    FILE *f = fopen(path, "w");
+    ck_assert_ptr_nonnull(f);
+    double scale = sqrt(2 * G / 1.0); /* T = t sqrt(2 g / a) */
+    fprintf(f, "time,x_front\n");
+    for (int i = 0; i <= 700; i++) {
+        double t = 0.001 * i;
+        fprintf(f, "%.10g,%.12g\n", t, synthetic_front(t * scale));
+    }
+    fclose(f);
+    free(path);
+    static const double te[] = {0.8, 1.2, 1.6, 2.0, 2.4, 3.5};
+    ck_assert(asprintf(&path, "%s/reference.csv", run) > 0);
+    f = fopen(path, "w");
+    ck_assert_ptr_nonnull(f);
+    fprintf(f, "# synthetic\nT,Z\n");
+    for (int i = 0; i < 6; i++)
+        fprintf(f, "%g,%.12g\n", te[i], synthetic_front(te[i] - 0.2));
+    fclose(f);
+    char *args = NULL, *out = NULL, *err = NULL;
+    ck_assert(asprintf(&args, "front %s --reference %s --width 1 --shift 0.2", run, path) > 0);
+    int status = analyze(run, args, &out, &err);
+    fprintf(stderr, "cli front: exit %d\n%s%s", status, out, err);
+    ck_assert_int_eq(status, 0);
+    /* T = 3.5 lies past the table's end (T = 0.7 x 4.43 = 3.1): 5 points */
+    ck_assert_double_eq(headline(out, "points"), 5);
+    double worst = 0, sum = 0, sum2 = 0;
+    for (int i = 0; i < 5; i++) {
+        double e = synthetic_front(te[i]) / synthetic_front(te[i] - 0.2) - 1;
+        if (fabs(e) > fabs(worst))
+            worst = e;
+        sum += fabs(e);
+        sum2 += e * e;
+    }
+    ck_assert_double_eq_tol(headline(out, "front_error_max"), worst, 1e-5);
+    ck_assert_double_eq_tol(headline(out, "front_error_mean"), sum / 5, 1e-5);
+    ck_assert_double_eq_tol(headline(out, "front_error_rms"), sqrt(sum2 / 5), 1e-5);
+    ck_assert_double_lt(fabs(headline(out, "front_error_max_shifted")), 1e-5);
+    ck_assert_double_eq_tol(headline(out, "shift_fitted"), 0.2, 1e-9);
+    ck_assert_double_lt(headline(out, "front_error_rms_fitted"), 1e-5);
+    free(args);
+    free(out);
+    free(err);
+    /* without a reference: refused */
+    ck_assert(asprintf(&args, "front %s --width 1", run) > 0);
+    status = analyze(run, args, &out, &err);
+    ck_assert_int_eq(status, 2);
+    ck_assert_ptr_nonnull(strstr(err, "front needs --reference REF.csv"));
+    free(args);
+    free(out);
+    free(err);
+    free(path);
+    free(run);
+}
+END_TEST
+
 START_TEST(cli)
 {
     double d2b = sluice_hyd_belanger_depth(0.02, sluice_hyd_froude(1.5, 0.02, G));
@@ -1699,6 +1770,7 @@ int main(void)
     tcase_add_test(c, cli_step_profiles);
     tcase_add_test(c, dissolved_oxygen_scaling);
     tcase_add_test(c, cli_dissolved_oxygen);
+    tcase_add_test(c, cli_front);
     suite_add_tcase(s, c);
     return test_run_suite(s);
 }
