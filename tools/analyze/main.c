@@ -1462,8 +1462,8 @@ static int cmd_front(analyze_ctx *cx, const options *o)
         if (ca < 0 || series[i] == chosen) {
             te[m] = ref.data[i * ref.cols + (size_t)cT];
             ze[m] = ref.data[i * ref.cols + (size_t)cZ];
-            if (te[m] >= 0 && ze[m] > 0 && (isinf(o->from) || te[m] >= o->from) &&
-                (isinf(o->to) || te[m] <= o->to))
+            double time = te[m] / sqrt(2 * o->g / a); /* the window is in seconds */
+            if (te[m] >= 0 && ze[m] > 0 && time >= o->from && time <= o->to)
                 m++;
         }
     double worst, mean, rms;

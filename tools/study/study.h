@@ -72,7 +72,8 @@ typedef struct study_measure {
     study_source source;
     char *file, *column;       /* gauge: a CSV of the run directory and its column */
     study_reduce reduce;
-    double from, to;           /* gauge: the time window (s); -inf, +inf: all */
+    double from, to;           /* the time window (s); -inf, +inf: all */
+    double last;               /* > 0: the window is the run's last `last` seconds */
     char **arguments;          /* analysis: sluice-analyze COMMAND [ARGS]; the run
                                   directory goes after COMMAND */
     size_t argument_count;

@@ -442,7 +442,10 @@ static int read_source(study *s, const sluice_node *node, study_measure *m)
         if (!more)
             exit(4);
         m->arguments = more;
-        m->arguments[m->argument_count++] = study_strdup(word);
+        const char *mark = strstr(word, "{study_dir}");
+        m->arguments[m->argument_count++] =
+            mark ? study_printf("%.*s%s%s", (int)(mark - word), word, s->directory, mark + 11)
+                 : study_strdup(word);
     }
     free(copy);
     m->key = study_strdup(key->value);
@@ -451,8 +454,9 @@ static int read_source(study *s, const sluice_node *node, study_measure *m)
 
 static int read_measure(study *s, const sluice_node *node, study_measure *m)
 {
-    static const char *const keys[] = {"name", "unit", "gauge", "column", "reduce", "from", "to",
-                                       "analysis", "key", "run", "reference", "error"};
+    static const char *const keys[] = {"name",     "unit", "gauge", "column",    "reduce",
+                                       "from",     "to",   "last",  "analysis",  "key",
+                                       "run",      "reference", "error"};
     if (node->kind != SLUICE_NODE_MAPPING) {
         study_error(s, node, "a measure is a mapping: name and one source (gauge, analysis, run)");
         return 1;
@@ -478,6 +482,22 @@ static int read_measure(study *s, const sluice_node *node, study_measure *m)
             study_error(s, n, "measure '%s': %s is a time in seconds", m->name, bounds[b]);
             errors++;
         }
+    }
+    const sluice_node *last = sluice_node_get(node, "last");
+    if (last && (number_of(last, &m->last) != 0 || !(m->last > 0))) {
+        study_error(s, last, "measure '%s': last is a positive time in seconds (the window is "
+                             "the run's last seconds)", m->name);
+        errors++;
+    }
+    if (last && (sluice_node_get(node, "from") || sluice_node_get(node, "to"))) {
+        study_error(s, last, "measure '%s': give either last or from/to", m->name);
+        errors++;
+    }
+    if (m->source == SOURCE_RUN && (last || sluice_node_get(node, "from") ||
+                                    sluice_node_get(node, "to"))) {
+        study_error(s, last ? last : node, "measure '%s': a figure of run.json has no time window",
+                    m->name);
+        errors++;
     }
     if (m->from >= m->to) {
         study_error(s, node, "measure '%s': the window from %g to %g s is empty", m->name,

@@ -42,6 +42,8 @@ static double gauge_value(const study *s, const study_run *r, const study_measur
     free(path);
     if (!f)
         return NAN;
+    double from = m->last > 0 ? r->end_time - m->last : m->from;
+    double to = m->last > 0 ? INFINITY : m->to;
     enum { MAX_FIELDS = 4096 };
     char **fields = malloc(MAX_FIELDS * sizeof *fields);
     size_t size = 1 << 16;
@@ -71,7 +73,7 @@ static double gauge_value(const study *s, const study_run *r, const study_measur
         if ((size_t)col >= n || (size_t)time_col >= n)
             continue;
         double t = strtod(fields[time_col], NULL), v = strtod(fields[col], NULL);
-        if (!(t >= m->from && t <= m->to) || !isfinite(v))
+        if (!(t >= from && t <= to) || !isfinite(v))
             continue;
         if (count == 0)
             first = v;
@@ -114,16 +116,33 @@ static double gauge_value(const study *s, const study_run *r, const study_measur
 /* A figure `key = value` printed by sluice-analyze on the run. */
 static double analysis_value(const study *s, const study_run *r, const study_measure *m)
 {
-    char **argv = calloc(m->argument_count + 3, sizeof *argv);
+    char **argv = calloc(m->argument_count + 9, sizeof *argv);
     if (!argv)
         return NAN;
     char *dir = study_printf("%s/runs/%s", s->out, r->name);
+    char *out = study_printf("%s/runs/%s/analysis", s->out, r->name);
+    char from[64], to[64];
     size_t n = 0;
     argv[n++] = (char *)s->analyze;
     argv[n++] = m->arguments[0];
     argv[n++] = dir;
     for (size_t i = 1; i < m->argument_count; i++)
         argv[n++] = m->arguments[i];
+    /* the window: the run's last seconds, or from/to */
+    double t0 = m->last > 0 ? r->end_time - m->last : m->from;
+    double t1 = m->last > 0 ? r->end_time : m->to;
+    if (isfinite(t0)) {
+        snprintf(from, sizeof from, "%.10g", t0);
+        argv[n++] = "--from";
+        argv[n++] = from;
+    }
+    if (isfinite(t1)) {
+        snprintf(to, sizeof to, "%.10g", t1);
+        argv[n++] = "--to";
+        argv[n++] = to;
+    }
+    argv[n++] = "--out";
+    argv[n++] = out;
     argv[n] = NULL;
     int pipefd[2];
     double value = NAN;
@@ -155,6 +174,7 @@ static double analysis_value(const study *s, const study_run *r, const study_mea
             value = NAN;
     }
     free(dir);
+    free(out);
     free(argv);
     return value;
 }

@@ -281,6 +281,9 @@ int study_read_run_json(study *s, study_run *r)
     r->failure[0] = '\0';
     if (failure)
         sscanf(failure + 12, "%255[^\"]", r->failure);
+    const char *end_time = strstr(text, "\"end_time\": ");
+    if (end_time && !(r->end_time > 0))
+        r->end_time = strtod(end_time + 12, NULL);
     r->steps = steps ? strtod(steps + 9, NULL) : NAN;
     r->particle_steps = particle_steps ? strtod(particle_steps + 18, NULL) : NAN;
     return status && strncmp(status + 11, "complete\"", 9) == 0 ? 0 : -1;
