@@ -405,9 +405,11 @@ static void write_table(study *s, FILE *csv, FILE *md)
             fprintf(csv, ",%s", s->axes[a].values[r->choice[a]].label);
             fprintf(md, " %s |", s->axes[a].values[r->choice[a]].label);
         }
-        fprintf(csv, ",%s,%d,%.0f,%.0f,%.3f,%.3f,%.4g", state_name(r), r->exit_code, r->particles,
+        /* the mean particle count of the run (open boundaries add and remove) */
+        double particles = r->steps > 0 ? r->particle_steps / r->steps : r->particles;
+        fprintf(csv, ",%s,%d,%.0f,%.0f,%.3f,%.3f,%.4g", state_name(r), r->exit_code, particles,
                 r->steps, r->cpu_seconds, r->wall_seconds, rate);
-        fprintf(md, " %s | %.0f | %.1f | %.3g |", state_name(r), r->particles, r->cpu_seconds,
+        fprintf(md, " %s | %.0f | %.1f | %.3g |", state_name(r), particles, r->cpu_seconds,
                 rate);
         for (size_t k = 0; k < s->measure_count; k++) {
             fprintf(csv, ",%.10g", r->values[k]);
