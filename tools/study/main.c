@@ -183,6 +183,49 @@ static int perform(study *s)
     return status;
 }
 
+/* With several study files and --out DIR: DIR/studies.md, every study's
+ * study.md in one page (headings one level down, plots by their paths). */
+static int write_index(const command_line *c, study *studies)
+{
+    char *path = study_printf("%s/studies.md", c->out);
+    char *temporary = study_printf("%s.tmp", path);
+    FILE *out = fopen(temporary, "w");
+    int rc = out ? 0 : -1;
+    if (out)
+        fprintf(out, "# Studies\n\n");
+    for (size_t i = 0; out && i < c->file_count; i++) {
+        char *md = study_printf("%s/study.md", studies[i].out);
+        const char *stem = studies[i].out + strlen(c->out) + 1;
+        FILE *in = fopen(md, "r");
+        free(md);
+        if (!in) {
+            rc = -1;
+            continue;
+        }
+        char *line = NULL;
+        size_t size = 0;
+        while (getline(&line, &size, in) > 0) {
+            if (line[0] == '#')
+                fputc('#', out);
+            char *plot = strstr(line, "](plots/");
+            if (plot) {
+                fprintf(out, "%.*s](%s/plots/%s", (int)(plot - line), line, stem, plot + 8);
+            } else
+                fputs(line, out);
+        }
+        fputc('\n', out);
+        free(line);
+        fclose(in);
+    }
+    if (out && (fclose(out) != 0 || rename(temporary, path) != 0))
+        rc = -1;
+    if (rc == 0 && !c->quiet)
+        fprintf(stderr, "sluice-study: wrote %s\n", path);
+    free(temporary);
+    free(path);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     command_line c;
@@ -218,6 +261,10 @@ int main(int argc, char **argv)
             list_runs(&studies[i]);
         else
             status = perform(&studies[i]);
+    }
+    if (status == 0 && !c.dry_run && c.out && c.file_count > 1 && write_index(&c, studies) != 0) {
+        fprintf(stderr, "sluice-study: error: cannot write %s/studies.md\n", c.out);
+        status = 4;
     }
     for (size_t i = 0; i < c.file_count; i++) {
         sluice_diag_destroy(studies[i].diag);

@@ -468,7 +468,7 @@ static int write_plots(study *s, FILE *md)
             continue;
         }
         /* blocks: one per group, "cpu_s spacing y"; y = |error| (in % when relative) or the value */
-        size_t blocks = 0;
+        size_t blocks = 0, points = 0;
         char *titles = study_strdup("");
         for (size_t i = 0; i < s->run_count; i++) {
             const study_run *r = &s->runs[i];
@@ -491,10 +491,17 @@ static int write_plots(study *s, FILE *md)
                     continue;
                 double y = m->has_reference ? fabs(o->errors[k]) * (m->absolute ? 1 : 100)
                                             : o->values[k];
+                points += isfinite(y) && (!m->has_reference || y > 0);
                 fprintf(f, "%.6g %.6g %.8g\n", o->cpu_seconds, isfinite(o->spacing) ? o->spacing : 0, y);
             }
         }
         fclose(f);
+        if (points == 0) {
+            fprintf(md, "(%s: no value to plot.)\n", m->name);
+            free(titles);
+            free(data);
+            continue;
+        }
         const char *ylabel = m->has_reference ? (m->absolute ? "|error|" : "|error| (%)") : m->name;
         char *script = study_printf("%s/%s.gp", dir, m->name);
         f = fopen(script, "w");
@@ -519,11 +526,16 @@ static int write_plots(study *s, FILE *md)
                         data);
             fclose(f);
             char *argv[] = {gnuplot, script, NULL};
+            char *log = study_printf("%s/gnuplot.log", dir);
             pid_t pid = fork();
             if (pid == 0) {
+                int fd = open(log, O_WRONLY | O_CREAT | O_APPEND, 0666);
+                if (fd >= 0)
+                    dup2(fd, STDERR_FILENO);
                 execv(argv[0], argv);
                 _exit(127);
             }
+            free(log);
             int status = 1;
             if (pid > 0)
                 waitpid(pid, &status, 0);
@@ -534,7 +546,8 @@ static int write_plots(study *s, FILE *md)
                     fprintf(md, "![%s against spacing](plots/%s_spacing.png)\n", m->name,
                             m->name);
             } else
-                fprintf(stderr, "sluice-study: gnuplot failed on %s\n", script);
+                fprintf(stderr, "sluice-study: gnuplot failed on %s (its messages: %s/gnuplot.log)\n",
+                        script, dir);
         }
         free(titles);
         free(script);

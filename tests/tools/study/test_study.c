@@ -281,6 +281,59 @@ START_TEST(unstable_run_is_recorded_not_fatal)
 }
 END_TEST
 
+/* A profile narrows an axis of edits and replaces a spacing list, adds its
+ * edits after the study's; --dry-run lists the runs and their commands and
+ * runs nothing; an unknown profile is refused. */
+START_TEST(profiles_and_dry_run)
+{
+    char *dir = test_scratch("study-profile");
+    char *scene = test_config("still_water_2d.yaml");
+    char *text = NULL;
+    ck_assert_int_ge(asprintf(&text,
+                              "scene: %s\n"
+                              "set: {time.end: 2}\n"
+                              "axes:\n"
+                              "  - {name: wall, values: {dbc: {}, mdbc: {swap: {dbc: mdbc}}, "
+                              "ghost: {swap: {dbc: ghost_particles}}}}\n"
+                              "  - {name: dx, spacing: [0.02, 0.01]}\n"
+                              "profiles:\n"
+                              "  quick:\n"
+                              "    set: {time.end: 0.1}\n"
+                              "    axes: {wall: [ghost, dbc], dx: [0.05]}\n",
+                              scene),
+                     0);
+    char *file = test_write_file(dir, "p.yaml", text);
+    char *args = NULL, *output = NULL;
+    ck_assert_int_ge(asprintf(&args, "study %s --out %s/out --profile quick --dry-run", file, dir),
+                     0);
+    ck_assert_int_eq(study(args, &output), 0);
+    ck_assert_ptr_nonnull(strstr(output, ": 2 runs into "));
+    const char *ghost = strstr(output, "  ghost_0.05 ");
+    const char *dbc = strstr(output, "  dbc_0.05 ");
+    ck_assert(ghost && dbc && ghost < dbc); /* the profile's order */
+    ck_assert_ptr_null(strstr(output, "mdbc_"));
+    /* the study's edits, then the profile's, then the axes' */
+    ck_assert_ptr_nonnull(strstr(output, "--swap dbc=ghost_particles --set time.end=2 --set "
+                                         "time.end=0.1 --set particles.spacing=0.05"));
+    char *out = NULL;
+    ck_assert_int_ge(asprintf(&out, "%s/out", dir), 0);
+    ck_assert(!test_exists(out)); /* nothing run, nothing written */
+    free(output);
+    free(args);
+    ck_assert_int_ge(asprintf(&args, "study %s --out %s/out --profile quik", file, dir), 0);
+    ck_assert_int_eq(study(args, &output), 2);
+    ck_assert_ptr_nonnull(strstr(output, "error: --profile 'quik': the study defines no such "
+                                         "profile; did you mean 'quick'?"));
+    free(output);
+    free(args);
+    free(out);
+    free(file);
+    free(text);
+    free(scene);
+    free(dir);
+}
+END_TEST
+
 /* A study file that is refused: exit 2, the message at file:line:column,
  * nothing written. */
 static void expect_refused(const char *body, const char *position, const char *message)
@@ -377,6 +430,7 @@ int main(void)
     suite_add_tcase(s, runs);
     TCase *refusals = tcase_create("refusals");
     tcase_add_test(refusals, bad_study_files_are_refused);
+    tcase_add_test(refusals, profiles_and_dry_run);
     suite_add_tcase(s, refusals);
     return test_run_suite(s);
 }
