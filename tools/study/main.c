@@ -118,8 +118,8 @@ static void list_runs(const study *s)
         if (r->reused)
             printf("  %-40s finished before (exit %d)\n", r->name, r->exit_code);
         else
-            printf("  %-40s %9.0f particles, %g s, %5.1f %% of the work\n", r->name,
-                   r->particles, r->end_time, total > 0 ? 100 * r->work / total : 0);
+            printf("  %-40s %9.0f particles, %g s, %5.1f %% of the work\n", r->name, r->particles,
+                   r->end_time, total > 0 ? 100 * r->work / total : 0);
         printf("    %s\n", r->command);
     }
 }
@@ -134,9 +134,9 @@ static char *output_directory(const command_line *c, const char *file)
     if (dot && dot != stem)
         *dot = '\0';
     char *out = c->out && c->file_count == 1 ? study_strdup(c->out)
-                : c->out ? study_printf("%s/%s", c->out, stem)
-                : study_printf("runs/%s%s%s", stem, c->profile ? "-" : "",
-                               c->profile ? c->profile : "");
+                : c->out                     ? study_printf("%s/%s", c->out, stem)
+                         : study_printf("runs/%s%s%s", stem, c->profile ? "-" : "",
+                                        c->profile ? c->profile : "");
     free(copy);
     return out;
 }

@@ -46,9 +46,9 @@ typedef enum study_axis_kind {
 } study_axis_kind;
 
 typedef struct study_value {
-    char *label;       /* as written (a key, or the value's text) */
+    char *label; /* as written (a key, or the value's text) */
     study_edits edits;
-    double number;     /* spacing or threads; NAN otherwise */
+    double number; /* spacing or threads; NAN otherwise */
     const sluice_node *at;
 } study_value;
 
@@ -62,47 +62,60 @@ typedef struct study_axis {
 
 typedef enum study_source { SOURCE_GAUGE, SOURCE_ANALYSIS, SOURCE_RUN } study_source;
 typedef enum study_reduce {
-    REDUCE_MEAN, REDUCE_MAX, REDUCE_MIN, REDUCE_FIRST, REDUCE_LAST, REDUCE_STD, REDUCE_RMS,
-    REDUCE_INTEGRAL, REDUCE_TIME_OF_MAX, REDUCE_TIME_OF_MIN, REDUCE_COUNT
+    REDUCE_MEAN,
+    REDUCE_MAX,
+    REDUCE_MIN,
+    REDUCE_FIRST,
+    REDUCE_LAST,
+    REDUCE_STD,
+    REDUCE_RMS,
+    REDUCE_INTEGRAL,
+    REDUCE_TIME_OF_MAX,
+    REDUCE_TIME_OF_MIN,
+    REDUCE_COUNT
 } study_reduce;
 extern const char *const study_reduce_names[REDUCE_COUNT];
 
 typedef struct study_measure {
     char *name, *unit;
     study_source source;
-    char *file, *column;       /* gauge: a CSV of the run directory and its column */
+    char *file, *column; /* gauge: a CSV of the run directory and its column */
     study_reduce reduce;
-    double from, to;           /* the time window (s); -inf, +inf: all */
-    double last;               /* > 0: the window is the run's last `last` seconds */
-    char **arguments;          /* analysis: sluice-analyze COMMAND [ARGS]; the run
-                                  directory goes after COMMAND */
+    double from, to;  /* the time window (s); -inf, +inf: all */
+    double last;      /* > 0: the window is the run's last `last` seconds */
+    char **arguments; /* analysis: sluice-analyze COMMAND [ARGS]; the run
+                         directory goes after COMMAND */
     size_t argument_count;
-    char *key;                 /* analysis: the `key = value` line; run: run.json's key */
+    char *key; /* analysis: the `key = value` line; run: run.json's key */
     int has_reference;
     double reference;
-    int absolute;              /* error = value - reference (else relative) */
+    int absolute; /* error = value - reference (else relative) */
     const sluice_node *at;
 } study_measure;
 
 typedef enum study_state {
-    RUN_PENDING, RUN_RUNNING, RUN_DONE, RUN_FAILED, RUN_INTERRUPTED
+    RUN_PENDING,
+    RUN_RUNNING,
+    RUN_DONE,
+    RUN_FAILED,
+    RUN_INTERRUPTED
 } study_state;
 
 typedef struct study_run {
     char *name;
-    size_t *choice;            /* the value of each axis */
-    char **argv;               /* sluice run ... (NULL-terminated) */
-    const sluice_node **origin;/* per argv entry: the node behind it, or NULL */
+    size_t *choice;             /* the value of each axis */
+    char **argv;                /* sluice run ... (NULL-terminated) */
+    const sluice_node **origin; /* per argv entry: the node behind it, or NULL */
     size_t argc;
-    char *command;             /* argv as one line (the record of the run) */
+    char *command; /* argv as one line (the record of the run) */
     int threads;
-    double spacing;            /* NAN without a spacing axis */
+    double spacing; /* NAN without a spacing axis */
     /* from `sluice check` */
     double particles, end_time, work;
     int dimensions;
     /* the run */
     study_state state;
-    int reused;                /* finished before this invocation */
+    int reused; /* finished before this invocation */
     pid_t pid;
     double started;
     int exit_code;
@@ -117,9 +130,9 @@ typedef struct study_run {
 typedef struct study {
     sluice_node *root;
     sluice_diag *diag;
-    char *path, *directory;    /* the study file and its directory */
+    char *path, *directory; /* the study file and its directory */
     char *title, *description;
-    char *scene;               /* resolved against the study file's directory */
+    char *scene; /* resolved against the study file's directory */
     study_edits base;
     int threads, jobs;
     study_axis *axes;
@@ -130,7 +143,7 @@ typedef struct study {
     size_t run_count;
     /* the command line */
     char *out;
-    const char *profile;       /* --profile NAME, or NULL */
+    const char *profile; /* --profile NAME, or NULL */
     const char *sluice, *analyze;
     int dry_run, summary_only, retry_failed, quiet;
 } study;
@@ -145,8 +158,8 @@ int study_expand(study *s);
 
 /* study_run.c */
 double study_clock(void);
-int study_check_runs(study *s);          /* sluice check of every run: 0 or errors */
-int study_execute(study *s);             /* 0, or 1 when interrupted */
+int study_check_runs(study *s); /* sluice check of every run: 0 or errors */
+int study_execute(study *s);    /* 0, or 1 when interrupted */
 int study_read_run_json(study *s, study_run *r);
 
 /* study_report.c */

@@ -71,8 +71,8 @@ void study_error(study *s, const sluice_node *at, const char *format, ...)
 }
 
 /* Unknown keys of a mapping, with the closest known one. */
-static int check_keys(study *s, const sluice_node *map, const char *where,
-                      const char *const *known, size_t count)
+static int check_keys(study *s, const sluice_node *map, const char *where, const char *const *known,
+                      size_t count)
 {
     int errors = 0;
     for (size_t i = 0; i < map->count; i++) {
@@ -85,8 +85,8 @@ static int check_keys(study *s, const sluice_node *map, const char *where,
         const char *close = sluice_closest(key, known, count);
         char list[512] = "";
         for (size_t j = 0, used = 0; j < count && used < sizeof list; j++)
-            used += (size_t)snprintf(list + used, sizeof list - used, "%s%s", j ? ", " : "",
-                                     known[j]);
+            used +=
+                (size_t)snprintf(list + used, sizeof list - used, "%s%s", j ? ", " : "", known[j]);
         if (close)
             study_error(s, map->keys[i], "unknown key '%s' in %s; did you mean '%s'?", key, where,
                         close);
@@ -290,19 +290,17 @@ static int read_list_values(study *s, study_axis *a, const sluice_node *list, co
         study_value *v = &a->values[a->count++];
         v->number = NAN;
         v->at = item;
-        v->label = item->kind == SLUICE_NODE_SCALAR ? study_strdup(item->value)
-                                                    : value_text(item);
+        v->label = item->kind == SLUICE_NODE_SCALAR ? study_strdup(item->value) : value_text(item);
         double number = NAN;
-        if (a->kind == AXIS_SPACING &&
-            (number_of(item, &number) != 0 || !(number > 0))) {
+        if (a->kind == AXIS_SPACING && (number_of(item, &number) != 0 || !(number > 0))) {
             study_error(s, item, "axis '%s': a spacing is a positive number of metres, got '%s'",
                         a->name, v->label);
             errors++;
-        } else if (a->kind == AXIS_THREADS &&
-                   (number_of(item, &number) != 0 || number < 1 || number > 4096 ||
-                    number != floor(number))) {
-            study_error(s, item, "axis '%s': a thread count is a whole number from 1 to 4096, "
-                                 "got '%s'",
+        } else if (a->kind == AXIS_THREADS && (number_of(item, &number) != 0 || number < 1 ||
+                                               number > 4096 || number != floor(number))) {
+            study_error(s, item,
+                        "axis '%s': a thread count is a whole number from 1 to 4096, "
+                        "got '%s'",
                         a->name, v->label);
             errors++;
         }
@@ -320,8 +318,9 @@ static int read_axis(study *s, const sluice_node *node, study_axis *a)
 {
     static const char *const keys[] = {"name", "values", "parameter", "spacing", "threads"};
     if (node->kind != SLUICE_NODE_MAPPING) {
-        study_error(s, node, "an axis is a mapping: name and one of values, parameter (with "
-                             "values), spacing, threads");
+        study_error(s, node,
+                    "an axis is a mapping: name and one of values, parameter (with "
+                    "values), spacing, threads");
         return 1;
     }
     int errors = check_keys(s, node, "an axis", keys, 5);
@@ -355,9 +354,10 @@ static int read_axis(study *s, const sluice_node *node, study_axis *a)
     if (parameter) {
         a->kind = AXIS_PARAMETER;
         if (!is_string(parameter) || !values) {
-            study_error(s, parameter, "axis '%s': parameter is a dotted path of the scene, "
-                                      "with values a list, e.g. parameter: "
-                                      "plugins.tait.speed_of_sound, values: [20, 40]",
+            study_error(s, parameter,
+                        "axis '%s': parameter is a dotted path of the scene, "
+                        "with values a list, e.g. parameter: "
+                        "plugins.tait.speed_of_sound, values: [20, 40]",
                         a->name);
             return errors + 1;
         }
@@ -419,8 +419,10 @@ static int read_source(study *s, const sluice_node *node, study_measure *m)
     if (run) {
         m->source = SOURCE_RUN;
         if (!is_string(run)) {
-            study_error(s, run, "measure '%s': run is a key of run.json, e.g. "
-                                "particle_steps_per_second", m->name);
+            study_error(s, run,
+                        "measure '%s': run is a key of run.json, e.g. "
+                        "particle_steps_per_second",
+                        m->name);
             return 1;
         }
         m->key = study_strdup(run->value);
@@ -454,9 +456,9 @@ static int read_source(study *s, const sluice_node *node, study_measure *m)
 
 static int read_measure(study *s, const sluice_node *node, study_measure *m)
 {
-    static const char *const keys[] = {"name",     "unit", "gauge", "column",    "reduce",
-                                       "from",     "to",   "last",  "analysis",  "key",
-                                       "run",      "reference", "error"};
+    static const char *const keys[] = {"name", "unit",      "gauge", "column",   "reduce",
+                                       "from", "to",        "last",  "analysis", "key",
+                                       "run",  "reference", "error"};
     if (node->kind != SLUICE_NODE_MAPPING) {
         study_error(s, node, "a measure is a mapping: name and one source (gauge, analysis, run)");
         return 1;
@@ -485,31 +487,35 @@ static int read_measure(study *s, const sluice_node *node, study_measure *m)
     }
     const sluice_node *last = sluice_node_get(node, "last");
     if (last && (number_of(last, &m->last) != 0 || !(m->last > 0))) {
-        study_error(s, last, "measure '%s': last is a positive time in seconds (the window is "
-                             "the run's last seconds)", m->name);
+        study_error(s, last,
+                    "measure '%s': last is a positive time in seconds (the window is "
+                    "the run's last seconds)",
+                    m->name);
         errors++;
     }
     if (last && (sluice_node_get(node, "from") || sluice_node_get(node, "to"))) {
         study_error(s, last, "measure '%s': give either last or from/to", m->name);
         errors++;
     }
-    if (m->source == SOURCE_RUN && (last || sluice_node_get(node, "from") ||
-                                    sluice_node_get(node, "to"))) {
+    if (m->source == SOURCE_RUN &&
+        (last || sluice_node_get(node, "from") || sluice_node_get(node, "to"))) {
         study_error(s, last ? last : node, "measure '%s': a figure of run.json has no time window",
                     m->name);
         errors++;
     }
     if (m->from >= m->to) {
-        study_error(s, node, "measure '%s': the window from %g to %g s is empty", m->name,
-                    m->from, m->to);
+        study_error(s, node, "measure '%s': the window from %g to %g s is empty", m->name, m->from,
+                    m->to);
         errors++;
     }
     const sluice_node *reference = sluice_node_get(node, "reference");
     if (reference) {
         m->has_reference = 1;
         if (number_of(reference, &m->reference) != 0) {
-            study_error(s, reference, "measure '%s': reference is a number (in the measure's "
-                                      "unit)", m->name);
+            study_error(s, reference,
+                        "measure '%s': reference is a number (in the measure's "
+                        "unit)",
+                        m->name);
             errors++;
         }
     }
@@ -522,9 +528,11 @@ static int read_measure(study *s, const sluice_node *node, study_measure *m)
                  !(m->has_reference && m->reference == 0))
             m->absolute = 0;
         else {
-            study_error(s, error, "measure '%s': error is relative (value / reference - 1, "
-                                  "the default; not with a reference of 0) or absolute (value "
-                                  "- reference)", m->name);
+            study_error(s, error,
+                        "measure '%s': error is relative (value / reference - 1, "
+                        "the default; not with a reference of 0) or absolute (value "
+                        "- reference)",
+                        m->name);
             errors++;
         }
         if (!m->has_reference) {
@@ -595,8 +603,8 @@ static int check_names(study *s)
                 }
             for (size_t w = 0; w < v; w++)
                 if (strcmp(a->values[w].label, a->values[v].label) == 0) {
-                    study_error(s, a->values[v].at, "axis '%s' has the value '%s' twice",
-                                a->name, a->values[v].label);
+                    study_error(s, a->values[v].at, "axis '%s' has the value '%s' twice", a->name,
+                                a->values[v].label);
                     errors++;
                 }
         }
@@ -668,8 +676,8 @@ static int apply_profile_axes(study *s, const sluice_node *axes, const char *pro
                 path = strndup(text, strcspn(text, "="));
             }
             free_values(a);
-            errors += read_list_values(s, a, list,
-                                       a->kind == AXIS_SPACING ? "particles.spacing" : path);
+            errors +=
+                read_list_values(s, a, list, a->kind == AXIS_SPACING ? "particles.spacing" : path);
             free(path);
             continue;
         }
@@ -679,8 +687,9 @@ static int apply_profile_axes(study *s, const sluice_node *axes, const char *pro
         size_t count = 0;
         for (size_t j = 0; j < list->count; j++) {
             size_t v = 0;
-            while (v < a->count && (!a->values[v].label || list->items[j]->kind != SLUICE_NODE_SCALAR ||
-                                    strcmp(a->values[v].label, list->items[j]->value) != 0))
+            while (v < a->count &&
+                   (!a->values[v].label || list->items[j]->kind != SLUICE_NODE_SCALAR ||
+                    strcmp(a->values[v].label, list->items[j]->value) != 0))
                 v++;
             if (v == a->count) {
                 study_error(s, list->items[j], "profiles.%s.axes.%s: the axis has no value '%s'",
@@ -710,8 +719,9 @@ static int read_profiles(study *s)
     static const char *const keys[] = {"description", "remove", "swap", "set", "axes"};
     const sluice_node *profiles = sluice_node_get(s->root, "profiles");
     if (profiles && profiles->kind != SLUICE_NODE_MAPPING) {
-        study_error(s, profiles, "'profiles' must map profile names to their changes "
-                                 "(description, remove, swap, set, axes)");
+        study_error(s, profiles,
+                    "'profiles' must map profile names to their changes "
+                    "(description, remove, swap, set, axes)");
         return 1;
     }
     int errors = 0;
@@ -720,8 +730,7 @@ static int read_profiles(study *s)
         const sluice_node *p = profiles->items[i];
         char *where = study_printf("profiles.%s", profiles->keys[i]->value);
         if (p->kind != SLUICE_NODE_MAPPING) {
-            study_error(s, p, "%s must be a mapping (description, remove, swap, set, axes)",
-                        where);
+            study_error(s, p, "%s must be a mapping (description, remove, swap, set, axes)", where);
             errors++;
         } else
             errors += check_keys(s, p, where, keys, 5);
@@ -737,8 +746,8 @@ static int read_profiles(study *s)
         for (size_t i = 0; profiles && i < profiles->count && count < 64; i++)
             names[count++] = profiles->keys[i]->value;
         const char *close = sluice_closest(s->profile, names, count);
-        study_error(s, profiles ? profiles : s->root,
-                    "--profile '%s': the study defines %s%s%s%s", s->profile,
+        study_error(s, profiles ? profiles : s->root, "--profile '%s': the study defines %s%s%s%s",
+                    s->profile,
                     profiles ? "no such profile" : "no profiles (a top-level 'profiles' mapping)",
                     close ? "; did you mean '" : "", close ? close : "", close ? "'?" : "");
         return 1;
@@ -752,9 +761,9 @@ static int read_profiles(study *s)
 
 static int read_top(study *s)
 {
-    static const char *const keys[] = {"title", "description", "scene", "variant", "remove",
-                                       "swap", "set", "threads", "jobs", "axes", "measures",
-                                       "profiles"};
+    static const char *const keys[] = {"title",  "description", "scene",    "variant",
+                                       "remove", "swap",        "set",      "threads",
+                                       "jobs",   "axes",        "measures", "profiles"};
     int errors = check_keys(s, s->root, "the study", keys, SLUICE_COUNT(keys));
     const sluice_node *title = sluice_node_get(s->root, "title");
     const sluice_node *description = sluice_node_get(s->root, "description");
@@ -767,9 +776,8 @@ static int read_top(study *s)
                     "file)");
         errors++;
     } else {
-        s->scene = scene->value[0] == '/'
-                       ? study_strdup(scene->value)
-                       : study_printf("%s/%s", s->directory, scene->value);
+        s->scene = scene->value[0] == '/' ? study_strdup(scene->value)
+                                          : study_printf("%s/%s", s->directory, scene->value);
         struct stat st;
         if (stat(s->scene, &st) != 0 || !S_ISREG(st.st_mode)) {
             study_error(s, scene, "the scene '%s' cannot be read (%s)", scene->value,

@@ -5,6 +5,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -98,17 +99,34 @@ static double gauge_value(const study *s, const study_run *r, const study_measur
         return NAN;
     double mean = sum / count;
     switch (m->reduce) {
-    case REDUCE_MEAN: result = mean; break;
+    case REDUCE_MEAN:
+        result = mean;
+        break;
     case REDUCE_MAX:
-    case REDUCE_MIN: result = extreme; break;
-    case REDUCE_FIRST: result = first; break;
-    case REDUCE_LAST: result = last; break;
-    case REDUCE_STD: result = sqrt(fmax(0, sum2 / count - mean * mean)); break;
-    case REDUCE_RMS: result = sqrt(sum2 / count); break;
-    case REDUCE_INTEGRAL: result = integral; break;
+    case REDUCE_MIN:
+        result = extreme;
+        break;
+    case REDUCE_FIRST:
+        result = first;
+        break;
+    case REDUCE_LAST:
+        result = last;
+        break;
+    case REDUCE_STD:
+        result = sqrt(fmax(0, sum2 / count - mean * mean));
+        break;
+    case REDUCE_RMS:
+        result = sqrt(sum2 / count);
+        break;
+    case REDUCE_INTEGRAL:
+        result = integral;
+        break;
     case REDUCE_TIME_OF_MAX:
-    case REDUCE_TIME_OF_MIN: result = at; break;
-    default: break;
+    case REDUCE_TIME_OF_MIN:
+        result = at;
+        break;
+    default:
+        break;
     }
     return result;
 }
@@ -162,8 +180,7 @@ static double analysis_value(const study *s, const study_run *r, const study_mea
         char line[4096];
         size_t key_length = strlen(m->key);
         while (f && fgets(line, sizeof line, f))
-            if (strncmp(line, m->key, key_length) == 0 &&
-                strncmp(line + key_length, " = ", 3) == 0)
+            if (strncmp(line, m->key, key_length) == 0 && strncmp(line + key_length, " = ", 3) == 0)
                 value = strtod(line + key_length + 3, NULL);
         if (f)
             fclose(f);
@@ -255,8 +272,8 @@ static char *group_label(const study *s, const study_run *r)
     for (size_t a = 0; a < s->axis_count; a++) {
         if (a == sp)
             continue;
-        char *longer = study_printf("%s%s%s", label, *label ? "/" : "",
-                                    s->axes[a].values[r->choice[a]].label);
+        char *longer =
+            study_printf("%s%s%s", label, *label ? "/" : "", s->axes[a].values[r->choice[a]].label);
         free(label);
         label = longer;
     }
@@ -285,6 +302,20 @@ static size_t group_members(const study *s, const study_run *r, size_t k, const 
     return n;
 }
 
+/* Appends to a fixed buffer (truncating). */
+static void append(char *buffer, size_t size, const char *format, ...)
+    __attribute__((format(printf, 3, 4)));
+static void append(char *buffer, size_t size, const char *format, ...)
+{
+    size_t used = strlen(buffer);
+    if (used + 1 >= size)
+        return;
+    va_list ap;
+    va_start(ap, format);
+    vsnprintf(buffer + used, size - used, format, ap);
+    va_end(ap);
+}
+
 /* Writes the observed orders of every group and measure: from the errors
  * against the reference between successive spacings, or (no reference)
  * Richardson's from three successive values with its extrapolated value. */
@@ -298,14 +329,16 @@ static void write_orders(study *s, FILE *csv, FILE *md)
         return;
     fprintf(csv, "group,measure,spacings,values,errors,observed_orders,richardson_order,"
                  "richardson_value\n");
-    fprintf(md, "\n## Observed orders of convergence\n\n"
-                "Between successive spacings (coarse to fine): p = ln(|e_coarse| / |e_fine|) / "
-                "ln(dx_coarse / dx_fine) for the error e against the reference; without a "
-                "reference, Richardson's p = ln(|f1 - f2| / |f2 - f3|) / ln(r) from three values "
-                "and the value it extrapolates to (monotone sequences at a constant spacing ratio only: "
-                "nan where the values oscillate).\n\n"
-                "| group | measure | spacings (m) | errors | observed orders | Richardson p | "
-                "extrapolated |\n|---|---|---|---|---|---|---|\n");
+    fprintf(
+        md,
+        "\n## Observed orders of convergence\n\n"
+        "Between successive spacings (coarse to fine): p = ln(|e_coarse| / |e_fine|) / "
+        "ln(dx_coarse / dx_fine) for the error e against the reference; without a "
+        "reference, Richardson's p = ln(|f1 - f2| / |f2 - f3|) / ln(r) from three values "
+        "and the value it extrapolates to (monotone sequences at a constant spacing ratio only: "
+        "nan where the values oscillate).\n\n"
+        "| group | measure | spacings (m) | errors | observed orders | Richardson p | "
+        "extrapolated |\n|---|---|---|---|---|---|---|\n");
     for (size_t i = 0; i < s->run_count; i++) {
         const study_run *r = &s->runs[i];
         int first = 1; /* only the group's first run writes it */
@@ -321,16 +354,17 @@ static void write_orders(study *s, FILE *csv, FILE *md)
             if (n < 2)
                 continue;
             char spacings[512] = "", values[512] = "", errors[512] = "", orders[512] = "";
-            size_t us = 0, uv = 0, ue = 0, uo = 0;
             for (size_t j = 0; j < n; j++) {
-                us += (size_t)snprintf(spacings + us, sizeof spacings - (us < sizeof spacings ? us : sizeof spacings), "%s%g", j ? ";" : "", members[j]->spacing);
-                uv += (size_t)snprintf(values + uv, sizeof values - (uv < sizeof values ? uv : sizeof values), "%s%.6g", j ? ";" : "", members[j]->values[k]);
-                if (m->has_reference)
-                    ue += (size_t)snprintf(errors + ue, sizeof errors - (ue < sizeof errors ? ue : sizeof errors), "%s%.4g", j ? ";" : "", members[j]->errors[k]);
-                if (j && m->has_reference) {
+                const char *sep = j ? ";" : "";
+                append(spacings, sizeof spacings, "%s%g", sep, members[j]->spacing);
+                append(values, sizeof values, "%s%.6g", sep, members[j]->values[k]);
+                if (!m->has_reference)
+                    continue;
+                append(errors, sizeof errors, "%s%.4g", sep, members[j]->errors[k]);
+                if (j) {
                     double p = log(fabs(members[j - 1]->errors[k]) / fabs(members[j]->errors[k])) /
                                log(members[j - 1]->spacing / members[j]->spacing);
-                    uo += (size_t)snprintf(orders + uo, sizeof orders - (uo < sizeof orders ? uo : sizeof orders), "%s%.2f", j > 1 ? ";" : "", p);
+                    append(orders, sizeof orders, "%s%.2f", j > 1 ? ";" : "", p);
                 }
             }
             double richardson = NAN, extrapolated = NAN;
@@ -345,8 +379,8 @@ static void write_orders(study *s, FILE *csv, FILE *md)
                 if (isfinite(richardson) && richardson > 0)
                     extrapolated = f3 + (f3 - f2) / (pow(ratio, richardson) - 1);
             }
-            fprintf(csv, "%s,%s,%s,%s,%s,%s,%.4g,%.6g\n", label, m->name, spacings, values,
-                    errors, orders, richardson, extrapolated);
+            fprintf(csv, "%s,%s,%s,%s,%s,%s,%.4g,%.6g\n", label, m->name, spacings, values, errors,
+                    orders, richardson, extrapolated);
             fprintf(md, "| %s | %s | %s | %s | %s | %.2f | %.6g |\n", label, m->name, spacings,
                     m->has_reference ? errors : "-", m->has_reference ? orders : "-", richardson,
                     extrapolated);
@@ -361,11 +395,16 @@ static void write_orders(study *s, FILE *csv, FILE *md)
 static const char *state_name(const study_run *r)
 {
     switch (r->state) {
-    case RUN_DONE: return "complete";
-    case RUN_FAILED: return r->exit_code == 3 ? "unstable" : "failed";
-    case RUN_INTERRUPTED: return "interrupted";
-    case RUN_RUNNING: return "running";
-    default: return "not run";
+    case RUN_DONE:
+        return "complete";
+    case RUN_FAILED:
+        return r->exit_code == 3 ? "unstable" : "failed";
+    case RUN_INTERRUPTED:
+        return "interrupted";
+    case RUN_RUNNING:
+        return "running";
+    default:
+        return "not run";
     }
 }
 
@@ -409,8 +448,7 @@ static void write_table(study *s, FILE *csv, FILE *md)
         double particles = r->steps > 0 ? r->particle_steps / r->steps : r->particles;
         fprintf(csv, ",%s,%d,%.0f,%.0f,%.3f,%.3f,%.4g", state_name(r), r->exit_code, particles,
                 r->steps, r->cpu_seconds, r->wall_seconds, rate);
-        fprintf(md, " %s | %.0f | %.1f | %.3g |", state_name(r), particles, r->cpu_seconds,
-                rate);
+        fprintf(md, " %s | %.0f | %.1f | %.3g |", state_name(r), particles, r->cpu_seconds, rate);
         for (size_t k = 0; k < s->measure_count; k++) {
             fprintf(csv, ",%.10g", r->values[k]);
             fprintf(md, " %.5g |", r->values[k]);
@@ -467,7 +505,8 @@ static int write_plots(study *s, FILE *md)
             free(data);
             continue;
         }
-        /* blocks: one per group, "cpu_s spacing y"; y = |error| (in % when relative) or the value */
+        /* blocks: one per group, "cpu_s spacing y"; y = |error| (in % when relative) or the value
+         */
         size_t blocks = 0, points = 0;
         char *titles = study_strdup("");
         for (size_t i = 0; i < s->run_count; i++) {
@@ -489,10 +528,11 @@ static int write_plots(study *s, FILE *md)
                 const study_run *o = &s->runs[j];
                 if (!same_group(s, r, o) || !isfinite(o->values[k]))
                     continue;
-                double y = m->has_reference ? fabs(o->errors[k]) * (m->absolute ? 1 : 100)
-                                            : o->values[k];
+                double y =
+                    m->has_reference ? fabs(o->errors[k]) * (m->absolute ? 1 : 100) : o->values[k];
                 points += isfinite(y) && (!m->has_reference || y > 0);
-                fprintf(f, "%.6g %.6g %.8g\n", o->cpu_seconds, isfinite(o->spacing) ? o->spacing : 0, y);
+                fprintf(f, "%.6g %.6g %.8g\n", o->cpu_seconds,
+                        isfinite(o->spacing) ? o->spacing : 0, y);
             }
         }
         fclose(f);
@@ -522,8 +562,7 @@ static int write_plots(study *s, FILE *md)
                         "set xlabel 'particle spacing dx (m)'\nset title '%s: %s against "
                         "spacing'\nset output '%s/%s_spacing.png'\nplot for [i=0:%zu] '%s' "
                         "index i using 2:3 with linespoints title word(titles, i+1)\n",
-                        s->title[0] ? s->title : "study", m->name, dir, m->name, blocks - 1,
-                        data);
+                        s->title[0] ? s->title : "study", m->name, dir, m->name, blocks - 1, data);
             fclose(f);
             char *argv[] = {gnuplot, script, NULL};
             char *log = study_printf("%s/gnuplot.log", dir);
@@ -543,10 +582,10 @@ static int write_plots(study *s, FILE *md)
                 made += 1 + spacing;
                 fprintf(md, "![%s against cost](plots/%s_cost.png)\n", m->name, m->name);
                 if (spacing)
-                    fprintf(md, "![%s against spacing](plots/%s_spacing.png)\n", m->name,
-                            m->name);
+                    fprintf(md, "![%s against spacing](plots/%s_spacing.png)\n", m->name, m->name);
             } else
-                fprintf(stderr, "sluice-study: gnuplot failed on %s (its messages: %s/gnuplot.log)\n",
+                fprintf(stderr,
+                        "sluice-study: gnuplot failed on %s (its messages: %s/gnuplot.log)\n",
                         script, dir);
         }
         free(titles);
@@ -575,8 +614,9 @@ int study_write_reports(study *s)
         fprintf(md, "# %s\n\n", s->title[0] ? s->title : "Study");
         if (s->description[0])
             fprintf(md, "%s\n\n", s->description);
-        fprintf(md, "Study file `%s`, base scene `%s`; %zu runs. Reproduce: `sluice study %s "
-                    "--out %s`.\n\n",
+        fprintf(md,
+                "Study file `%s`, base scene `%s`; %zu runs. Reproduce: `sluice study %s "
+                "--out %s`.\n\n",
                 s->path, s->scene, s->run_count, s->path, s->out);
         write_table(s, files[0], md);
         write_orders(s, files[1], md);

@@ -67,7 +67,8 @@ static int capture(char *const *argv, char **out, char **err)
     }
     if (pid < 0 || !*out || !*err)
         return -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status)
+                             : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
 }
 
 /* Whether diag holds `message` already (the same edit fails in every run
@@ -122,8 +123,7 @@ static void relay_message(study *s, const study_run *r, const char *line)
         sluice_diag_add(s->diag, SLUICE_SEVERITY_ERROR, s->path, 1, 1, "run %s: %s", r->name,
                         line + 15);
     else
-        sluice_diag_add(s->diag, SLUICE_SEVERITY_ERROR, s->path, 1, 1, "run %s: %s", r->name,
-                        line);
+        sluice_diag_add(s->diag, SLUICE_SEVERITY_ERROR, s->path, 1, 1, "run %s: %s", r->name, line);
 }
 
 /* `sluice check` of one run: its particles, end time and dimensions. */
@@ -172,8 +172,8 @@ static int check_run(study *s, study_run *r)
              line = strtok_r(NULL, "\n", &save))
             relay_message(s, r, line);
         if (!sluice_diag_error_count(s->diag))
-            study_error(s, NULL, "run %s: sluice check gave exit %d and no summary line",
-                        r->name, status);
+            study_error(s, NULL, "run %s: sluice check gave exit %d and no summary line", r->name,
+                        status);
         errors++;
     }
     free(out);
@@ -405,8 +405,7 @@ static void progress(study *s, double start, int final)
             "%sstudy: %zu/%zu runs done (%zu failed, %zu running, %zu from before), %.0f %% of "
             "the work, elapsed %s, ETA %s%s",
             tty ? "\r" : "", done + failed + reused, s->run_count, failed + failed_before, running,
-            reused,
-            total > 0 ? 100 * this_run / total : 100.0, e, final ? "0s" : t,
+            reused, total > 0 ? 100 * this_run / total : 100.0, e, final ? "0s" : t,
             tty && !final ? "   " : "\n");
     fflush(stderr);
 }
@@ -428,8 +427,8 @@ static void finish(study *s, study_run *r, int status, const struct rusage *usag
     write_record(s, r);
     if (r->state == RUN_FAILED && !s->quiet)
         fprintf(stderr, "%sstudy: run %s failed (exit %d%s%s); its log: %s/logs/%s.log\n",
-                isatty(STDERR_FILENO) ? "\n" : "", r->name, r->exit_code,
-                r->failure[0] ? ": " : "", r->failure, s->out, r->name);
+                isatty(STDERR_FILENO) ? "\n" : "", r->name, r->exit_code, r->failure[0] ? ": " : "",
+                r->failure, s->out, r->name);
 }
 
 int study_check_runs(study *s)

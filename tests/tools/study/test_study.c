@@ -33,7 +33,8 @@ static char *csv_field(const char *csv, const char *run, const char *column)
         char *fields[256];
         int n = 0;
         char *row = strdup(line);
-        for (char *s3 = NULL, *f = strtok_r(row, ",", &s3); f && n < 256; f = strtok_r(NULL, ",", &s3))
+        for (char *s3 = NULL, *f = strtok_r(row, ",", &s3); f && n < 256;
+             f = strtok_r(NULL, ",", &s3))
             fields[n++] = f;
         if (n > index && strcmp(fields[0], run) == 0)
             result = strdup(fields[index]);
@@ -111,7 +112,8 @@ static const char *two_axis_study =
     "set:\n"
     "  time.end: 0.04\n"
     "  plugins.hdf5.interval: 0.04\n"
-    "  plugins.floor: {plugin: wall_pressure, positions: [[0.5, 0]], names: p, size: [0.4], "
+    "  plugins.floor: {plugin: wall_pressure, positions: [[0.5, 0]], names: p, "
+    "size: [0.4], "
     "interval: 0.005}\n"
     "jobs: 2\n"
     "axes:\n"
@@ -124,7 +126,8 @@ static const char *two_axis_study =
     "measures:\n"
     "  - {name: kept, run: particles_final}\n"
     "  - {name: h, unit: m, run: smoothing_length, reference: 0}\n"
-    "  - {name: p_floor, unit: Pa, gauge: wall_pressure.csv, column: p_Pa, from: 0.02, "
+    "  - {name: p_floor, unit: Pa, gauge: wall_pressure.csv, column: p_Pa, "
+    "from: 0.02, "
     "reference: 4905}\n";
 
 START_TEST(two_axis_study_runs_resumes_and_reports)
@@ -141,14 +144,15 @@ START_TEST(two_axis_study_runs_resumes_and_reports)
     fprintf(stderr, "%s", output);
     ck_assert_int_eq(status, 0);
     /* progress for the whole study */
-    ck_assert_ptr_nonnull(strstr(output, "study: 6/6 runs done (0 failed, 0 running, 0 from before)"));
+    ck_assert_ptr_nonnull(
+        strstr(output, "study: 6/6 runs done (0 failed, 0 running, 0 from before)"));
     free(output);
 
     ck_assert_int_ge(asprintf(&out, "%s/out/study.csv", dir), 0);
     char *csv = test_read_file(out);
     ck_assert_ptr_nonnull(csv);
     ck_assert_int_eq(test_count_lines(csv, ",complete,"), 6);
-    static const char *const runs[] = {"dbc_0.05", "dbc_0.025", "dbc_0.0125",
+    static const char *const runs[] = {"dbc_0.05",  "dbc_0.025",  "dbc_0.0125",
                                        "mdbc_0.05", "mdbc_0.025", "mdbc_0.0125"};
     static const double spacings[] = {0.05, 0.025, 0.0125};
     for (int i = 0; i < 6; i++) {
@@ -348,8 +352,8 @@ static void expect_refused(const char *body, const char *position, const char *m
     int status = study(args, &output);
     char *expected = NULL;
     ck_assert_int_ge(asprintf(&expected, "%s:%s: error: %s", file, position, message), 0);
-    ck_assert_msg(status == 2 && strstr(output, expected),
-                  "exit %d, output:\n%s\nexpected:\n%s", status, output, expected);
+    ck_assert_msg(status == 2 && strstr(output, expected), "exit %d, output:\n%s\nexpected:\n%s",
+                  status, output, expected);
     char *out = NULL;
     ck_assert_int_ge(asprintf(&out, "%s/out", dir), 0);
     ck_assert(!test_exists(out));
@@ -369,10 +373,10 @@ START_TEST(bad_study_files_are_refused)
 {
     expect_refused("scene: %s\n" AXIS "mesures: []\n", "4:1",
                    "unknown key 'mesures' in the study; did you mean 'measures'?");
-    expect_refused("scene: %s/nothing.yaml\n" AXIS, "1:8",
-                   "the scene '");
+    expect_refused("scene: %s/nothing.yaml\n" AXIS, "1:8", "the scene '");
     expect_refused("title: no scene %s\n" AXIS, "1:1",
-                   "a study needs 'scene': the path of its base scene (relative to the study "
+                   "a study needs 'scene': the path of its base scene (relative "
+                   "to the study "
                    "file)");
     expect_refused("scene: %s\n", "1:1", "a study needs 'axes' (a list)");
     expect_refused("scene: %s\naxes:\n  - {name: dx, spacing: [0.1, -1]}\n", "3:31",
@@ -387,25 +391,31 @@ START_TEST(bad_study_files_are_refused)
     expect_refused("scene: %s\naxes:\n  - {name: c, parameter: plugins.tait.speed_of_sound, "
                    "values: [20, 20]}\n",
                    "3:68", "axis 'c' has the value '20' twice");
-    expect_refused("scene: %s\naxes:\n  - {name: w, values: {dbc: {}, m: {swap: {dbx: mdbc}}}}\n",
+    expect_refused("scene: %s\naxes:\n  - {name: w, values: {dbc: {}, m: {swap: {dbx: "
+                   "mdbc}}}}\n",
                    "3:49",
                    "cannot swap 'dbx': the scene loads no plugin of that name; did you "
                    "mean 'dbc'?");
     expect_refused("scene: %s\naxes:\n  - {name: c, parameter: plugins.tait.speed_of_sound, "
                    "values: [-3]}\n",
                    "3:64",
-                   "plugins.tait.speed_of_sound = -3 m s^-1 is out of range: it must be > 0 m s^-1");
+                   "plugins.tait.speed_of_sound = -3 m s^-1 is out of range: it must be > 0 "
+                   "m s^-1");
     expect_refused("scene: %s\naxes:\n  - {name: w, values: {a: {swap: [dbc]}}}\n", "3:34",
-                   "axes.w.values.a.swap must be a mapping from plugins the scene loads to the "
+                   "axes.w.values.a.swap must be a mapping from plugins the scene loads to "
+                   "the "
                    "plugins that replace them, e.g. {dbc: mdbc}");
     expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p, gauge: a.csv, column: p, "
                    "reduce: maen}\n",
                    "5:48",
-                   "measure 'p': reduce must be one of mean, max, min, first, last, std, rms, "
+                   "measure 'p': reduce must be one of mean, max, min, first, "
+                   "last, std, rms, "
                    "integral, time_of_max, time_of_min; did you mean 'mean'?");
     expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p}\n", "5:5",
-                   "measure 'p' needs exactly one source: gauge (a CSV file of the run, with "
-                   "column), analysis (sluice-analyze arguments, with key) or run (a figure of "
+                   "measure 'p' needs exactly one source: gauge (a CSV file of "
+                   "the run, with "
+                   "column), analysis (sluice-analyze arguments, with key) or "
+                   "run (a figure of "
                    "run.json)");
     expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p, run: steps}\n  - {name: p, run: "
                    "steps}\n",
@@ -413,7 +423,8 @@ START_TEST(bad_study_files_are_refused)
     expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p, run: steps, error: absolute}\n",
                    "5:34", "measure 'p': error needs a reference");
     expect_refused("scene: %s\naxes:\n  - {name: w, values: {a/b: {}}}\n", "3:24",
-                   "axis 'w': the label 'a/b' names run directories: letters, digits, '.', '_', "
+                   "axis 'w': the label 'a/b' names run directories: letters, "
+                   "digits, '.', '_', "
                    "'+' and '-' only");
     expect_refused("scene: %s\naxes: [\n", "3:1",
                    "YAML syntax error: did not find expected node content");
