@@ -36,6 +36,8 @@ typedef struct study_edits {
     size_t count;
     const char *variant; /* NULL: none */
     const sluice_node *variant_at;
+    char *scene; /* an axis value's own scene (resolved), or NULL */
+    const sluice_node *scene_at;
 } study_edits;
 
 typedef enum study_axis_kind {
@@ -107,7 +109,8 @@ typedef struct study_run {
     char **argv;                /* sluice run ... (NULL-terminated) */
     const sluice_node **origin; /* per argv entry: the node behind it, or NULL */
     size_t argc;
-    char *command; /* argv as one line (the record of the run) */
+    char *command;     /* argv as one line (the record of the run) */
+    const char *scene; /* the run's scene: the study's or an axis value's */
     int threads;
     double spacing; /* NAN without a spacing axis */
     /* from `sluice check` */

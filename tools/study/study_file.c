@@ -233,7 +233,32 @@ static int read_edits(study *s, const sluice_node *map, const char *where, study
     return errors;
 }
 
-static const char *const edit_keys[] = {"description", "remove", "swap", "set", "variant"};
+static const char *const edit_keys[] = {"description", "remove", "swap",
+                                        "set",         "variant", "scene"};
+
+/* An axis value's `scene`: another base scene for its runs (a model kept as
+ * a scene file of its own), relative to the study file. */
+static int read_value_scene(study *s, const sluice_node *map, const char *where, study_edits *e)
+{
+    const sluice_node *scene = sluice_node_get(map, "scene");
+    if (!scene)
+        return 0;
+    if (!is_string(scene)) {
+        study_error(s, scene, "%s.scene must be the path of a scene file", where);
+        return 1;
+    }
+    e->scene = scene->value[0] == '/' ? study_strdup(scene->value)
+                                      : study_printf("%s/%s", s->directory, scene->value);
+    e->scene_at = scene;
+    struct stat st;
+    errno = 0;
+    if (stat(e->scene, &st) != 0 || !S_ISREG(st.st_mode)) {
+        study_error(s, scene, "the scene '%s' cannot be read (%s)", scene->value,
+                    errno ? strerror(errno) : "not a file");
+        return 1;
+    }
+    return 0;
+}
 
 /* An axis of values each with its edits: {label: {swap:.., set:..}, ...}. */
 static int read_edit_values(study *s, study_axis *a, const sluice_node *values)
@@ -266,7 +291,8 @@ static int read_edit_values(study *s, study_axis *a, const sluice_node *values)
             continue;
         }
         char *where = study_printf("axes.%s.values.%s", a->name, v->label);
-        errors += check_keys(s, edits, where, edit_keys, 5);
+        errors += check_keys(s, edits, where, edit_keys, 6);
+        errors += read_value_scene(s, edits, where, &v->edits);
         errors += read_edits(s, edits, where, &v->edits);
         free(where);
     }
@@ -632,6 +658,7 @@ static void free_values(study_axis *a)
         for (size_t e = 0; e < a->values[v].edits.count; e++)
             free(a->values[v].edits.items[e].text);
         free(a->values[v].edits.items);
+        free(a->values[v].edits.scene);
         free(a->values[v].label);
     }
     free(a->values);
@@ -703,6 +730,7 @@ static int apply_profile_axes(study *s, const sluice_node *axes, const char *pro
             a->values[v].label = NULL; /* moved */
             a->values[v].edits.items = NULL;
             a->values[v].edits.count = 0;
+            a->values[v].edits.scene = NULL;
         }
         free_values(a);
         a->values = kept;
@@ -851,15 +879,28 @@ static int build_command(study *s, study_run *r)
     sources[count++] = &s->base;
     for (size_t a = 0; a < s->axis_count && count < 64; a++)
         sources[count++] = &s->axes[a].values[r->choice[a]].edits;
+    int errors = 0;
+    const study_edits *own = NULL;
+    for (size_t i = 0; i < count; i++)
+        if (sources[i]->scene) {
+            if (own) {
+                study_error(s, sources[i]->scene_at,
+                            "run '%s' would have two scenes ('%s' and '%s'); one axis may "
+                            "choose the scene",
+                            r->name, own->scene, sources[i]->scene);
+                errors++;
+            }
+            own = sources[i];
+        }
+    r->scene = own ? own->scene : s->scene;
     push_arg(r, s->sluice, NULL);
     push_arg(r, "run", NULL);
-    push_arg(r, s->scene, NULL);
+    push_arg(r, r->scene, own ? own->scene_at : NULL);
     push_arg(r, "--out", NULL);
     char *dir = study_printf("%s/runs/%s", s->out, r->name);
     push_arg(r, dir, NULL);
     free(dir);
     const study_edits *variant = NULL;
-    int errors = 0;
     for (size_t i = 0; i < count; i++)
         if (sources[i]->variant) {
             if (variant) {
@@ -966,6 +1007,7 @@ void study_free(study *s)
             for (size_t e = 0; e < s->axes[a].values[v].edits.count; e++)
                 free(s->axes[a].values[v].edits.items[e].text);
             free(s->axes[a].values[v].edits.items);
+            free(s->axes[a].values[v].edits.scene);
             free(s->axes[a].values[v].label);
         }
         free(s->axes[a].values);

@@ -184,10 +184,10 @@ static int check_run(study *s, study_run *r)
 /* ------------------------------------------------------------- records -- */
 
 /* FNV-1a of the base scene's bytes: a run is redone when its scene changed. */
-static unsigned long long scene_hash(const study *s)
+static unsigned long long scene_hash(const study_run *r)
 {
     unsigned long long h = 1469598103934665603ULL;
-    FILE *f = fopen(s->scene, "rb");
+    FILE *f = fopen(r->scene, "rb");
     if (!f)
         return 0;
     int c;
@@ -218,7 +218,7 @@ static int read_record(study *s, study_run *r)
         if (strncmp(line, "command: ", 9) == 0)
             same = strcmp(line + 9, r->command) == 0;
         else if (sscanf(line, "scene_hash: %llx", &hash) == 1)
-            same_scene = hash == scene_hash(s);
+            same_scene = hash == scene_hash(r);
         else if (sscanf(line, "exit: %d", &r->exit_code) == 1)
             have_exit = 1;
         else if (sscanf(line, "cpu_seconds: %lf", &r->cpu_seconds) != 1)
@@ -250,7 +250,7 @@ static void write_record(study *s, const study_run *r)
         fprintf(f,
                 "command: %s\nscene_hash: %llx\nexit: %d\ncpu_seconds: %.6f\nwall_seconds: "
                 "%.6f\n",
-                r->command, scene_hash(s), r->exit_code, r->cpu_seconds, r->wall_seconds);
+                r->command, scene_hash(r), r->exit_code, r->cpu_seconds, r->wall_seconds);
         if (fclose(f) == 0)
             rename(temporary, path);
     }
