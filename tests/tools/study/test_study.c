@@ -426,6 +426,8 @@ START_TEST(bad_study_files_are_refused)
                    "axis 'w': the label 'a/b' names run directories: letters, "
                    "digits, '.', '_', "
                    "'+' and '-' only");
+    expect_refused("scene: %s\naxes:\n  - {name: m, values: {a: {scene: nowhere.yaml}}}\n",
+                   "3:35", "the scene 'nowhere.yaml' cannot be read (No such file or directory)");
     expect_refused("scene: %s\naxes: [\n", "3:1",
                    "YAML syntax error: did not find expected node content");
 }
