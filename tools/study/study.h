@@ -85,6 +85,7 @@ typedef struct study_measure {
     study_reduce reduce;
     double from, to;  /* the time window (s); -inf, +inf: all */
     double last;      /* > 0: the window is the run's last `last` seconds */
+    double last_share; /* > 0: the window is this share of the run, at its end */
     char **arguments; /* analysis: sluice-analyze COMMAND [ARGS]; the run
                          directory goes after COMMAND */
     size_t argument_count;

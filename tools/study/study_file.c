@@ -512,10 +512,19 @@ static int read_measure(study *s, const sluice_node *node, study_measure *m)
         }
     }
     const sluice_node *last = sluice_node_get(node, "last");
-    if (last && (number_of(last, &m->last) != 0 || !(m->last > 0))) {
+    if (last && last->kind == SLUICE_NODE_SCALAR && *last->value &&
+        last->value[strlen(last->value) - 1] == '%') {
+        /* a share of the run: "50%" is its second half */
+        char *end = NULL;
+        double percent = strtod(last->value, &end);
+        if (end == last->value + strlen(last->value) - 1 && percent > 0 && percent <= 100)
+            m->last_share = percent / 100;
+    } else if (last)
+        number_of(last, &m->last);
+    if (last && !(m->last > 0) && !(m->last_share > 0)) {
         study_error(s, last,
-                    "measure '%s': last is a positive time in seconds (the window is "
-                    "the run's last seconds)",
+                    "measure '%s': last is a positive time in seconds (the run's last "
+                    "seconds) or a share of the run such as 50%% (its second half)",
                     m->name);
         errors++;
     }

@@ -17,6 +17,18 @@
 
 /* ------------------------------------------------------------ measures -- */
 
+/* The measure's time window in the run: from/to, or the run's last seconds
+ * or share. */
+static void study_window(const study_measure *m, const study_run *r, double *from, double *to)
+{
+    *from = m->from;
+    *to = m->to;
+    if (m->last > 0 || m->last_share > 0) {
+        *from = r->end_time - (m->last > 0 ? m->last : m->last_share * r->end_time);
+        *to = r->end_time;
+    }
+}
+
 /* Splits a CSV line in place; returns the number of fields. */
 static size_t split(char *line, char **fields, size_t max)
 {
@@ -43,8 +55,8 @@ static double gauge_value(const study *s, const study_run *r, const study_measur
     free(path);
     if (!f)
         return NAN;
-    double from = m->last > 0 ? r->end_time - m->last : m->from;
-    double to = m->last > 0 ? INFINITY : m->to;
+    double from, to;
+    study_window(m, r, &from, &to);
     enum { MAX_FIELDS = 4096 };
     char **fields = malloc(MAX_FIELDS * sizeof *fields);
     size_t size = 1 << 16;
@@ -147,8 +159,8 @@ static double analysis_value(const study *s, const study_run *r, const study_mea
     for (size_t i = 1; i < m->argument_count; i++)
         argv[n++] = m->arguments[i];
     /* the window: the run's last seconds, or from/to */
-    double t0 = m->last > 0 ? r->end_time - m->last : m->from;
-    double t1 = m->last > 0 ? r->end_time : m->to;
+    double t0, t1;
+    study_window(m, r, &t0, &t1);
     if (isfinite(t0)) {
         snprintf(from, sizeof from, "%.10g", t0);
         argv[n++] = "--from";
