@@ -120,6 +120,8 @@ typedef struct study_run {
     /* the run */
     study_state state;
     int reused; /* finished before this invocation */
+    char *restart;      /* the checkpoint an interrupted run continues from, or NULL */
+    double cpu_before;  /* CPU seconds of its earlier parts */
     pid_t pid;
     double started;
     int exit_code;

@@ -1007,6 +1007,7 @@ void study_free(study *s)
         free(r->choice);
         free(r->name);
         free(r->command);
+        free(r->restart);
         free(r->values);
         free(r->errors);
     }

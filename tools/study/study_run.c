@@ -7,6 +7,7 @@
 #define _GNU_SOURCE
 #include <errno.h>
 #include <fcntl.h>
+#include <dirent.h>
 #include <ftw.h>
 #include <math.h>
 #include <signal.h>
@@ -202,7 +203,31 @@ static char *record_path(const study *s, const study_run *r)
     return study_printf("%s/records/%s.txt", s->out, r->name);
 }
 
-/* A finished run of an earlier invocation with the same command: reused. */
+/* The run directory's checkpoint of the latest step (malloc'd), or NULL. */
+static char *latest_checkpoint(const study *s, const study_run *r)
+{
+    char *dir = study_printf("%s/runs/%s", s->out, r->name);
+    DIR *d = opendir(dir);
+    char *best = NULL;
+    unsigned long long best_step = 0;
+    for (struct dirent *e; d && (e = readdir(d));) {
+        unsigned long long step = 0;
+        int n = 0;
+        if (sscanf(e->d_name, "checkpoint_%llu.h5%n", &step, &n) == 1 &&
+            (size_t)n == strlen(e->d_name) && (!best || step > best_step)) {
+            free(best);
+            best = study_printf("%s/%s", dir, e->d_name);
+            best_step = step;
+        }
+    }
+    if (d)
+        closedir(d);
+    free(dir);
+    return best;
+}
+
+/* A finished run of an earlier invocation with the same command: reused.
+ * One stopped by a signal is continued from its checkpoint. */
 static int read_record(study *s, study_run *r)
 {
     char *path = record_path(s, r);
@@ -227,6 +252,13 @@ static int read_record(study *s, study_run *r)
     fclose(f);
     if (!same || !same_scene || !have_exit)
         return 0;
+    if (r->exit_code == 5) {
+        /* stopped by a signal after a whole step: continue from its last checkpoint */
+        r->restart = latest_checkpoint(s, r);
+        r->cpu_before = r->restart ? r->cpu_seconds : 0;
+        r->cpu_seconds = 0;
+        return 0;
+    }
     if (r->exit_code == 0) {
         if (study_read_run_json(s, r) != 0)
             return 0; /* the directory was changed since: run it again */
@@ -308,27 +340,46 @@ static void on_signal(int sig)
 static int launch(study *s, study_run *r)
 {
     char *dir = study_printf("%s/runs/%s", s->out, r->name);
-    nftw(dir, remove_entry, 16, FTW_DEPTH | FTW_PHYS); /* a run not finished: from the start */
+    if (!r->restart) /* a run not finished and not resumable: from the start */
+        nftw(dir, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
     char *record = record_path(s, r);
     unlink(record);
     free(record);
+    /* the command, with --restart CHECKPOINT when it continues */
+    char **argv = calloc(r->argc + 3, sizeof *argv);
+    if (!argv) {
+        free(dir);
+        return -1;
+    }
+    memcpy(argv, r->argv, r->argc * sizeof *argv);
+    if (r->restart) {
+        argv[r->argc] = "--restart";
+        argv[r->argc + 1] = r->restart;
+    }
     char *log = study_printf("%s/logs/%s.log", s->out, r->name);
-    int fd = open(log, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    int fd = open(log, O_WRONLY | O_CREAT | (r->restart ? O_APPEND : O_TRUNC) | O_CLOEXEC, 0666);
     free(log);
     free(dir);
-    if (fd < 0)
+    if (fd < 0) {
+        free(argv);
         return -1;
+    }
     pid_t pid = fork();
     if (pid == 0) {
         dup2(fd, STDOUT_FILENO);
         dup2(fd, STDERR_FILENO);
         signal(SIGINT, SIG_DFL);
         signal(SIGTERM, SIG_DFL);
-        execv(r->argv[0], r->argv);
-        fprintf(stderr, "sluice-study: cannot run %s: %s\n", r->argv[0], strerror(errno));
+        /* a process group of its own: a terminal's Ctrl-C reaches the study,
+         * which passes it on once (a second signal would end the run at once,
+         * without its checkpoint) */
+        setpgid(0, 0);
+        execv(argv[0], argv);
+        fprintf(stderr, "sluice-study: cannot run %s: %s\n", argv[0], strerror(errno));
         _exit(127);
     }
     close(fd);
+    free(argv);
     if (pid < 0)
         return -1;
     r->pid = pid;
@@ -418,7 +469,13 @@ static void finish(study *s, study_run *r, int status, const struct rusage *usag
     r->exit_code = WIFEXITED(status) ? WEXITSTATUS(status)
                                      : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
     r->pid = 0;
-    if (r->exit_code == 5 || (stop_requested && r->exit_code != 0)) {
+    r->cpu_seconds += r->cpu_before; /* a continued run costs all its parts */
+    if (r->exit_code == 5) {
+        r->state = RUN_INTERRUPTED; /* recorded: the next invocation continues it */
+        write_record(s, r);
+        return;
+    }
+    if (stop_requested && r->exit_code != 0) {
         r->state = RUN_INTERRUPTED; /* not recorded: run again next time */
         return;
     }
@@ -462,6 +519,7 @@ int study_execute(study *s)
     sigaction(SIGTERM, &action, NULL);
     double start = study_clock(), last = 0;
     size_t next = 0, running = 0;
+    int forwarded = 0;
     int jobs = s->jobs > 0 ? s->jobs : 1;
     for (;;) {
         while (!stop_requested && running < (size_t)jobs && next < s->run_count) {
@@ -491,10 +549,13 @@ int study_execute(study *s)
                 progress(s, start, 0);
             continue;
         }
-        if (stop_requested == SIGTERM)
+        if (stop_requested && !forwarded) {
+            /* the runs stop too, after a whole step, with a checkpoint */
             for (size_t i = 0; i < s->run_count; i++)
                 if (s->runs[i].state == RUN_RUNNING)
-                    kill(s->runs[i].pid, SIGTERM);
+                    kill(s->runs[i].pid, (int)stop_requested);
+            forwarded = 1;
+        }
         double now = study_clock();
         if (!s->quiet && now - last >= (isatty(STDERR_FILENO) ? 1.0 : 60.0)) {
             progress(s, start, 0);

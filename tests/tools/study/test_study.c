@@ -3,6 +3,10 @@
  * redoing a run; an unstable run is recorded, not fatal; bad study files are
  * refused with file:line:column before anything runs. */
 #include <check.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -285,6 +289,88 @@ START_TEST(unstable_run_is_recorded_not_fatal)
 }
 END_TEST
 
+/* SIGINT to the study: the running run stops after a whole step with a
+ * checkpoint, the study exits 5; the same command continues that run from
+ * its checkpoint (run.json: restarted_at_step > 0) and completes it. */
+START_TEST(interrupted_study_continues_from_the_checkpoint)
+{
+    char *dir = test_scratch("study-interrupt");
+    char *scene = test_config("still_water_2d.yaml");
+    char *text = NULL;
+    ck_assert_int_ge(asprintf(&text,
+                              "scene: %s\n"
+                              "set: {time.end: 1.5, plugins.hdf5.interval: 0.5}\n"
+                              "axes:\n"
+                              "  - {name: dx, spacing: [0.025]}\n"
+                              "measures:\n"
+                              "  - {name: kept, run: particles_final}\n",
+                              scene),
+                     0);
+    char *file = test_write_file(dir, "i.yaml", text);
+    char *out = NULL, *log = NULL, *program = NULL;
+    ck_assert_int_ge(asprintf(&out, "%s/out", dir), 0);
+    ck_assert_int_ge(asprintf(&log, "%s/out/logs/0.025.log", dir), 0);
+    ck_assert_int_ge(asprintf(&program, "%s/sluice", test_build_dir()), 0);
+    pid_t pid = fork();
+    ck_assert_int_ge(pid, 0);
+    if (pid == 0) {
+        int null = open("/dev/null", O_WRONLY);
+        dup2(null, STDERR_FILENO);
+        execl(program, program, "study", file, "--out", out, (char *)NULL);
+        _exit(127);
+    }
+    /* wait until the run has taken steps (its progress line), then interrupt */
+    double t = 0;
+    for (int k = 0; k < 600 && t < 0.05; k++) {
+        usleep(100000);
+        char *text_log = test_read_file(log);
+        for (char *p = text_log; p && (p = strstr(p, "  t ")); p += 4)
+            sscanf(p, "  t %lf", &t);
+        free(text_log);
+    }
+    ck_assert_double_gt(t, 0.0);
+    kill(pid, SIGINT);
+    int status = 0;
+    ck_assert_int_eq(waitpid(pid, &status, 0), pid);
+    ck_assert(WIFEXITED(status));
+    ck_assert_int_eq(WEXITSTATUS(status), 5);
+    char *record_path = NULL;
+    ck_assert_int_ge(asprintf(&record_path, "%s/records/0.025.txt", out), 0);
+    char *record = test_read_file(record_path);
+    ck_assert_ptr_nonnull(record);
+    ck_assert_ptr_nonnull(strstr(record, "exit: 5\n"));
+    free(record);
+    /* the same command: continued, completed */
+    char *args = NULL, *output = NULL;
+    ck_assert_int_ge(asprintf(&args, "study %s --out %s", file, out), 0);
+    ck_assert_int_eq(study(args, &output), 0);
+    ck_assert_ptr_nonnull(strstr(output, "1/1 runs done (0 failed, 0 running, 0 from before)"));
+    free(output);
+    char *json_path = NULL;
+    ck_assert_int_ge(asprintf(&json_path, "%s/runs/0.025/run.json", out), 0);
+    char *json = test_read_file(json_path);
+    ck_assert_ptr_nonnull(json);
+    ck_assert_ptr_nonnull(strstr(json, "\"status\": \"complete\""));
+    ck_assert_double_gt(test_json_number(json, "restarted_at_step"), 0);
+    ck_assert_double_eq(test_json_number(json, "particles_final"),
+                        test_json_number(json, "particles_initial"));
+    record = test_read_file(record_path);
+    ck_assert_ptr_nonnull(strstr(record, "exit: 0\n"));
+    free(record);
+    free(json);
+    free(json_path);
+    free(args);
+    free(record_path);
+    free(program);
+    free(log);
+    free(out);
+    free(file);
+    free(text);
+    free(scene);
+    free(dir);
+}
+END_TEST
+
 /* A profile narrows an axis of edits and replaces a spacing list, adds its
  * edits after the study's; --dry-run lists the runs and their commands and
  * runs nothing; an unknown profile is refused. */
@@ -440,6 +526,7 @@ int main(void)
     tcase_set_timeout(runs, 600);
     tcase_add_test(runs, two_axis_study_runs_resumes_and_reports);
     tcase_add_test(runs, unstable_run_is_recorded_not_fatal);
+    tcase_add_test(runs, interrupted_study_continues_from_the_checkpoint);
     suite_add_tcase(s, runs);
     TCase *refusals = tcase_create("refusals");
     tcase_add_test(refusals, bad_study_files_are_refused);
