@@ -493,6 +493,20 @@ static int have_program(const char *name, char *path, size_t size)
     return found;
 }
 
+/* Text for a single-quoted gnuplot string (a quote doubled). */
+static char *gnuplot_quoted(const char *text)
+{
+    char *out = calloc(2 * strlen(text) + 1, 1);
+    if (!out)
+        exit(4);
+    for (char *o = out; *text; text++) {
+        *o++ = *text;
+        if (*text == '\'')
+            *o++ = '\'';
+    }
+    return out;
+}
+
 /* One gnuplot script per measure: against CPU time, and (with a spacing
  * axis) against the spacing, one line per group. Returns the PNGs made. */
 static int write_plots(study *s, FILE *md)
@@ -555,6 +569,7 @@ static int write_plots(study *s, FILE *md)
             continue;
         }
         const char *ylabel = m->has_reference ? (m->absolute ? "|error|" : "|error| (%)") : m->name;
+        char *title = gnuplot_quoted(s->title[0] ? s->title : "study");
         char *script = study_printf("%s/%s.gp", dir, m->name);
         f = fopen(script, "w");
         if (f) {
@@ -567,14 +582,14 @@ static int write_plots(study *s, FILE *md)
                     "word(titles, i+1)\n",
                     titles, m->has_reference ? "set logscale y\n" : "", ylabel,
                     *m->unit && !m->has_reference ? " (" : "", m->has_reference ? "" : m->unit,
-                    *m->unit && !m->has_reference ? ")" : "", s->title[0] ? s->title : "study",
-                    m->name, dir, m->name, blocks - 1, data);
+                    *m->unit && !m->has_reference ? ")" : "", title, m->name, dir, m->name,
+                    blocks - 1, data);
             if (spacing)
                 fprintf(f,
                         "set xlabel 'particle spacing dx (m)'\nset title '%s: %s against "
                         "spacing'\nset output '%s/%s_spacing.png'\nplot for [i=0:%zu] '%s' "
                         "index i using 2:3 with linespoints title word(titles, i+1)\n",
-                        s->title[0] ? s->title : "study", m->name, dir, m->name, blocks - 1, data);
+                        title, m->name, dir, m->name, blocks - 1, data);
             fclose(f);
             char *argv[] = {gnuplot, script, NULL};
             char *log = study_printf("%s/gnuplot.log", dir);
@@ -601,6 +616,7 @@ static int write_plots(study *s, FILE *md)
                         script, dir);
         }
         free(titles);
+        free(title);
         free(script);
         free(data);
     }
