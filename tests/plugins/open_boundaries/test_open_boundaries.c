@@ -477,7 +477,7 @@ END_TEST
 
 /* The hydraulic-jump scenes of configs/ load and take their first steps
  * (the reduced CI version: 100 steps; their physics is measured
- * by tools/jump-study.sh and docs/validation.md): every open boundary,
+ * by configs/studies/jump_jonsson.yaml, docs/validation.md): every open boundary,
  * gauge and writer starts, particles enter, and nothing is lost. */
 static const char *const jump_scenes[] = {
     "hydraulic_jump_jonsson2016.yaml", "abrupt_drop_T1.yaml", "abrupt_drop_T2.yaml",
