@@ -167,6 +167,9 @@ double study_clock(void);
 int study_check_runs(study *s); /* sluice check of every run: 0 or errors */
 int study_execute(study *s);    /* 0, or 1 when interrupted */
 int study_read_run_json(study *s, study_run *r);
+/* The top-level part of OUT/runs/NAME/run.json (its scalars, before
+ * "plugins") into text: 0, or -1 without the file. */
+int study_run_json_head(const study *s, const study_run *r, char *text, size_t size);
 
 /* study_report.c */
 int study_measure_runs(study *s);

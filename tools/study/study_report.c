@@ -211,18 +211,9 @@ static double analysis_value(const study *s, const study_run *r, const study_mea
 /* A top-level number of run.json. */
 static double run_value(const study *s, const study_run *r, const char *key)
 {
-    char *path = study_printf("%s/runs/%s/run.json", s->out, r->name);
-    FILE *f = fopen(path, "r");
-    free(path);
-    if (!f)
-        return NAN;
     char text[8192];
-    size_t n = fread(text, 1, sizeof text - 1, f);
-    fclose(f);
-    text[n] = '\0';
-    char *plugins = strstr(text, "\"plugins\"");
-    if (plugins)
-        *plugins = '\0';
+    if (study_run_json_head(s, r, text, sizeof text) != 0)
+        return NAN;
     char *pattern = study_printf("\"%s\": ", key);
     const char *at = strstr(text, pattern);
     double value = at ? strtod(at + strlen(pattern), NULL) : NAN;

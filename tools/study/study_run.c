@@ -292,20 +292,27 @@ static void write_record(study *s, const study_run *r)
 
 /* The top-level figures of OUT/runs/NAME/run.json (the core writes it; its
  * scalars precede "plugins"). 0, or -1 without a complete run.json. */
-int study_read_run_json(study *s, study_run *r)
+int study_run_json_head(const study *s, const study_run *r, char *text, size_t size)
 {
     char *path = study_printf("%s/runs/%s/run.json", s->out, r->name);
     FILE *f = fopen(path, "r");
     free(path);
     if (!f)
         return -1;
-    char text[8192];
-    size_t n = fread(text, 1, sizeof text - 1, f);
+    size_t n = fread(text, 1, size - 1, f);
     fclose(f);
     text[n] = '\0';
     char *plugins = strstr(text, "\"plugins\"");
     if (plugins)
         *plugins = '\0';
+    return 0;
+}
+
+int study_read_run_json(study *s, study_run *r)
+{
+    char text[8192];
+    if (study_run_json_head(s, r, text, sizeof text) != 0)
+        return -1;
     const char *status = strstr(text, "\"status\": \"");
     const char *failure = strstr(text, "\"failure\": \"");
     const char *steps = strstr(text, "\"steps\": ");
