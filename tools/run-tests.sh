@@ -1,7 +1,8 @@
 #!/bin/sh
-# Builds Sluice and runs the whole test suite three times: in the optimised
-# release build, in the same with MPI (-Dmpi=enabled, which adds the runs
-# across 1, 2 and 4 ranks and parallel HDF5, docs/scaling.md), and in a build with
+# Builds Sluice and runs the test suite in three builds: the whole suite in
+# the optimised release build; the core's suites and the runs across 1, 2
+# and 4 ranks in the same with MPI (-Dmpi=enabled: parallel HDF5,
+# docs/scaling.md); the suite without its long runs in a build with
 # AddressSanitizer and UndefinedBehaviorSanitizer (any report fails the run);
 # then fuzzes the scene loader for 60 s
 # (tools/fuzz.sh; any crash fails the run). Installs the Debian 12 build dependencies first
@@ -38,15 +39,16 @@ echo "== release build (build/)"
 meson compile -C build
 meson test -C build --print-errorlogs --num-processes "$jobs"
 
-echo "== MPI build (build-mpi/, -Dmpi=enabled): runs across 1, 2 and 4 ranks, and the suite"
+echo "== MPI build (build-mpi/, -Dmpi=enabled): runs across 1, 2 and 4 ranks, and the core's suites"
 [ -f build-mpi/build.ninja ] || meson setup build-mpi --buildtype=release -Dmpi=enabled
 meson compile -C build-mpi
-# The runs across ranks in full; the rest of the suite (the same physics code
-# on one rank, built with MPI) without the long validations the release pass
-# has just asserted (Check tag `validation`, as in the sanitizer pass below)
-# and without the seed scenes (meson suite `long`, tests/meson.build).
+# The runs across ranks, and the suites of the core (meson suite `core`,
+# tests/meson.build): the MPI build differs from the release build in the
+# core alone, the plugins being the same code, which the release pass has
+# just tested. The long validations (Check tag `validation`) are left to the
+# release pass, as in the sanitizer pass below.
 CK_EXCLUDE_TAGS=validation meson test -C build-mpi --print-errorlogs --num-processes "$jobs" \
-    --no-suite long
+    --suite core
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build (build-asan/)"
 [ -f build-asan/build.ninja ] || meson setup build-asan --buildtype=debugoptimized \
@@ -60,10 +62,11 @@ meson compile -C build-asan
 # scanned for pointers, and no Sluice code keeps heap pointers in TLS.
 # The long physics validations (Check tag `validation`: 10 s tanks, the
 # 1.5 s dam break at dx = 0.02 m, steady Poiseuille and open-channel flows,
-# the 20 s open channel) are asserted by the release pass above; under the
-# sanitizers, which run the code 5-10 times slower, the suite runs every
-# other case, which exercise the same code paths on shorter runs.
-CK_EXCLUDE_TAGS=validation \
+# the 20 s open channel) and the other runs of thousands of steps (tag
+# `long`) are asserted by the release pass above; under the sanitizers,
+# which run the code 5-10 times slower, the suite runs every other case,
+# which exercise the same code paths on shorter runs.
+CK_EXCLUDE_TAGS="validation long" \
 ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:intercept_tls_get_addr=0" \
 UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1" \
     meson test -C build-asan --print-errorlogs --num-processes "$jobs"

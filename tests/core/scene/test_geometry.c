@@ -2514,8 +2514,15 @@ int main(void)
     tcase_add_test(walls, layer_slanted_2d);
     tcase_add_test(walls, layer_box_obstacles);
     tcase_add_test(walls, wall_watch_matches_full_query);
-    tcase_add_test(walls, wall_distance_matches_every_element);
     suite_add_tcase(s, walls);
+    /* a brute-force comparison over every element at many points (tag
+     * `long`: the sanitizer pass of tools/run-tests.sh leaves it, the
+     * cases above reach the same code) */
+    TCase *every_element = tcase_create("walls_every_element");
+    tcase_set_tags(every_element, "long");
+    tcase_set_timeout(every_element, 120);
+    tcase_add_test(every_element, wall_distance_matches_every_element);
+    suite_add_tcase(s, every_element);
     TCase *profiles = tcase_create("profiles");
     tcase_set_timeout(profiles, 120);
     tcase_add_test(profiles, profile_steps);

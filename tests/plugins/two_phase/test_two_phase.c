@@ -1325,7 +1325,11 @@ int main(void)
     tcase_add_test(eos, equation_of_state_values);
     tcase_add_test(eos, initial_phases_masses_and_pressure);
     suite_add_tcase(s, eos);
+    /* tag `long`: thousands of steps of the two-phase pair terms that the
+     * bubble cases below and the spillway scenes' short runs reach too; left
+     * out of the sanitizer pass of tools/run-tests.sh */
     TCase *flow = tcase_create("flow");
+    tcase_set_tags(flow, "long");
     tcase_set_timeout(flow, 300);
     tcase_add_test(flow, still_two_layer_column);
     suite_add_tcase(s, flow);
