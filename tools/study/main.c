@@ -115,8 +115,12 @@ static void list_runs(const study *s)
     printf("%s: %zu runs into %s/runs\n", s->path, s->run_count, s->out);
     for (size_t i = 0; i < s->run_count; i++) {
         const study_run *r = &s->runs[i];
-        if (r->reused)
+        if (r->state == RUN_SKIPPED)
+            printf("  %-40s skipped: %s\n", r->name, r->skipped);
+        else if (r->reused)
             printf("  %-40s finished before (exit %d)\n", r->name, r->exit_code);
+        else if (r->external)
+            printf("  %-40s an external program\n", r->name);
         else
             printf("  %-40s %9.0f particles, %g s, %5.1f %% of the work\n", r->name, r->particles,
                    r->end_time, total > 0 ? 100 * r->work / total : 0);

@@ -38,6 +38,11 @@ typedef struct study_edits {
     const sluice_node *variant_at;
     char *scene; /* an axis value's own scene (resolved), or NULL */
     const sluice_node *scene_at;
+    /* an axis value run by another program (a peer code): its shell command
+     * with {run_dir}, {spacing}, {threads}, {study_dir} in it, and the shell
+     * command that tells whether that program is installed; or NULL */
+    char *external, *requires;
+    const sluice_node *external_at, *requires_at;
 } study_edits;
 
 typedef enum study_axis_kind {
@@ -101,17 +106,20 @@ typedef enum study_state {
     RUN_RUNNING,
     RUN_DONE,
     RUN_FAILED,
-    RUN_INTERRUPTED
+    RUN_INTERRUPTED,
+    RUN_SKIPPED /* an external program that is not installed here */
 } study_state;
 
 typedef struct study_run {
     char *name;
     size_t *choice;             /* the value of each axis */
-    char **argv;                /* sluice run ... (NULL-terminated) */
+    char **argv;                /* sluice run ..., or /bin/sh -c EXTERNAL (NULL-terminated) */
     const sluice_node **origin; /* per argv entry: the node behind it, or NULL */
     size_t argc;
     char *command;     /* argv as one line (the record of the run) */
     const char *scene; /* the run's scene: the study's or an axis value's */
+    const study_edits *external; /* the axis value run by another program, or NULL */
+    char *skipped;               /* why an external run is skipped, or NULL */
     int threads;
     double spacing; /* NAN without a spacing axis */
     /* from `sluice check` */

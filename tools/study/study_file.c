@@ -233,8 +233,80 @@ static int read_edits(study *s, const sluice_node *map, const char *where, study
     return errors;
 }
 
-static const char *const edit_keys[] = {"description", "remove", "swap",
-                                        "set",         "variant", "scene"};
+static const char *const edit_keys[] = {"description", "remove",   "swap",    "set",
+                                        "variant",     "scene",    "external", "requires"};
+
+/* The placeholders an external command may hold. */
+static const char *const external_placeholders[] = {"{run_dir}", "{spacing}", "{threads}",
+                                                    "{study_dir}"};
+
+/* An axis value's `external: COMMAND` (a run by another program, a peer
+ * code: a shell command that writes the run directory {run_dir}) and its
+ * optional `requires: COMMAND` (a shell command that succeeds where that
+ * program is installed; where it fails, the value's runs are skipped with a
+ * note). An external value takes no scene edits of its own. */
+static int read_value_external(study *s, const sluice_node *map, const char *where,
+                               study_edits *e)
+{
+    const sluice_node *external = sluice_node_get(map, "external");
+    const sluice_node *requires = sluice_node_get(map, "requires");
+    if (!external) {
+        if (requires) {
+            study_error(s, requires, "%s.requires belongs to an external value (give 'external')",
+                        where);
+            return 1;
+        }
+        return 0;
+    }
+    int errors = 0;
+    if (!is_string(external) || !*external->value) {
+        study_error(s, external,
+                    "%s.external must be a shell command that writes the run directory "
+                    "{run_dir}",
+                    where);
+        return 1;
+    }
+    if (!strstr(external->value, "{run_dir}")) {
+        study_error(s, external,
+                    "%s.external must name the run directory it writes as {run_dir}", where);
+        errors++;
+    }
+    for (const char *p = strchr(external->value, '{'); p; p = strchr(p + 1, '{')) {
+        int known = 0;
+        for (size_t k = 0; k < sizeof external_placeholders / sizeof *external_placeholders; k++)
+            known |= strncmp(p, external_placeholders[k], strlen(external_placeholders[k])) == 0;
+        if (!known) {
+            study_error(s, external,
+                        "%s.external: unknown placeholder '%.*s' (known: {run_dir}, "
+                        "{spacing}, {threads}, {study_dir})",
+                        where, (int)(strchr(p, '}') ? strchr(p, '}') - p + 1 : 1), p);
+            errors++;
+        }
+    }
+    static const char *const scene_keys[] = {"remove", "swap", "set", "variant", "scene"};
+    for (size_t k = 0; k < 5; k++)
+        if (sluice_node_get(map, scene_keys[k])) {
+            study_error(s, sluice_node_get(map, scene_keys[k]),
+                        "%s: an external value runs another program and takes no scene edits "
+                        "('%s')",
+                        where, scene_keys[k]);
+            errors++;
+        }
+    if (requires && (!is_string(requires) || !*requires->value)) {
+        study_error(s, requires,
+                    "%s.requires must be a shell command that succeeds where the program is "
+                    "installed",
+                    where);
+        errors++;
+    }
+    e->external = study_strdup(external->value);
+    e->external_at = external;
+    if (requires && is_string(requires)) {
+        e->requires = study_strdup(requires->value);
+        e->requires_at = requires;
+    }
+    return errors;
+}
 
 /* An axis value's `scene`: another base scene for its runs (a model kept as
  * a scene file of its own), relative to the study file. */
@@ -285,13 +357,14 @@ static int read_edit_values(study *s, study_axis *a, const sluice_node *values)
         if (edits->kind != SLUICE_NODE_MAPPING) {
             study_error(s, edits,
                         "axis '%s', value '%s': a mapping with the optional keys description, "
-                        "remove, swap, set and variant",
+                        "remove, swap, set, variant and scene (or external and requires)",
                         a->name, v->label);
             errors++;
             continue;
         }
         char *where = study_printf("axes.%s.values.%s", a->name, v->label);
-        errors += check_keys(s, edits, where, edit_keys, 6);
+        errors += check_keys(s, edits, where, edit_keys, 8);
+        errors += read_value_external(s, edits, where, &v->edits);
         errors += read_value_scene(s, edits, where, &v->edits);
         errors += read_edits(s, edits, where, &v->edits);
         free(where);
@@ -668,6 +741,8 @@ static void free_values(study_axis *a)
             free(a->values[v].edits.items[e].text);
         free(a->values[v].edits.items);
         free(a->values[v].edits.scene);
+        free(a->values[v].edits.external);
+        free(a->values[v].edits.requires);
         free(a->values[v].label);
     }
     free(a->values);
@@ -736,10 +811,7 @@ static int apply_profile_axes(study *s, const sluice_node *axes, const char *pro
                 continue;
             }
             kept[count++] = a->values[v];
-            a->values[v].label = NULL; /* moved */
-            a->values[v].edits.items = NULL;
-            a->values[v].edits.count = 0;
-            a->values[v].edits.scene = NULL;
+            a->values[v] = (study_value){.number = NAN}; /* moved */
         }
         free_values(a);
         a->values = kept;
@@ -879,6 +951,78 @@ static void push_arg(study_run *r, const char *text, const sluice_node *origin)
 
 static const char *const edit_options[] = {"--remove", "--swap", "--set"};
 
+/* The external command of a run with its placeholders filled in (malloc'd). */
+static char *expand_external(const study *s, const study_run *r, const char *command)
+{
+    char spacing[32], threads[32];
+    snprintf(spacing, sizeof spacing, "%.10g", r->spacing);
+    snprintf(threads, sizeof threads, "%d", r->threads);
+    char *run_dir = study_printf("%s/runs/%s", s->out, r->name);
+    const char *values[] = {run_dir, spacing, threads, s->directory};
+    size_t length = 1, n = sizeof external_placeholders / sizeof *external_placeholders;
+    for (const char *p = command; *p; p++) {
+        length++;
+        for (size_t k = 0; k < n; k++)
+            if (strncmp(p, external_placeholders[k], strlen(external_placeholders[k])) == 0)
+                length += strlen(values[k]);
+    }
+    char *out = calloc(length, 1), *o = out;
+    if (!out)
+        exit(4);
+    for (const char *p = command; *p;) {
+        size_t k = 0;
+        while (k < n && strncmp(p, external_placeholders[k], strlen(external_placeholders[k])))
+            k++;
+        if (k < n) {
+            o = stpcpy(o, values[k]);
+            p += strlen(external_placeholders[k]);
+        } else
+            *o++ = *p++;
+    }
+    free(run_dir);
+    return out;
+}
+
+/* A run of an external value: `/bin/sh -c COMMAND`; the other axes' values
+ * may set the spacing and the threads, not edit a scene. */
+static int build_external(study *s, study_run *r, const study_edits *const *sources, size_t count)
+{
+    int errors = 0;
+    for (size_t i = 1; i < count; i++) {
+        const study_edits *e = sources[i];
+        if (e == r->external || s->axes[i - 1].kind == AXIS_SPACING)
+            continue; /* the spacing reaches the program as {spacing} */
+        if (e->external) {
+            study_error(s, e->external_at,
+                        "run '%s' would run two external programs; one axis may choose one",
+                        r->name);
+            errors++;
+        } else if (e->count || e->variant || e->scene) {
+            const sluice_node *at = e->count ? e->items[0].at : e->variant ? e->variant_at
+                                                                            : e->scene_at;
+            study_error(s, at,
+                        "run '%s' combines an external program with a scene edit; give the "
+                        "external value its own axis, or a profile without this combination",
+                        r->name);
+            errors++;
+        }
+    }
+    if (strstr(r->external->external, "{spacing}") && isnan(r->spacing)) {
+        study_error(s, r->external->external_at,
+                    "run '%s': the external command uses {spacing} and no axis sets it",
+                    r->name);
+        errors++;
+    }
+    r->scene = s->scene;
+    push_arg(r, "/bin/sh", NULL);
+    push_arg(r, "-c", NULL);
+    char *command = expand_external(s, r, r->external->external);
+    push_arg(r, command, r->external->external_at);
+    r->command = study_printf("external: %s", command);
+    free(command);
+    return errors;
+}
+
 /* `sluice run SCENE --out DIR [--variant V] --remove.. --swap.. --set..`:
  * each option once per edit, the base study's first. */
 static int build_command(study *s, study_run *r)
@@ -888,6 +1032,11 @@ static int build_command(study *s, study_run *r)
     sources[count++] = &s->base;
     for (size_t a = 0; a < s->axis_count && count < 64; a++)
         sources[count++] = &s->axes[a].values[r->choice[a]].edits;
+    for (size_t i = 1; i < count && !r->external; i++)
+        if (sources[i]->external)
+            r->external = sources[i];
+    if (r->external)
+        return build_external(s, r, sources, count);
     int errors = 0;
     const study_edits *own = NULL;
     for (size_t i = 0; i < count; i++)
@@ -1008,6 +1157,7 @@ void study_free(study *s)
         free(r->name);
         free(r->command);
         free(r->restart);
+        free(r->skipped);
         free(r->values);
         free(r->errors);
     }
@@ -1018,6 +1168,8 @@ void study_free(study *s)
                 free(s->axes[a].values[v].edits.items[e].text);
             free(s->axes[a].values[v].edits.items);
             free(s->axes[a].values[v].edits.scene);
+            free(s->axes[a].values[v].edits.external);
+            free(s->axes[a].values[v].edits.requires);
             free(s->axes[a].values[v].label);
         }
         free(s->axes[a].values);

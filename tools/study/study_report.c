@@ -406,8 +406,29 @@ static const char *state_name(const study_run *r)
         return "interrupted";
     case RUN_RUNNING:
         return "running";
+    case RUN_SKIPPED:
+        return "skipped";
     default:
         return "not run";
+    }
+}
+
+/* Why runs were skipped or failed, one line each. */
+static void write_notes(const study *s, FILE *md)
+{
+    int any = 0;
+    for (size_t i = 0; i < s->run_count; i++) {
+        const study_run *r = &s->runs[i];
+        if (r->state != RUN_SKIPPED && r->state != RUN_FAILED)
+            continue;
+        if (!any++)
+            fprintf(md, "\n## Runs skipped or failed\n\n");
+        if (r->state == RUN_SKIPPED)
+            fprintf(md, "- %s: skipped, %s\n", r->name, r->skipped);
+        else
+            fprintf(md, "- %s: %s (exit %d)%s%s; its log: %s/logs/%s.log\n", r->name,
+                    state_name(r), r->exit_code, r->failure[0] ? ", " : "", r->failure, s->out,
+                    r->name);
     }
 }
 
@@ -634,10 +655,12 @@ int study_write_reports(study *s)
         if (s->description[0])
             fprintf(md, "%s\n\n", s->description);
         fprintf(md,
-                "Study file `%s`, base scene `%s`; %zu runs. Reproduce: `sluice study %s "
+                "Study file `%s`, base scene `%s`; %zu runs. Reproduce: `sluice study %s%s%s "
                 "--out %s`.\n\n",
-                s->path, s->scene, s->run_count, s->path, s->out);
+                s->path, s->scene, s->run_count, s->path, s->profile ? " --profile " : "",
+                s->profile ? s->profile : "", s->out);
         write_table(s, files[0], md);
+        write_notes(s, md);
         write_orders(s, files[1], md);
         write_plots(s, md);
         for (int i = 0; i < 3; i++)

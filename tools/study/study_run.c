@@ -3,7 +3,10 @@
  * into OUT/runs/NAME, several at a time, with a record per finished run
  * (OUT/records/NAME.txt: the command, exit status, CPU and wall seconds)
  * that makes the study resumable: a run whose record matches its command is
- * not redone. Progress and an ETA for the whole study on stderr. */
+ * not redone. Progress and an ETA for the whole study on stderr. A run of an
+ * external value (another program, a peer code) runs its shell command
+ * instead, where its `requires` command succeeds (else it is skipped with a
+ * note). */
 #define _GNU_SOURCE
 #include <errno.h>
 #include <fcntl.h>
@@ -182,11 +185,34 @@ static int check_run(study *s, study_run *r)
     return errors;
 }
 
+/* An external run's `requires`: NULL when the program is there, else the
+ * note why its runs are skipped (malloc'd). */
+static char *check_requirement(const study_edits *e)
+{
+    if (!e->requires)
+        return NULL;
+    char *argv[] = {"/bin/sh", "-c", e->requires, NULL};
+    char *out = NULL, *err = NULL;
+    int status = capture(argv, &out, &err);
+    char *note = NULL;
+    if (status != 0) {
+        const char *said = err && *err ? err : out && *out ? out : "";
+        note = study_printf("not installed here: `%s` gave exit %d%s%.*s", e->requires, status,
+                            *said ? ": " : "", (int)strcspn(said, "\n"), said);
+    }
+    free(out);
+    free(err);
+    return note;
+}
+
 /* ------------------------------------------------------------- records -- */
 
-/* FNV-1a of the base scene's bytes: a run is redone when its scene changed. */
+/* FNV-1a of the base scene's bytes: a run is redone when its scene changed
+ * (an external run has no scene: its command alone says what it is). */
 static unsigned long long scene_hash(const study_run *r)
 {
+    if (r->external)
+        return 0;
     unsigned long long h = 1469598103934665603ULL;
     FILE *f = fopen(r->scene, "rb");
     if (!f)
@@ -252,7 +278,7 @@ static int read_record(study *s, study_run *r)
     fclose(f);
     if (!same || !same_scene || !have_exit)
         return 0;
-    if (r->exit_code == 5) {
+    if (r->exit_code == 5 && !r->external) {
         /* stopped by a signal after a whole step: continue from its last checkpoint */
         r->restart = latest_checkpoint(s, r);
         r->cpu_before = r->restart ? r->cpu_seconds : 0;
@@ -325,6 +351,11 @@ int study_read_run_json(study *s, study_run *r)
         r->end_time = strtod(end_time + 12, NULL);
     r->steps = steps ? strtod(steps + 9, NULL) : NAN;
     r->particle_steps = particle_steps ? strtod(particle_steps + 18, NULL) : NAN;
+    /* an external program's own figure of its solver's CPU time (without
+     * its set-up, e.g. compiling kernels) replaces the measured one */
+    const char *cpu = r->external ? strstr(text, "\"cpu_seconds\": ") : NULL;
+    if (cpu && strtod(cpu + 15, NULL) > 0)
+        r->cpu_seconds = strtod(cpu + 15, NULL);
     return status && strncmp(status + 11, "complete\"", 9) == 0 ? 0 : -1;
 }
 
@@ -349,6 +380,10 @@ static int launch(study *s, study_run *r)
     char *dir = study_printf("%s/runs/%s", s->out, r->name);
     if (!r->restart) /* a run not finished and not resumable: from the start */
         nftw(dir, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
+    if (r->external && study_mkdirs(dir) != 0) {
+        free(dir);
+        return -1;
+    }
     char *record = record_path(s, r);
     unlink(record);
     free(record);
@@ -432,10 +467,14 @@ static void format_duration(double seconds, char *out, size_t size)
 
 static void progress(study *s, double start, int final)
 {
-    size_t done = 0, failed = 0, failed_before = 0, running = 0, reused = 0;
+    size_t done = 0, failed = 0, failed_before = 0, running = 0, reused = 0, skipped = 0;
     double total = 0, finished = 0, this_run = 0;
     for (size_t i = 0; i < s->run_count; i++) {
         study_run *r = &s->runs[i];
+        if (r->state == RUN_SKIPPED) {
+            skipped++;
+            continue;
+        }
         if (r->reused) {
             reused++;
             failed_before += r->state == RUN_FAILED;
@@ -460,10 +499,11 @@ static void progress(study *s, double start, int final)
     format_duration(eta, t, sizeof t);
     int tty = isatty(STDERR_FILENO);
     fprintf(stderr,
-            "%sstudy: %zu/%zu runs done (%zu failed, %zu running, %zu from before), %.0f %% of "
+            "%sstudy: %zu/%zu runs done (%zu failed, %zu running, %zu from before%s), %.0f %% of "
             "the work, elapsed %s, ETA %s%s",
-            tty ? "\r" : "", done + failed + reused, s->run_count, failed + failed_before, running,
-            reused, total > 0 ? 100 * this_run / total : 100.0, e, final ? "0s" : t,
+            tty ? "\r" : "", done + failed + reused + skipped, s->run_count,
+            failed + failed_before, running, reused, skipped ? ", some skipped" : "",
+            total > 0 ? 100 * this_run / total : 100.0, e, final ? "0s" : t,
             tty && !final ? "   " : "\n");
     fflush(stderr);
 }
@@ -477,7 +517,7 @@ static void finish(study *s, study_run *r, int status, const struct rusage *usag
                                      : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
     r->pid = 0;
     r->cpu_seconds += r->cpu_before; /* a continued run costs all its parts */
-    if (r->exit_code == 5) {
+    if (r->exit_code == 5 && !r->external) {
         r->state = RUN_INTERRUPTED; /* recorded: the next invocation continues it */
         write_record(s, r);
         return;
@@ -498,14 +538,37 @@ static void finish(study *s, study_run *r, int status, const struct rusage *usag
 int study_check_runs(study *s)
 {
     int errors = 0;
+    double work = 0;
+    size_t checked = 0;
     for (size_t i = 0; i < s->run_count; i++) {
         study_run *r = &s->runs[i];
+        if (r->external) {
+            /* its requirement, once per value */
+            size_t j = 0;
+            while (j < i && s->runs[j].external != r->external)
+                j++;
+            r->skipped = j < i ? (s->runs[j].skipped ? study_strdup(s->runs[j].skipped) : NULL)
+                               : check_requirement(r->external);
+            if (r->skipped) {
+                r->state = RUN_SKIPPED;
+                continue;
+            }
+        }
         if (read_record(s, r)) {
             r->work = 0;
             continue;
         }
-        errors += check_run(s, r);
+        if (!r->external) {
+            errors += check_run(s, r);
+            work += r->work;
+            checked++;
+        }
     }
+    /* an external run's work is unknown before it runs: the ETA counts it as
+     * an average Sluice run */
+    for (size_t i = 0; i < s->run_count; i++)
+        if (s->runs[i].external && s->runs[i].state == RUN_PENDING)
+            s->runs[i].work = checked ? work / (double)checked : 1;
     return errors;
 }
 
@@ -559,8 +622,9 @@ int study_execute(study *s)
         if (stop_requested && !forwarded) {
             /* the runs stop too, after a whole step, with a checkpoint */
             for (size_t i = 0; i < s->run_count; i++)
-                if (s->runs[i].state == RUN_RUNNING)
-                    kill(s->runs[i].pid, (int)stop_requested);
+                if (s->runs[i].state == RUN_RUNNING) /* an external one: its whole group */
+                    kill(s->runs[i].external ? -s->runs[i].pid : s->runs[i].pid,
+                         (int)stop_requested);
             forwarded = 1;
         }
         double now = study_clock();

@@ -424,6 +424,99 @@ START_TEST(profiles_and_dry_run)
 }
 END_TEST
 
+/* A peer code as an axis value: an external program (here a shell script
+ * standing in for one) writes its run directory; its run.json's figures and
+ * files are measured like a Sluice run's, its own CPU figure replaces the
+ * measured one, it is not redone on resuming; a program that is not
+ * installed (`requires` fails) is skipped with a note, not fatal. */
+START_TEST(external_programs_as_axis_values)
+{
+    char *dir = test_scratch("study-external");
+    char *scene = test_config("still_water_2d.yaml");
+    /* the peer: particles 100 / spacing, 10 steps, x = 3 * spacing */
+    free(test_write_file(dir, "peer.sh",
+                         "set -e\n"
+                         "mkdir -p \"$1\"\n"
+                         "echo run >>\"$1/../../../count\"\n"
+                         "awk -v dx=\"$2\" 'BEGIN { n = 100 / dx; printf \"{\\n  \\\"status\\\": "
+                         "\\\"complete\\\",\\n  \\\"steps\\\": 10,\\n  \\\"particle_steps\\\": "
+                         "%.0f,\\n  \\\"cpu_seconds\\\": 2.5\\n}\\n\", 10 * n }' "
+                         ">\"$1/run.json\"\n"
+                         "printf 'time,x\\n0,0\\n1,%s\\n' \"$(awk -v dx=\"$2\" 'BEGIN "
+                         "{ print 3 * dx }')\" >\"$1/peer.csv\"\n"));
+    char *text = NULL;
+    ck_assert_int_ge(asprintf(&text,
+                              "scene: %s\n"
+                              "set: {time.end: 0.01, plugins.hdf5.interval: 0.01}\n"
+                              "axes:\n"
+                              "  - name: code\n"
+                              "    values:\n"
+                              "      sluice: {}\n"
+                              "      peer: {external: \"sh {study_dir}/peer.sh {run_dir} "
+                              "{spacing}\"}\n"
+                              "      absent:\n"
+                              "        external: \"sh {study_dir}/peer.sh {run_dir} {spacing}\"\n"
+                              "        requires: \"echo no such program >&2; exit 3\"\n"
+                              "  - {name: dx, spacing: [0.05, 0.025]}\n"
+                              "measures:\n"
+                              "  - {name: steps, run: steps}\n"
+                              "  - {name: x, unit: m, gauge: peer.csv, column: x, reduce: max}\n",
+                              scene),
+                     0);
+    char *file = test_write_file(dir, "e.yaml", text);
+    char *args = NULL, *output = NULL, *path = NULL;
+    ck_assert_int_ge(asprintf(&args, "study %s --out %s/out", file, dir), 0);
+    int status = study(args, &output);
+    fprintf(stderr, "%s", output);
+    ck_assert_int_eq(status, 0);
+    free(output);
+    ck_assert_int_ge(asprintf(&path, "%s/out/study.csv", dir), 0);
+    char *csv = test_read_file(path);
+    ck_assert_ptr_nonnull(csv);
+    static const double spacings[] = {0.05, 0.025};
+    static const char *const peers[] = {"peer_0.05", "peer_0.025"};
+    static const char *const absent[] = {"absent_0.05", "absent_0.025"};
+    for (int i = 0; i < 2; i++) {
+        char *state = csv_field(csv, peers[i], "status");
+        ck_assert_str_eq(state, "complete");
+        free(state);
+        ck_assert_double_eq_tol(csv_number(csv, peers[i], "steps"), 10, 1e-12);
+        ck_assert_double_eq_tol(csv_number(csv, peers[i], "particles"), 100 / spacings[i], 0.5);
+        ck_assert_double_eq_tol(csv_number(csv, peers[i], "cpu_s"), 2.5, 1e-9);
+        ck_assert_double_eq_tol(csv_number(csv, peers[i], "x"), 3 * spacings[i], 1e-12);
+        state = csv_field(csv, absent[i], "status");
+        ck_assert_str_eq(state, "skipped");
+        free(state);
+    }
+    /* Sluice's own runs beside them, without the peer's file */
+    ck_assert_double_gt(csv_number(csv, "sluice_0.025", "steps"), 0);
+    ck_assert(isnan(csv_number(csv, "sluice_0.025", "x")));
+    free(csv);
+    free(path);
+    ck_assert_int_ge(asprintf(&path, "%s/out/study.md", dir), 0);
+    char *md = test_read_file(path);
+    ck_assert_ptr_nonnull(md);
+    ck_assert_ptr_nonnull(strstr(md, "- absent_0.05: skipped, not installed here: `echo no such "
+                                     "program >&2; exit 3` gave exit 3: no such program\n"));
+    free(md);
+    free(path);
+    /* resumed: nothing is run again */
+    ck_assert_int_eq(study(args, &output), 0);
+    ck_assert_ptr_nonnull(strstr(output, "from before, some skipped)"));
+    free(output);
+    ck_assert_int_ge(asprintf(&path, "%s/count", dir), 0);
+    char *count = test_read_file(path);
+    ck_assert_int_eq(test_count_lines(count, "run"), 2);
+    free(count);
+    free(path);
+    free(args);
+    free(file);
+    free(text);
+    free(scene);
+    free(dir);
+}
+END_TEST
+
 /* A study file that is refused: exit 2, the message at file:line:column,
  * nothing written. */
 static void expect_refused(const char *body, const char *position, const char *message)
@@ -514,6 +607,27 @@ START_TEST(bad_study_files_are_refused)
                    "'+' and '-' only");
     expect_refused("scene: %s\naxes:\n  - {name: m, values: {a: {scene: nowhere.yaml}}}\n",
                    "3:35", "the scene 'nowhere.yaml' cannot be read (No such file or directory)");
+    expect_refused("scene: %s\naxes:\n  - {name: c, values: {p: {external: \"run {out}\"}}}\n",
+                   "3:38", "axes.c.values.p.external must name the run directory it writes as "
+                           "{run_dir}");
+    expect_refused("scene: %s\naxes:\n  - {name: c, values: {p: {external: \"run {run_dir} "
+                   "{dx}\"}}}\n",
+                   "3:38", "axes.c.values.p.external: unknown placeholder '{dx}' (known: "
+                           "{run_dir}, {spacing}, {threads}, {study_dir})");
+    expect_refused("scene: %s\naxes:\n  - {name: c, values: {p: {external: \"run {run_dir}\", "
+                   "set: {time.end: 1}}}}\n",
+                   "3:60", "axes.c.values.p: an external value runs another program and takes "
+                           "no scene edits ('set')");
+    expect_refused("scene: %s\naxes:\n  - {name: c, values: {p: {requires: \"true\"}}}\n",
+                   "3:38", "axes.c.values.p.requires belongs to an external value (give "
+                           "'external')");
+    expect_refused("scene: %s\naxes:\n  - {name: c, values: {p: {external: \"run {run_dir} "
+                   "{spacing}\"}}}\n",
+                   "3:38", "run 'p': the external command uses {spacing} and no axis sets it");
+    expect_refused("scene: %s\naxes:\n  - {name: c, values: {p: {external: \"run {run_dir}\"}}}\n"
+                   "  - {name: w, values: {m: {swap: {dbc: mdbc}}}}\n",
+                   "4:40", "run 'p_m' combines an external program with a scene edit; give the "
+                           "external value its own axis, or a profile without this combination");
     expect_refused("scene: %s\naxes: [\n", "3:1",
                    "YAML syntax error: did not find expected node content");
 }
@@ -527,6 +641,7 @@ int main(void)
     tcase_add_test(runs, two_axis_study_runs_resumes_and_reports);
     tcase_add_test(runs, unstable_run_is_recorded_not_fatal);
     tcase_add_test(runs, interrupted_study_continues_from_the_checkpoint);
+    tcase_add_test(runs, external_programs_as_axis_values);
     suite_add_tcase(s, runs);
     TCase *refusals = tcase_create("refusals");
     tcase_add_test(refusals, bad_study_files_are_refused);
