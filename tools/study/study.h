@@ -62,6 +62,9 @@ typedef struct study_value {
 typedef struct study_axis {
     char *name;
     study_axis_kind kind;
+    /* the axis of the observed orders: the spacing axis, or a parameter
+     * axis of positive numbers marked `convergence: true` (a time step) */
+    int convergence;
     study_value *values;
     size_t count;
     const sluice_node *at;
@@ -121,7 +124,9 @@ typedef struct study_run {
     const study_edits *external; /* the axis value run by another program, or NULL */
     char *skipped;               /* why an external run is skipped, or NULL */
     int threads;
-    double spacing; /* NAN without a spacing axis */
+    double spacing;    /* NAN without a spacing axis */
+    double resolution; /* the convergence axis's value (the spacing, or a
+                          parameter's), NAN without one */
     /* from `sluice check` */
     double particles, end_time, work;
     int dimensions;

@@ -402,6 +402,13 @@ static int read_list_values(study *s, study_axis *a, const sluice_node *list, co
                         "got '%s'",
                         a->name, v->label);
             errors++;
+        } else if (a->kind == AXIS_PARAMETER && a->convergence &&
+                   (number_of(item, &number) != 0 || !(number > 0))) {
+            study_error(s, item,
+                        "axis '%s': the values of a convergence axis are positive numbers, "
+                        "got '%s'",
+                        a->name, v->label);
+            errors++;
         }
         v->number = number;
         if (path) {
@@ -415,14 +422,15 @@ static int read_list_values(study *s, study_axis *a, const sluice_node *list, co
 
 static int read_axis(study *s, const sluice_node *node, study_axis *a)
 {
-    static const char *const keys[] = {"name", "values", "parameter", "spacing", "threads"};
+    static const char *const keys[] = {"name",    "values",  "parameter",
+                                       "spacing", "threads", "convergence"};
     if (node->kind != SLUICE_NODE_MAPPING) {
         study_error(s, node,
                     "an axis is a mapping: name and one of values, parameter (with "
                     "values), spacing, threads");
         return 1;
     }
-    int errors = check_keys(s, node, "an axis", keys, 5);
+    int errors = check_keys(s, node, "an axis", keys, 6);
     const sluice_node *name = sluice_node_get(node, "name");
     a->at = node;
     if (!is_string(name)) {
@@ -442,8 +450,18 @@ static int read_axis(study *s, const sluice_node *node, study_axis *a)
                     a->name);
         return errors + 1;
     }
+    const sluice_node *convergence = sluice_node_get(node, "convergence");
+    if (convergence && (!parameter || !is_string(convergence) ||
+                        (strcmp(convergence->value, "true") && strcmp(convergence->value, "false")))) {
+        study_error(s, convergence,
+                    "axis '%s': convergence (true or false) marks a parameter axis of positive "
+                    "numbers, such as time.max_step, as the axis of the observed orders",
+                    a->name);
+        return errors + 1;
+    }
     if (spacing) {
         a->kind = AXIS_SPACING;
+        a->convergence = 1;
         return errors + read_list_values(s, a, spacing, "particles.spacing");
     }
     if (threads) {
@@ -460,6 +478,7 @@ static int read_axis(study *s, const sluice_node *node, study_axis *a)
                         a->name);
             return errors + 1;
         }
+        a->convergence = convergence && strcmp(convergence->value, "true") == 0;
         return errors + read_list_values(s, a, values, parameter->value);
     }
     a->kind = AXIS_EDITS;
@@ -686,11 +705,14 @@ static int read_list(study *s, const char *key, int required)
 static int check_names(study *s)
 {
     int errors = 0;
-    int spacing_axes = 0, thread_axes = 0;
+    int spacing_axes = 0, thread_axes = 0, convergence_axes = 0;
+    const study_axis *second_convergence = NULL;
     for (size_t i = 0; i < s->axis_count; i++) {
         study_axis *a = &s->axes[i];
         if (!a->name)
             continue;
+        if (a->convergence && convergence_axes++)
+            second_convergence = a;
         spacing_axes += a->kind == AXIS_SPACING;
         thread_axes += a->kind == AXIS_THREADS;
         for (size_t j = 0; j < i; j++)
@@ -719,6 +741,12 @@ static int check_names(study *s)
     }
     if (spacing_axes > 1 || thread_axes > 1) {
         study_error(s, s->root, "a study has at most one spacing axis and one threads axis");
+        errors++;
+    } else if (second_convergence) {
+        study_error(s, second_convergence->at,
+                    "axis '%s': a study has one axis of the observed orders (the spacing axis, "
+                    "or one parameter axis with convergence: true)",
+                    second_convergence->name);
         errors++;
     }
     for (size_t i = 0; i < s->measure_count; i++)
@@ -1122,6 +1150,7 @@ int study_expand(study *s)
             return -1;
         r->threads = s->threads;
         r->spacing = NAN;
+        r->resolution = NAN;
         char *name = study_strdup("");
         /* the last axis varies fastest */
         size_t rest = k;
@@ -1135,6 +1164,8 @@ int study_expand(study *s)
                 r->spacing = v->number;
             if (s->axes[a].kind == AXIS_THREADS)
                 r->threads = (int)v->number;
+            if (s->axes[a].convergence)
+                r->resolution = v->number;
             char *longer = study_printf("%s%s%s", name, a ? "_" : "", v->label);
             free(name);
             name = longer;

@@ -249,10 +249,12 @@ int study_measure_runs(study *s)
 
 /* -------------------------------------------------------------- orders -- */
 
-static size_t spacing_axis(const study *s)
+/* The axis of the observed orders: the spacing, or a parameter axis with
+ * convergence: true (axis_count: none). */
+static size_t convergence_axis(const study *s)
 {
     for (size_t a = 0; a < s->axis_count; a++)
-        if (s->axes[a].kind == AXIS_SPACING)
+        if (s->axes[a].convergence)
             return a;
     return s->axis_count;
 }
@@ -260,7 +262,7 @@ static size_t spacing_axis(const study *s)
 /* Whether runs a and b differ only in the spacing. */
 static int same_group(const study *s, const study_run *a, const study_run *b)
 {
-    size_t sp = spacing_axis(s);
+    size_t sp = convergence_axis(s);
     for (size_t k = 0; k < s->axis_count; k++)
         if (k != sp && a->choice[k] != b->choice[k])
             return 0;
@@ -270,7 +272,7 @@ static int same_group(const study *s, const study_run *a, const study_run *b)
 /* The group's label: the values of the axes other than the spacing. */
 static char *group_label(const study *s, const study_run *r)
 {
-    size_t sp = spacing_axis(s);
+    size_t sp = convergence_axis(s);
     char *label = study_strdup("");
     for (size_t a = 0; a < s->axis_count; a++) {
         if (a == sp)
@@ -293,11 +295,11 @@ static size_t group_members(const study *s, const study_run *r, size_t k, const 
     size_t n = 0;
     for (size_t i = 0; i < s->run_count; i++) {
         const study_run *o = &s->runs[i];
-        if (same_group(s, r, o) && isfinite(o->values[k]) && isfinite(o->spacing))
+        if (same_group(s, r, o) && isfinite(o->values[k]) && isfinite(o->resolution))
             out[n++] = o;
     }
     for (size_t i = 1; i < n; i++) /* insertion sort by spacing, descending */
-        for (size_t j = i; j > 0 && out[j]->spacing > out[j - 1]->spacing; j--) {
+        for (size_t j = i; j > 0 && out[j]->resolution > out[j - 1]->resolution; j--) {
             const study_run *t = out[j];
             out[j] = out[j - 1];
             out[j - 1] = t;
@@ -324,7 +326,7 @@ static void append(char *buffer, size_t size, const char *format, ...)
  * Richardson's from three successive values with its extrapolated value. */
 static void write_orders(study *s, FILE *csv, FILE *md)
 {
-    size_t sp = spacing_axis(s);
+    size_t sp = convergence_axis(s);
     if (sp == s->axis_count)
         return;
     const study_run **members = calloc(s->run_count + 1, sizeof *members);
@@ -335,13 +337,15 @@ static void write_orders(study *s, FILE *csv, FILE *md)
     fprintf(
         md,
         "\n## Observed orders of convergence\n\n"
-        "Between successive spacings (coarse to fine): p = ln(|e_coarse| / |e_fine|) / "
+        "Between successive values of the convergence axis (the spacing dx, or a parameter "
+        "such as the time step; coarse to fine): p = ln(|e_coarse| / |e_fine|) / "
         "ln(dx_coarse / dx_fine) for the error e against the reference; without a "
         "reference, Richardson's p = ln(|f1 - f2| / |f2 - f3|) / ln(r) from three values "
         "and the value it extrapolates to (monotone sequences at a constant spacing ratio only: "
         "nan where the values oscillate).\n\n"
-        "| group | measure | spacings (m) | errors | observed orders | Richardson p | "
-        "extrapolated |\n|---|---|---|---|---|---|---|\n");
+        "| group | measure | %s | errors | observed orders | Richardson p | "
+        "extrapolated |\n|---|---|---|---|---|---|---|\n",
+        s->axes[sp].kind == AXIS_SPACING ? "spacings (m)" : s->axes[sp].name);
     for (size_t i = 0; i < s->run_count; i++) {
         const study_run *r = &s->runs[i];
         int first = 1; /* only the group's first run writes it */
@@ -359,14 +363,14 @@ static void write_orders(study *s, FILE *csv, FILE *md)
             char spacings[512] = "", values[512] = "", errors[512] = "", orders[512] = "";
             for (size_t j = 0; j < n; j++) {
                 const char *sep = j ? ";" : "";
-                append(spacings, sizeof spacings, "%s%g", sep, members[j]->spacing);
+                append(spacings, sizeof spacings, "%s%g", sep, members[j]->resolution);
                 append(values, sizeof values, "%s%.6g", sep, members[j]->values[k]);
                 if (!m->has_reference)
                     continue;
                 append(errors, sizeof errors, "%s%.4g", sep, members[j]->errors[k]);
                 if (j) {
                     double p = log(fabs(members[j - 1]->errors[k]) / fabs(members[j]->errors[k])) /
-                               log(members[j - 1]->spacing / members[j]->spacing);
+                               log(members[j - 1]->resolution / members[j]->resolution);
                     append(orders, sizeof orders, "%s%.2f", j > 1 ? ";" : "", p);
                 }
             }
@@ -374,9 +378,9 @@ static void write_orders(study *s, FILE *csv, FILE *md)
             if (n >= 3) {
                 double f1 = members[n - 3]->values[k], f2 = members[n - 2]->values[k],
                        f3 = members[n - 1]->values[k];
-                double ratio = members[n - 3]->spacing / members[n - 2]->spacing;
+                double ratio = members[n - 3]->resolution / members[n - 2]->resolution;
                 /* monotone convergence only: an oscillating sequence has no order */
-                double ratio2 = members[n - 2]->spacing / members[n - 1]->spacing;
+                double ratio2 = members[n - 2]->resolution / members[n - 1]->resolution;
                 if ((f1 - f2) * (f2 - f3) > 0 && fabs(ratio / ratio2 - 1) < 0.01)
                     richardson = log(fabs(f1 - f2) / fabs(f2 - f3)) / log(ratio);
                 if (isfinite(richardson) && richardson > 0)
@@ -440,8 +444,9 @@ static void write_table(study *s, FILE *csv, FILE *md)
         fprintf(csv, ",%s", s->axes[a].name);
         fprintf(md, " %s |", s->axes[a].name);
     }
-    fprintf(csv, ",status,exit,particles,steps,cpu_s,wall_s,particle_steps_per_cpu_s");
-    fprintf(md, " status | particles | CPU s | particle-steps / CPU s |");
+    fprintf(csv, ",status,exit,particles,steps,cpu_s,wall_s,particle_steps_per_cpu_s,"
+                 "particle_steps_per_s");
+    fprintf(md, " status | particles | CPU s | particle-steps / CPU s | particle-steps / s |");
     for (size_t k = 0; k < s->measure_count; k++) {
         const study_measure *m = &s->measures[k];
         fprintf(csv, ",%s", m->name);
@@ -455,13 +460,14 @@ static void write_table(study *s, FILE *csv, FILE *md)
     fprintf(md, "\n|---|");
     for (size_t a = 0; a < s->axis_count; a++)
         fprintf(md, "---|");
-    fprintf(md, "---|---:|---:|---:|");
+    fprintf(md, "---|---:|---:|---:|---:|");
     for (size_t k = 0; k < s->measure_count; k++)
         fprintf(md, s->measures[k].has_reference ? "---:|---:|" : "---:|");
     fprintf(md, "\n");
     for (size_t i = 0; i < s->run_count; i++) {
         const study_run *r = &s->runs[i];
         double rate = r->particle_steps / r->cpu_seconds;
+        double wall_rate = r->particle_steps / r->wall_seconds;
         fprintf(csv, "%s", r->name);
         fprintf(md, "| %s |", r->name);
         for (size_t a = 0; a < s->axis_count; a++) {
@@ -470,9 +476,10 @@ static void write_table(study *s, FILE *csv, FILE *md)
         }
         /* the mean particle count of the run (open boundaries add and remove) */
         double particles = r->steps > 0 ? r->particle_steps / r->steps : r->particles;
-        fprintf(csv, ",%s,%d,%.0f,%.0f,%.3f,%.3f,%.4g", state_name(r), r->exit_code, particles,
-                r->steps, r->cpu_seconds, r->wall_seconds, rate);
-        fprintf(md, " %s | %.0f | %.1f | %.3g |", state_name(r), particles, r->cpu_seconds, rate);
+        fprintf(csv, ",%s,%d,%.0f,%.0f,%.3f,%.3f,%.4g,%.4g", state_name(r), r->exit_code,
+                particles, r->steps, r->cpu_seconds, r->wall_seconds, rate, wall_rate);
+        fprintf(md, " %s | %.0f | %.1f | %.3g | %.3g |", state_name(r), particles, r->cpu_seconds,
+                rate, wall_rate);
         for (size_t k = 0; k < s->measure_count; k++) {
             fprintf(csv, ",%.10g", r->values[k]);
             fprintf(md, " %.5g |", r->values[k]);
@@ -533,7 +540,15 @@ static int write_plots(study *s, FILE *md)
     char *dir = study_printf("%s/plots", s->out);
     study_mkdirs(dir);
     int made = 0;
-    int spacing = spacing_axis(s) < s->axis_count;
+    size_t c = convergence_axis(s);
+    int spacing = c < s->axis_count;
+    /* the convergence axis: the spacing (<measure>_spacing.png), or a
+     * parameter (<measure>_convergence.png) */
+    const int of_spacing = spacing && s->axes[c].kind == AXIS_SPACING;
+    char *axis_label = !spacing      ? NULL
+                       : of_spacing ? study_strdup("particle spacing dx (m)")
+                                    : gnuplot_quoted(s->axes[c].name);
+    const char *axis_file = of_spacing ? "spacing" : "convergence";
     fprintf(md, "\n## Plots\n\n");
     for (size_t k = 0; k < s->measure_count; k++) {
         const study_measure *m = &s->measures[k];
@@ -570,7 +585,7 @@ static int write_plots(study *s, FILE *md)
                     m->has_reference ? fabs(o->errors[k]) * (m->absolute ? 1 : 100) : o->values[k];
                 points += isfinite(y) && (!m->has_reference || y > 0);
                 fprintf(f, "%.6g %.6g %.8g\n", o->cpu_seconds,
-                        isfinite(o->spacing) ? o->spacing : 0, y);
+                        isfinite(o->resolution) ? o->resolution : 0, y);
             }
         }
         fclose(f);
@@ -598,10 +613,11 @@ static int write_plots(study *s, FILE *md)
                     blocks - 1, data);
             if (spacing)
                 fprintf(f,
-                        "set xlabel 'particle spacing dx (m)'\nset title '%s: %s against "
-                        "spacing'\nset output '%s/%s_spacing.png'\nplot for [i=0:%zu] '%s' "
-                        "index i using 2:3 with linespoints title word(titles, i+1)\n",
-                        title, m->name, dir, m->name, blocks - 1, data);
+                        "set xlabel '%s'\nset title '%s: %s against %s'\nset output "
+                        "'%s/%s_%s.png'\nplot for [i=0:%zu] '%s' index i using 2:3 with "
+                        "linespoints title word(titles, i+1)\n",
+                        axis_label, title, m->name, axis_label, dir, m->name, axis_file,
+                        blocks - 1, data);
             fclose(f);
             char *argv[] = {gnuplot, script, NULL};
             char *log = study_printf("%s/gnuplot.log", dir);
@@ -621,7 +637,8 @@ static int write_plots(study *s, FILE *md)
                 made += 1 + spacing;
                 fprintf(md, "![%s against cost](plots/%s_cost.png)\n", m->name, m->name);
                 if (spacing)
-                    fprintf(md, "![%s against spacing](plots/%s_spacing.png)\n", m->name, m->name);
+                    fprintf(md, "![%s against %s](plots/%s_%s.png)\n", m->name, axis_label,
+                            m->name, axis_file);
             } else
                 fprintf(stderr,
                         "sluice-study: gnuplot failed on %s (its messages: %s/gnuplot.log)\n",
@@ -633,6 +650,7 @@ static int write_plots(study *s, FILE *md)
         free(data);
     }
     free(dir);
+    free(axis_label);
     return made;
 }
 

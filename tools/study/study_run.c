@@ -351,11 +351,14 @@ int study_read_run_json(study *s, study_run *r)
         r->end_time = strtod(end_time + 12, NULL);
     r->steps = steps ? strtod(steps + 9, NULL) : NAN;
     r->particle_steps = particle_steps ? strtod(particle_steps + 18, NULL) : NAN;
-    /* an external program's own figure of its solver's CPU time (without
-     * its set-up, e.g. compiling kernels) replaces the measured one */
+    /* an external program's own figures of its solver's CPU and wall time
+     * (without its set-up, e.g. compiling kernels) replace the measured ones */
     const char *cpu = r->external ? strstr(text, "\"cpu_seconds\": ") : NULL;
     if (cpu && strtod(cpu + 15, NULL) > 0)
         r->cpu_seconds = strtod(cpu + 15, NULL);
+    const char *wall = r->external ? strstr(text, "\"wall_seconds\": ") : NULL;
+    if (wall && strtod(wall + 16, NULL) > 0)
+        r->wall_seconds = strtod(wall + 16, NULL);
     return status && strncmp(status + 11, "complete\"", 9) == 0 ? 0 : -1;
 }
 

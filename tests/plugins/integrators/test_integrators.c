@@ -541,7 +541,7 @@ START_TEST(energy_pec)
 }
 END_TEST
 
-/* The energy gauge of the fixture library (used by tools/integrator-study.sh)
+/* The energy gauge of the fixture library
  * on free fall: position Verlet integrates a constant acceleration exactly,
  * so the gauge's kinetic and potential energies must equal
  * sum 1/2 m |v0 + g t|^2 and sum m 9.81 (y0 + v0y t - 9.81 t^2 / 2) at every

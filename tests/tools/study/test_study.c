@@ -517,6 +517,51 @@ START_TEST(external_programs_as_axis_values)
 }
 END_TEST
 
+/* A parameter axis marked convergence: true is the axis of the observed
+ * orders: h = ratio x dx against a reference of 0 falls at exactly first
+ * order in the ratio, and Richardson's order of h is 1 (extrapolated 0). */
+START_TEST(orders_along_a_parameter_axis)
+{
+    char *dir = test_scratch("study-convergence");
+    char *scene = test_config("still_water_2d.yaml");
+    char *text = NULL;
+    ck_assert_int_ge(asprintf(&text,
+                              "scene: %s\n"
+                              "set: {time.end: 0.01, plugins.hdf5.interval: 0.01, "
+                              "particles.spacing: 0.05}\n"
+                              "axes:\n"
+                              "  - {name: ratio, parameter: particles.smoothing_length_ratio, "
+                              "values: [2, 1.5, 1.125], convergence: true}\n"
+                              "measures:\n"
+                              "  - {name: h, unit: m, run: smoothing_length, reference: 0}\n",
+                              scene),
+                     0);
+    char *file = test_write_file(dir, "c.yaml", text);
+    char *args = NULL, *output = NULL, *path = NULL;
+    ck_assert_int_ge(asprintf(&args, "study %s --out %s/out", file, dir), 0);
+    ck_assert_int_eq(study(args, &output), 0);
+    free(output);
+    ck_assert_int_ge(asprintf(&path, "%s/out/orders.csv", dir), 0);
+    char *orders = test_read_file(path);
+    ck_assert_ptr_nonnull(orders);
+    static const char row[] = "all,h,2;1.5;1.125,0.1;0.075;0.05625,0.1;0.075;0.05625,"
+                              "1.00;1.00,1,";
+    const char *at = strstr(orders, row);
+    ck_assert_msg(at, "%s", orders);
+    ck_assert_double_eq_tol(strtod(at + strlen(row), NULL), 0, 1e-12); /* extrapolated h */
+    free(orders);
+    free(path);
+    ck_assert_int_ge(asprintf(&path, "%s/out/plots/h_convergence.png", dir), 0);
+    ck_assert(is_png(path));
+    free(path);
+    free(args);
+    free(file);
+    free(text);
+    free(scene);
+    free(dir);
+}
+END_TEST
+
 /* A study file that is refused: exit 2, the message at file:line:column,
  * nothing written. */
 static void expect_refused(const char *body, const char *position, const char *message)
@@ -628,6 +673,18 @@ START_TEST(bad_study_files_are_refused)
                    "  - {name: w, values: {m: {swap: {dbc: mdbc}}}}\n",
                    "4:40", "run 'p_m' combines an external program with a scene edit; give the "
                            "external value its own axis, or a profile without this combination");
+    expect_refused("scene: %s\naxes:\n  - {name: dx, spacing: [0.05], convergence: true}\n",
+                   "3:46", "axis 'dx': convergence (true or false) marks a parameter axis of "
+                           "positive numbers, such as time.max_step, as the axis of the observed "
+                           "orders");
+    expect_refused("scene: %s\naxes:\n  - {name: dt, parameter: time.max_step, values: [1e-4, "
+                   "fast], convergence: true}\n",
+                   "3:57", "axis 'dt': the values of a convergence axis are positive numbers, "
+                           "got 'fast'");
+    expect_refused("scene: %s\naxes:\n  - {name: dx, spacing: [0.05]}\n  - {name: dt, parameter: "
+                   "time.max_step, values: [1e-4], convergence: true}\n",
+                   "4:5", "axis 'dt': a study has one axis of the observed orders (the spacing "
+                          "axis, or one parameter axis with convergence: true)");
     expect_refused("scene: %s\naxes: [\n", "3:1",
                    "YAML syntax error: did not find expected node content");
 }
@@ -642,6 +699,7 @@ int main(void)
     tcase_add_test(runs, unstable_run_is_recorded_not_fatal);
     tcase_add_test(runs, interrupted_study_continues_from_the_checkpoint);
     tcase_add_test(runs, external_programs_as_axis_values);
+    tcase_add_test(runs, orders_along_a_parameter_axis);
     suite_add_tcase(s, runs);
     TCase *refusals = tcase_create("refusals");
     tcase_add_test(refusals, bad_study_files_are_refused);
