@@ -12,7 +12,7 @@
  *   sluice-analyze l2        RUN --reference REF.csv [--time T ...]
  *   sluice-analyze front     RUN --reference REF.csv [--shift DT] [--width A]
  *   sluice-analyze classify  --y1 Y1 --yt YT --v1 V --drop S
- *   sluice-analyze drop-type RUN --drop-x X [--drop S]
+ *   sluice-analyze drop-type RUN [--drop-x X] [--drop S]
  *   sluice-analyze step-profiles POINTS.csv --per-line N --edges x,y;.. --theta DEG
  *                                --dc DC --uc UC
  *   sluice-analyze dissolved-oxygen POINTS.csv --per-line N --cs CS --cu CU
@@ -116,7 +116,7 @@ static const char usage[] =
     "                                              dam-break front vs Martin & Moyce: raw,\n"
     "                                              shifted and best-fit time origin\n"
     "  classify  --y1 --yt --v1 --drop S           jump at an abrupt drop (momentum limits)\n"
-    "  drop-type RUN --drop-x X [--drop S]         jump type at an abrupt drop from a run\n"
+    "  drop-type RUN [--drop-x X] [--drop S]       jump type at an abrupt drop from a run\n"
     "  momentum  RUN                               mean momentum function M + P per section\n"
     "                                              (section_gauge with forces: true)\n"
     "  step-profiles POINTS.csv --per-line N --edges x,y;x,y.. --theta DEG --dc DC --uc UC\n"
@@ -1747,7 +1747,7 @@ static int cmd_drop_type(analyze_ctx *cx, const options *o)
 {
     const char *run = run_dir(cx, o);
     double fr1, v1;
-    if (!run || inflow(cx, o, &fr1, &v1) != 0 || need(cx, o, o->drop_x, "drop-x", 0) != 0)
+    if (!run || inflow(cx, o, &fr1, &v1) != 0)
         return -1;
     if (!(o->fraction > 0.0 && o->fraction < 1.0))
         return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--fraction must be in (0, 1)");
@@ -1772,16 +1772,30 @@ static int cmd_drop_type(analyze_ctx *cx, const options *o)
                      "bed; the run's inlet has no bed above 0)");
         goto done;
     }
+    /* the edge: --drop-x, else the downstream end of the scene's fluid
+     * region that lies on the upper bed (the upper stream) */
+    double drop_x = o->drop_x, lo[3], hi[3];
+    for (size_t k = 0; isnan(drop_x) && analyze_scene_region(r.scene, "fluid", k, lo, hi) == 0;
+         k++)
+        if (fabs(lo[1] - drop) <= 1e-9 * (1 + drop))
+            drop_x = hi[0];
+    if (!(drop_x > -INFINITY && drop_x < INFINITY)) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                     "drop-type needs --drop-x X (the edge of the drop; the run's scene has no "
+                     "fluid region on the upper bed at %g m to take it from)",
+                     drop);
+        goto done;
+    }
     if (surface_load(cx, o, &r, &s) != 0)
         goto done;
     size_t upper = 0;
-    while (upper < s.n && s.x[upper] < o->drop_x)
+    while (upper < s.n && s.x[upper] < drop_x)
         upper++;
     if (upper < 2) {
         analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
                      "drop-type needs at least two free-surface gauges upstream of the drop "
                      "(x < %g m); %s has %zu",
-                     o->drop_x, run, upper);
+                     drop_x, run, upper);
         goto done;
     }
     const double d2 = sluice_hyd_belanger_depth(o->d1, fr1);
@@ -1796,7 +1810,7 @@ static int cmd_drop_type(analyze_ctx *cx, const options *o)
         for (size_t k = 0; k < upper; k++)
             depth[k] = cell(&s.g, i, s.col[k]) - drop;
         state[i] =
-            sluice_hyd_drop_state_of(s.x, depth, upper, threshold, o->drop_x, roller, &x1[i]);
+            sluice_hyd_drop_state_of(s.x, depth, upper, threshold, drop_x, roller, &x1[i]);
     }
     double fa, fb, fw;
     size_t episodes;
@@ -1806,7 +1820,7 @@ static int cmd_drop_type(analyze_ctx *cx, const options *o)
     headline("F1", fr1, NULL);
     headline("y1", o->d1, "m");
     headline("drop", drop, "m");
-    headline("drop_x", o->drop_x, "m");
+    headline("drop_x", drop_x, "m");
     headline("threshold_depth", threshold, "m");
     headline("L_r_Hager", roller, "m");
     print_window(&s.g);

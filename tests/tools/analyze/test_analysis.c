@@ -1056,7 +1056,10 @@ START_TEST(cli)
         ck_assert(asprintf(&path, "%s/scene.resolved.yaml", drop_run) > 0);
         FILE *scene = fopen(path, "w");
         ck_assert_ptr_nonnull(scene);
-        fputs("dimensions: 2\nplugins:\n  inlet:\n    bed: 0.032\n    depth: 0.035\n"
+        fputs("dimensions: 2\ngeometry:\n  fluid:\n"
+              "    - {shape: box, min: [0.8, 0], max: [2, 0.16]}\n"
+              "    - {shape: box, min: [0, 0.032], max: [0.8, 0.067]}\n"
+              "plugins:\n  inlet:\n    bed: 0.032\n    depth: 0.035\n"
               "    velocity: 1.93\n  free_surface_gauge:\n    positions: [0.1, 0.2, 0.3, 0.4, "
               "0.5, 0.6, 0.7, 0.9, 1.0]\n",
               scene);
@@ -1084,6 +1087,16 @@ START_TEST(cli)
         ck_assert_double_eq_tol(headline(out, "fraction_B"), 0.5, 1e-12);
         ck_assert_int_eq((int)headline(out, "wave_episodes"), 1);
         ck_assert_double_eq_tol(headline(out, "drop"), 0.032, 1e-12);
+        free(args);
+        free(out);
+        free(err);
+        /* without --drop-x: the edge is the downstream end of the fluid
+         * region on the upper bed (the second region, at y = 0.032 m) */
+        ck_assert(asprintf(&args, "drop-type %s --no-plot", drop_run) > 0);
+        status = analyze(drop_run, args, &out, &err);
+        ck_assert_msg(status == 0, "%s%s", out, err);
+        ck_assert_double_eq_tol(headline(out, "drop_x"), 0.8, 1e-12);
+        ck_assert_ptr_nonnull(strstr(out, "type = B-wave"));
         free(args);
         free(out);
         free(err);
