@@ -4,14 +4,14 @@
  * refused with file:line:column before anything runs. */
 #include <check.h>
 #include <fcntl.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "test_util.h"
 
@@ -108,6 +108,19 @@ static int is_png(const char *path)
     return n == 8 && memcmp(magic, "\x89PNG\r\n\x1a\n", 8) == 0;
 }
 
+/* Writes DIR/NAME from `format` with the still tank's scene path for its %s;
+ * returns the file's path. */
+static char *write_study(const char *dir, const char *name, const char *format)
+{
+    char *scene = test_config("still_water_2d.yaml");
+    char *text = NULL;
+    ck_assert_int_ge(asprintf(&text, format, scene), 0);
+    char *file = test_write_file(dir, name, text);
+    free(text);
+    free(scene);
+    return file;
+}
+
 /* The still tank (H = 0.5 m) briefly, with a floor sensor; wall schemes by
  * swap, three spacings. */
 static const char *two_axis_study =
@@ -137,10 +150,7 @@ static const char *two_axis_study =
 START_TEST(two_axis_study_runs_resumes_and_reports)
 {
     char *dir = test_scratch("study");
-    char *scene = test_config("still_water_2d.yaml");
-    char *text = NULL;
-    ck_assert_int_ge(asprintf(&text, two_axis_study, scene), 0);
-    char *file = test_write_file(dir, "tiny.yaml", text);
+    char *file = write_study(dir, "tiny.yaml", two_axis_study);
     char *args = NULL, *out = NULL;
     ck_assert_int_ge(asprintf(&args, "study %s --out %s/out", file, dir), 0);
     char *output = NULL;
@@ -234,8 +244,6 @@ START_TEST(two_axis_study_runs_resumes_and_reports)
     free(out);
     free(args);
     free(file);
-    free(text);
-    free(scene);
     free(dir);
 }
 END_TEST
@@ -245,19 +253,14 @@ START_TEST(unstable_run_is_recorded_not_fatal)
     /* c0 = 1 m/s in a 0.5 m deep tank: the density leaves the watchdog's band in
      * the first step (rho g H / c0^2 = 4.9 rho0) */
     char *dir = test_scratch("study-unstable");
-    char *scene = test_config("still_water_2d.yaml");
-    char *text = NULL;
-    ck_assert_int_ge(asprintf(&text,
-                              "scene: %s\n"
-                              "set: {time.end: 0.02, particles.spacing: 0.05}\n"
-                              "axes:\n"
-                              "  - {name: c0, parameter: plugins.tait.speed_of_sound, values: "
-                              "[22.1, 1]}\n"
-                              "measures:\n"
-                              "  - {name: steps, run: steps}\n",
-                              scene),
-                     0);
-    char *file = test_write_file(dir, "c0.yaml", text);
+    char *file = write_study(dir, "c0.yaml",
+                             "scene: %s\n"
+                             "set: {time.end: 0.02, particles.spacing: 0.05}\n"
+                             "axes:\n"
+                             "  - {name: c0, parameter: plugins.tait.speed_of_sound, values: "
+                             "[22.1, 1]}\n"
+                             "measures:\n"
+                             "  - {name: steps, run: steps}\n");
     char *args = NULL, *output = NULL;
     ck_assert_int_ge(asprintf(&args, "study %s --out %s/out", file, dir), 0);
     ck_assert_int_eq(study(args, &output), 0);
@@ -283,8 +286,6 @@ START_TEST(unstable_run_is_recorded_not_fatal)
     free(path);
     free(args);
     free(file);
-    free(text);
-    free(scene);
     free(dir);
 }
 END_TEST
@@ -295,18 +296,13 @@ END_TEST
 START_TEST(interrupted_study_continues_from_the_checkpoint)
 {
     char *dir = test_scratch("study-interrupt");
-    char *scene = test_config("still_water_2d.yaml");
-    char *text = NULL;
-    ck_assert_int_ge(asprintf(&text,
-                              "scene: %s\n"
-                              "set: {time.end: 1.5, plugins.hdf5.interval: 0.5}\n"
-                              "axes:\n"
-                              "  - {name: dx, spacing: [0.025]}\n"
-                              "measures:\n"
-                              "  - {name: kept, run: particles_final}\n",
-                              scene),
-                     0);
-    char *file = test_write_file(dir, "i.yaml", text);
+    char *file = write_study(dir, "i.yaml",
+                             "scene: %s\n"
+                             "set: {time.end: 1.5, plugins.hdf5.interval: 0.5}\n"
+                             "axes:\n"
+                             "  - {name: dx, spacing: [0.025]}\n"
+                             "measures:\n"
+                             "  - {name: kept, run: particles_final}\n");
     char *out = NULL, *log = NULL, *program = NULL;
     ck_assert_int_ge(asprintf(&out, "%s/out", dir), 0);
     ck_assert_int_ge(asprintf(&log, "%s/out/logs/0.025.log", dir), 0);
@@ -365,8 +361,6 @@ START_TEST(interrupted_study_continues_from_the_checkpoint)
     free(log);
     free(out);
     free(file);
-    free(text);
-    free(scene);
     free(dir);
 }
 END_TEST
@@ -377,22 +371,17 @@ END_TEST
 START_TEST(profiles_and_dry_run)
 {
     char *dir = test_scratch("study-profile");
-    char *scene = test_config("still_water_2d.yaml");
-    char *text = NULL;
-    ck_assert_int_ge(asprintf(&text,
-                              "scene: %s\n"
-                              "set: {time.end: 2}\n"
-                              "axes:\n"
-                              "  - {name: wall, values: {dbc: {}, mdbc: {swap: {dbc: mdbc}}, "
-                              "ghost: {swap: {dbc: ghost_particles}}}}\n"
-                              "  - {name: dx, spacing: [0.02, 0.01]}\n"
-                              "profiles:\n"
-                              "  quick:\n"
-                              "    set: {time.end: 0.1}\n"
-                              "    axes: {wall: [ghost, dbc], dx: [0.05]}\n",
-                              scene),
-                     0);
-    char *file = test_write_file(dir, "p.yaml", text);
+    char *file = write_study(dir, "p.yaml",
+                             "scene: %s\n"
+                             "set: {time.end: 2}\n"
+                             "axes:\n"
+                             "  - {name: wall, values: {dbc: {}, mdbc: {swap: {dbc: mdbc}}, "
+                             "ghost: {swap: {dbc: ghost_particles}}}}\n"
+                             "  - {name: dx, spacing: [0.02, 0.01]}\n"
+                             "profiles:\n"
+                             "  quick:\n"
+                             "    set: {time.end: 0.1}\n"
+                             "    axes: {wall: [ghost, dbc], dx: [0.05]}\n");
     char *args = NULL, *output = NULL;
     ck_assert_int_ge(asprintf(&args, "study %s --out %s/out --profile quick --dry-run", file, dir),
                      0);
@@ -418,8 +407,6 @@ START_TEST(profiles_and_dry_run)
     free(args);
     free(out);
     free(file);
-    free(text);
-    free(scene);
     free(dir);
 }
 END_TEST
@@ -432,7 +419,6 @@ END_TEST
 START_TEST(external_programs_as_axis_values)
 {
     char *dir = test_scratch("study-external");
-    char *scene = test_config("still_water_2d.yaml");
     /* the peer: particles 100 / spacing, 10 steps, x = 3 * spacing */
     free(test_write_file(dir, "peer.sh",
                          "set -e\n"
@@ -444,26 +430,22 @@ START_TEST(external_programs_as_axis_values)
                          ">\"$1/run.json\"\n"
                          "printf 'time,x\\n0,0\\n1,%s\\n' \"$(awk -v dx=\"$2\" 'BEGIN "
                          "{ print 3 * dx }')\" >\"$1/peer.csv\"\n"));
-    char *text = NULL;
-    ck_assert_int_ge(asprintf(&text,
-                              "scene: %s\n"
-                              "set: {time.end: 0.01, plugins.hdf5.interval: 0.01}\n"
-                              "axes:\n"
-                              "  - name: code\n"
-                              "    values:\n"
-                              "      sluice: {}\n"
-                              "      peer: {external: \"sh {study_dir}/peer.sh {run_dir} "
-                              "{spacing}\"}\n"
-                              "      absent:\n"
-                              "        external: \"sh {study_dir}/peer.sh {run_dir} {spacing}\"\n"
-                              "        requires: \"echo no such program >&2; exit 3\"\n"
-                              "  - {name: dx, spacing: [0.05, 0.025]}\n"
-                              "measures:\n"
-                              "  - {name: steps, run: steps}\n"
-                              "  - {name: x, unit: m, gauge: peer.csv, column: x, reduce: max}\n",
-                              scene),
-                     0);
-    char *file = test_write_file(dir, "e.yaml", text);
+    char *file = write_study(dir, "e.yaml",
+                             "scene: %s\n"
+                             "set: {time.end: 0.01, plugins.hdf5.interval: 0.01}\n"
+                             "axes:\n"
+                             "  - name: code\n"
+                             "    values:\n"
+                             "      sluice: {}\n"
+                             "      peer: {external: \"sh {study_dir}/peer.sh {run_dir} "
+                             "{spacing}\"}\n"
+                             "      absent:\n"
+                             "        external: \"sh {study_dir}/peer.sh {run_dir} {spacing}\"\n"
+                             "        requires: \"echo no such program >&2; exit 3\"\n"
+                             "  - {name: dx, spacing: [0.05, 0.025]}\n"
+                             "measures:\n"
+                             "  - {name: steps, run: steps}\n"
+                             "  - {name: x, unit: m, gauge: peer.csv, column: x, reduce: max}\n");
     char *args = NULL, *output = NULL, *path = NULL;
     ck_assert_int_ge(asprintf(&args, "study %s --out %s/out", file, dir), 0);
     int status = study(args, &output);
@@ -511,8 +493,6 @@ START_TEST(external_programs_as_axis_values)
     free(path);
     free(args);
     free(file);
-    free(text);
-    free(scene);
     free(dir);
 }
 END_TEST
@@ -523,20 +503,15 @@ END_TEST
 START_TEST(orders_along_a_parameter_axis)
 {
     char *dir = test_scratch("study-convergence");
-    char *scene = test_config("still_water_2d.yaml");
-    char *text = NULL;
-    ck_assert_int_ge(asprintf(&text,
-                              "scene: %s\n"
-                              "set: {time.end: 0.01, plugins.hdf5.interval: 0.01, "
-                              "particles.spacing: 0.05}\n"
-                              "axes:\n"
-                              "  - {name: ratio, parameter: particles.smoothing_length_ratio, "
-                              "values: [2, 1.5, 1.125], convergence: true}\n"
-                              "measures:\n"
-                              "  - {name: h, unit: m, run: smoothing_length, reference: 0}\n",
-                              scene),
-                     0);
-    char *file = test_write_file(dir, "c.yaml", text);
+    char *file = write_study(dir, "c.yaml",
+                             "scene: %s\n"
+                             "set: {time.end: 0.01, plugins.hdf5.interval: 0.01, "
+                             "particles.spacing: 0.05}\n"
+                             "axes:\n"
+                             "  - {name: ratio, parameter: particles.smoothing_length_ratio, "
+                             "values: [2, 1.5, 1.125], convergence: true}\n"
+                             "measures:\n"
+                             "  - {name: h, unit: m, run: smoothing_length, reference: 0}\n");
     char *args = NULL, *output = NULL, *path = NULL;
     ck_assert_int_ge(asprintf(&args, "study %s --out %s/out", file, dir), 0);
     ck_assert_int_eq(study(args, &output), 0);
@@ -556,8 +531,6 @@ START_TEST(orders_along_a_parameter_axis)
     free(path);
     free(args);
     free(file);
-    free(text);
-    free(scene);
     free(dir);
 }
 END_TEST
@@ -567,10 +540,7 @@ END_TEST
 static void expect_refused(const char *body, const char *position, const char *message)
 {
     char *dir = test_scratch("study-refused");
-    char *scene = test_config("still_water_2d.yaml");
-    char *text = NULL;
-    ck_assert_int_ge(asprintf(&text, body, scene), 0);
-    char *file = test_write_file(dir, "bad.yaml", text);
+    char *file = write_study(dir, "bad.yaml", body);
     char *args = NULL, *output = NULL;
     ck_assert_int_ge(asprintf(&args, "study %s --out %s/out", file, dir), 0);
     int status = study(args, &output);
@@ -586,8 +556,6 @@ static void expect_refused(const char *body, const char *position, const char *m
     free(output);
     free(args);
     free(file);
-    free(text);
-    free(scene);
     free(dir);
 }
 
@@ -650,41 +618,47 @@ START_TEST(bad_study_files_are_refused)
                    "axis 'w': the label 'a/b' names run directories: letters, "
                    "digits, '.', '_', "
                    "'+' and '-' only");
-    expect_refused("scene: %s\naxes:\n  - {name: m, values: {a: {scene: nowhere.yaml}}}\n",
-                   "3:35", "the scene 'nowhere.yaml' cannot be read (No such file or directory)");
+    expect_refused("scene: %s\naxes:\n  - {name: m, values: {a: {scene: nowhere.yaml}}}\n", "3:35",
+                   "the scene 'nowhere.yaml' cannot be read (No such file or directory)");
     expect_refused("scene: %s\naxes:\n  - {name: c, values: {p: {external: \"run {out}\"}}}\n",
-                   "3:38", "axes.c.values.p.external must name the run directory it writes as "
-                           "{run_dir}");
+                   "3:38",
+                   "axes.c.values.p.external must name the run directory it writes as "
+                   "{run_dir}");
     expect_refused("scene: %s\naxes:\n  - {name: c, values: {p: {external: \"run {run_dir} "
                    "{dx}\"}}}\n",
-                   "3:38", "axes.c.values.p.external: unknown placeholder '{dx}' (known: "
-                           "{run_dir}, {spacing}, {threads}, {study_dir})");
+                   "3:38",
+                   "axes.c.values.p.external: unknown placeholder '{dx}' (known: "
+                   "{run_dir}, {spacing}, {threads}, {study_dir})");
     expect_refused("scene: %s\naxes:\n  - {name: c, values: {p: {external: \"run {run_dir}\", "
                    "set: {time.end: 1}}}}\n",
-                   "3:60", "axes.c.values.p: an external value runs another program and takes "
-                           "no scene edits ('set')");
-    expect_refused("scene: %s\naxes:\n  - {name: c, values: {p: {requires: \"true\"}}}\n",
-                   "3:38", "axes.c.values.p.requires belongs to an external value (give "
-                           "'external')");
+                   "3:60",
+                   "axes.c.values.p: an external value runs another program and takes "
+                   "no scene edits ('set')");
+    expect_refused("scene: %s\naxes:\n  - {name: c, values: {p: {requires: \"true\"}}}\n", "3:38",
+                   "axes.c.values.p.requires belongs to an external value (give "
+                   "'external')");
     expect_refused("scene: %s\naxes:\n  - {name: c, values: {p: {external: \"run {run_dir} "
                    "{spacing}\"}}}\n",
                    "3:38", "run 'p': the external command uses {spacing} and no axis sets it");
     expect_refused("scene: %s\naxes:\n  - {name: c, values: {p: {external: \"run {run_dir}\"}}}\n"
                    "  - {name: w, values: {m: {swap: {dbc: mdbc}}}}\n",
-                   "4:40", "run 'p_m' combines an external program with a scene edit; give the "
-                           "external value its own axis, or a profile without this combination");
-    expect_refused("scene: %s\naxes:\n  - {name: dx, spacing: [0.05], convergence: true}\n",
-                   "3:46", "axis 'dx': convergence (true or false) marks a parameter axis of "
-                           "positive numbers, such as time.max_step, as the axis of the observed "
-                           "orders");
+                   "4:40",
+                   "run 'p_m' combines an external program with a scene edit; give the "
+                   "external value its own axis, or a profile without this combination");
+    expect_refused("scene: %s\naxes:\n  - {name: dx, spacing: [0.05], convergence: true}\n", "3:46",
+                   "axis 'dx': convergence (true or false) marks a parameter axis of "
+                   "positive numbers, such as time.max_step, as the axis of the observed "
+                   "orders");
     expect_refused("scene: %s\naxes:\n  - {name: dt, parameter: time.max_step, values: [1e-4, "
                    "fast], convergence: true}\n",
-                   "3:57", "axis 'dt': the values of a convergence axis are positive numbers, "
-                           "got 'fast'");
+                   "3:57",
+                   "axis 'dt': the values of a convergence axis are positive numbers, "
+                   "got 'fast'");
     expect_refused("scene: %s\naxes:\n  - {name: dx, spacing: [0.05]}\n  - {name: dt, parameter: "
                    "time.max_step, values: [1e-4], convergence: true}\n",
-                   "4:5", "axis 'dt': a study has one axis of the observed orders (the spacing "
-                          "axis, or one parameter axis with convergence: true)");
+                   "4:5",
+                   "axis 'dt': a study has one axis of the observed orders (the spacing "
+                   "axis, or one parameter axis with convergence: true)");
     expect_refused("scene: %s\naxes: [\n", "3:1",
                    "YAML syntax error: did not find expected node content");
 }
