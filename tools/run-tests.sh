@@ -5,7 +5,9 @@
 # docs/scaling.md); the suite without its long runs in a build with
 # AddressSanitizer and UndefinedBehaviorSanitizer (any report fails the run);
 # then fuzzes the scene loader for 60 s
-# (tools/fuzz.sh; any crash fails the run). Installs the Debian 12 build dependencies first
+# (tools/fuzz.sh; any crash fails the run). Every pass runs even when an
+# earlier one failed; the summary names the failed passes and the script
+# then exits 1. Installs the Debian 12 build dependencies first
 # when they are missing (needs root). Used by .ci/run; see README.md.
 set -eu
 cd "$(dirname "$0")/.."
@@ -34,26 +36,33 @@ fi
 jobs=$(nproc 2>/dev/null || echo 2)
 export OMP_NUM_THREADS="${OMP_NUM_THREADS:-$jobs}"
 
-echo "== release build (build/)"
-[ -f build/build.ninja ] || meson setup build --buildtype=release
-meson compile -C build
-meson test -C build --print-errorlogs --num-processes "$jobs"
+# Each pass runs even when an earlier one failed; the summary at the end
+# names the passes that failed, and the script then exits 1.
+failed=""
+note_failure() {
+    failed="$failed $1"
+    echo "== $1: FAILED" >&2
+}
 
-echo "== MPI build (build-mpi/, -Dmpi=enabled): runs across 1, 2 and 4 ranks, and the core's suites"
-[ -f build-mpi/build.ninja ] || meson setup build-mpi --buildtype=release -Dmpi=enabled
-meson compile -C build-mpi
+release_pass() {
+    [ -f build/build.ninja ] || meson setup build --buildtype=release || return 1
+    meson compile -C build || return 1
+    meson test -C build --print-errorlogs --num-processes "$jobs"
+}
+
 # The runs across ranks, and the suites of the core (meson suite `core`,
 # tests/meson.build): the MPI build differs from the release build in the
-# core alone, the plugins being the same code, which the release pass has
-# just tested. The long validations (Check tag `validation`) are left to the
-# release pass, as in the sanitizer pass below.
-CK_EXCLUDE_TAGS=validation meson test -C build-mpi --print-errorlogs --num-processes "$jobs" \
-    --suite core
+# core alone, the plugins being the same code, which the release pass tests.
+# The long validations (Check tag `validation`) are left to the release
+# pass, as in the sanitizer pass below.
+mpi_pass() {
+    [ -f build-mpi/build.ninja ] ||
+        meson setup build-mpi --buildtype=release -Dmpi=enabled || return 1
+    meson compile -C build-mpi || return 1
+    CK_EXCLUDE_TAGS=validation meson test -C build-mpi --print-errorlogs \
+        --num-processes "$jobs" --suite core
+}
 
-echo "== AddressSanitizer + UndefinedBehaviorSanitizer build (build-asan/)"
-[ -f build-asan/build.ninja ] || meson setup build-asan --buildtype=debugoptimized \
-    -Db_sanitize=address,undefined -Dc_args=-fno-sanitize-recover=all
-meson compile -C build-asan
 # intercept_tls_get_addr=0: GCC 12's sanitizer runtime misreads a dynamic TLS
 # block (of a dlopen'ed library) as a glibc 2.19 header when it happens to land
 # at one offset in a page, and LeakSanitizer's tracer then crashes ("Tracer
@@ -66,11 +75,26 @@ meson compile -C build-asan
 # `long`) are asserted by the release pass above; under the sanitizers,
 # which run the code 5-10 times slower, the suite runs every other case,
 # which exercise the same code paths on shorter runs.
-CK_EXCLUDE_TAGS="validation long" \
-ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:intercept_tls_get_addr=0" \
-UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1" \
-    meson test -C build-asan --print-errorlogs --num-processes "$jobs"
+sanitizer_pass() {
+    [ -f build-asan/build.ninja ] || meson setup build-asan --buildtype=debugoptimized \
+        -Db_sanitize=address,undefined -Dc_args=-fno-sanitize-recover=all || return 1
+    meson compile -C build-asan || return 1
+    CK_EXCLUDE_TAGS="validation long" \
+    ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:intercept_tls_get_addr=0" \
+    UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1" \
+        meson test -C build-asan --print-errorlogs --num-processes "$jobs"
+}
 
+echo "== release build (build/)"
+release_pass || note_failure "release"
+echo "== MPI build (build-mpi/, -Dmpi=enabled): runs across 1, 2 and 4 ranks, and the core's suites"
+mpi_pass || note_failure "MPI"
+echo "== AddressSanitizer + UndefinedBehaviorSanitizer build (build-asan/)"
+sanitizer_pass || note_failure "sanitizers"
 echo "== fuzzing the scene loader for 60 s (clang, libFuzzer + ASan/UBSan; build-fuzz/)"
-tools/fuzz.sh 60
+tools/fuzz.sh 60 || note_failure "fuzzing"
+if [ -n "$failed" ]; then
+    echo "== failed:$failed (the other passes passed)" >&2
+    exit 1
+fi
 echo "== all tests passed"
