@@ -43,8 +43,8 @@ typedef struct options {
     size_t positional_count;
     double d1, v1, fr, g, x, from, to, fraction, x1, bed, drop, y1, yt, min_wet, fmin, fmax,
         tolerance, drop_x, wave_min, per_line, theta, dc, uc, threshold, h, first_step, cs, cu,
-        calibrate, target, width, shift, series;
-    const char *column, *reference, *out, *positions, *points, *field, *edges;
+        calibrate, target, width, shift, series, arrival, duration, scale, time_scale;
+    const char *column, *reference, *out, *positions, *points, *field, *edges, *time_column;
     double times[MAX_TIMES];
     size_t time_count;
     int no_plot;
@@ -90,6 +90,11 @@ static const struct option_spec {
     {"shift", OPT_NUMBER, offsetof(options, shift)},
     {"series", OPT_NUMBER, offsetof(options, series)},
     {"target", OPT_NUMBER, offsetof(options, target)},
+    {"arrival", OPT_NUMBER, offsetof(options, arrival)},
+    {"duration", OPT_NUMBER, offsetof(options, duration)},
+    {"scale", OPT_NUMBER, offsetof(options, scale)},
+    {"time-scale", OPT_NUMBER, offsetof(options, time_scale)},
+    {"time-column", OPT_STRING, offsetof(options, time_column)},
     {"edges", OPT_STRING, offsetof(options, edges)},
     {"column", OPT_STRING, offsetof(options, column)},
     {"reference", OPT_STRING, offsetof(options, reference)},
@@ -111,6 +116,10 @@ static const char usage[] =
     "  surface   RUN --d1 --v1 [--x1]             free-surface mean/std vs Murzyn & Chanson\n"
     "  spectrum  RUN --column [FILE:]NAME          amplitude spectrum, Strouhal number\n"
     "  correlate A.csv:COL B.csv:COL               Pearson r (seed 004)\n"
+    "  impact    RUN --column [FILE:]NAME --arrival P [--duration D] [--scale P0]\n"
+    "            [--time-scale T0] [--time-column t]\n"
+    "                                              an impact on a pressure sensor: arrival,\n"
+    "                                              peak, rise time, impulse\n"
     "  l2        RUN --reference REF.csv [--time]  free-surface L2 error, RMSE (seed 002)\n"
     "  front     RUN --reference REF.csv [--shift DT] [--width A] [--series A_IN]\n"
     "                                              dam-break front vs Martin & Moyce: raw,\n"
@@ -361,7 +370,7 @@ static int gauge_table_load(analyze_ctx *cx, const options *o, const char *path,
     memset(g, 0, sizeof *g);
     if (analyze_table_load(cx, path, &g->table) != 0)
         return -1;
-    long tc = analyze_table_column(cx, &g->table, "time");
+    long tc = analyze_table_column(cx, &g->table, o->time_column ? o->time_column : "time");
     if (tc < 0)
         return -1;
     if (g->table.rows == 0)
@@ -1104,7 +1113,8 @@ static int find_column(analyze_ctx *cx, const options *o, const run_data *r, cha
                                             {"section_gauge", "sections.csv"},
                                             {"point_gauge", "points.csv"},
                                             {"inlet", "inlet.csv"},
-                                            {"outlet", "outlet.csv"}};
+                                            {"outlet", "outlet.csv"},
+                                            {"wall_pressure", "wall_pressure.csv"}};
     char searched[512] = "";
     size_t used = 0;
     for (size_t k = 0; k < sizeof gauges / sizeof *gauges; k++) {
@@ -1135,6 +1145,94 @@ static int find_column(analyze_ctx *cx, const options *o, const run_data *r, cha
     return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
                         "no gauge file of %s has a column '%s' (searched: %s)", r->run,
                         o->column, used ? searched : "no gauge file found");
+}
+
+/* An impact on a pressure sensor (a wall_pressure column, or any column of
+ * a table with a time column): in the window, the arrival t_a (the first
+ * sample above --arrival); over the impact [t_a, t_a + --duration] (to the
+ * window's end without --duration) the peak, its time, the rise time and
+ * the impulse, the integral of p (trapezoidal, the window's end cutting it
+ * short); with
+ * --scale P0 and --time-scale T0 the same divided by P0, T0 and P0 T0
+ * (dimensionless, e.g. rho g H and (H/g)^(1/2) of a dam break). */
+static int cmd_impact(analyze_ctx *cx, const options *o)
+{
+    const char *run = run_dir(cx, o);
+    if (!run)
+        return -1;
+    if (!o->column)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "impact needs --column [FILE:]NAME (e.g. wall_pressure.csv:p_Pa)");
+    if (!isfinite(o->arrival))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "impact needs --arrival P: the pressure whose first crossing in the "
+                            "window marks the impact's arrival (in the column's unit)");
+    if (!isnan(o->duration) && !(o->duration > 0.0))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--duration must be positive");
+    if ((!isnan(o->scale) && !(o->scale > 0.0)) ||
+        (!isnan(o->time_scale) && !(o->time_scale > 0.0)))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "--scale and --time-scale must be positive");
+    run_data r;
+    if (run_open(cx, run, &r) != 0)
+        return -1;
+    int status = -1;
+    char *path = NULL, *name = NULL;
+    gauge_table g = {0};
+    double *p = NULL;
+    if (find_column(cx, o, &r, &path, &name) != 0 || gauge_table_load(cx, o, path, &g) != 0)
+        goto done;
+    long c = analyze_table_column(cx, &g.table, name);
+    p = c >= 0 ? analyze_alloc(cx, g.table.rows, sizeof *p) : NULL;
+    if (!p)
+        goto done;
+    analyze_table_copy(&g.table, (size_t)c, p);
+    size_t a = g.first;
+    while (a < g.last && !(p[a] > o->arrival))
+        a++;
+    if (a == g.last) {
+        analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND,
+                     "%s: %s never exceeds --arrival %g in the window [%g, %g]", path, name,
+                     o->arrival, g.time[g.first], g.time[g.last - 1]);
+        goto done;
+    }
+    const double end = isnan(o->duration) ? g.time[g.last - 1] : g.time[a] + o->duration;
+    size_t peak = a;
+    for (size_t i = a; i < g.last && g.time[i] <= end; i++)
+        if (p[i] > p[peak])
+            peak = i;
+    double impulse = 0.0;
+    for (size_t i = a + 1; i < g.last && g.time[i - 1] < end; i++) {
+        const double t1 = fmin(g.time[i], end);
+        const double p1 = p[i - 1] + (p[i] - p[i - 1]) * (t1 - g.time[i - 1]) /
+                                         (g.time[i] - g.time[i - 1]);
+        if (isfinite(p1) && isfinite(p[i - 1]))
+            impulse += 0.5 * (p[i - 1] + p1) * (t1 - g.time[i - 1]);
+    }
+    const double ps = isnan(o->scale) ? 1.0 : o->scale;
+    const double ts = isnan(o->time_scale) ? 1.0 : o->time_scale;
+    printf("source = %s %s\n", path, name);
+    print_window(&g);
+    headline("t_arrival", g.time[a], NULL);
+    headline("peak", p[peak], NULL);
+    headline("t_peak", g.time[peak], NULL);
+    headline("rise_time", g.time[peak] - g.time[a], NULL);
+    headline("impulse", impulse, NULL);
+    headline("impulse_duration", fmin(end, g.time[g.last - 1]) - g.time[a], NULL);
+    if (!isnan(o->scale) || !isnan(o->time_scale)) {
+        headline("t_arrival_scaled", g.time[a] / ts, NULL);
+        headline("peak_scaled", p[peak] / ps, NULL);
+        headline("t_peak_scaled", g.time[peak] / ts, NULL);
+        headline("impulse_scaled", impulse / (ps * ts), NULL);
+    }
+    status = 0;
+done:
+    free(p);
+    free(path);
+    free(name);
+    gauge_table_free(&g);
+    analyze_scene_free(r.scene);
+    return status;
 }
 
 static int cmd_spectrum(analyze_ctx *cx, const options *o)
@@ -2595,7 +2693,7 @@ int main(int argc, char **argv)
     o.command = argv[1];
     o.d1 = o.v1 = o.fr = o.x = o.x1 = o.drop = o.y1 = o.yt = o.fmin = o.fmax = o.drop_x = NAN;
     o.per_line = o.theta = o.dc = o.uc = o.h = NAN;
-    o.cs = o.cu = o.calibrate = o.target = NAN;
+    o.cs = o.cu = o.calibrate = o.target = o.arrival = o.duration = o.scale = o.time_scale = NAN;
     o.threshold = 0.05;
     o.first_step = 1;
     o.wave_min = 0.1;
@@ -2615,7 +2713,7 @@ int main(int argc, char **argv)
         {"roller", cmd_roller},     {"vmax", cmd_vmax},           {"surface", cmd_surface},
         {"spectrum", cmd_spectrum}, {"correlate", cmd_correlate}, {"l2", cmd_l2},
         {"classify", cmd_classify}, {"drop-type", cmd_drop_type}, {"momentum", cmd_momentum},
-        {"step-profiles", cmd_step_profiles}, {"dissolved-oxygen", cmd_dissolved_oxygen},
+        {"step-profiles", cmd_step_profiles}, {"impact", cmd_impact}, {"dissolved-oxygen", cmd_dissolved_oxygen},
         {"front", cmd_front},
     };
     int (*command)(analyze_ctx *, const options *) = NULL;

@@ -98,8 +98,15 @@ typedef struct study_measure {
                          directory goes after COMMAND */
     size_t argument_count;
     char *key; /* analysis: the `key = value` line; run: run.json's key */
+    double scale; /* the value is multiplied by it (default 1) */
     int has_reference;
     double reference;
+    /* the reference taken from another measure of the same run:
+     * reference_factor x its value (reference_measure: its name) */
+    char *reference_measure;
+    double reference_factor;
+    size_t reference_index;
+    const sluice_node *reference_measure_at;
     int absolute; /* error = value - reference (else relative) */
     const sluice_node *at;
 } study_measure;

@@ -572,11 +572,70 @@ static int read_source(study *s, const sluice_node *node, study_measure *m)
     return 0;
 }
 
+/* A measure's `scale`, and its reference: a number (`reference`), or
+ * `reference_factor` (default 1) times another measure of the same run
+ * (`reference_measure`, resolved in check_names). */
+static int read_scale_and_reference(study *s, const sluice_node *node, study_measure *m)
+{
+    int errors = 0;
+    m->scale = 1;
+    const sluice_node *scale = sluice_node_get(node, "scale");
+    if (scale && (number_of(scale, &m->scale) != 0 || m->scale == 0 || !isfinite(m->scale))) {
+        study_error(s, scale,
+                    "measure '%s': scale is a non-zero number the value is multiplied by "
+                    "(e.g. 1 / (rho V^2 / 2) for a pressure coefficient)",
+                    m->name);
+        errors++;
+    }
+    const sluice_node *reference = sluice_node_get(node, "reference");
+    const sluice_node *other = sluice_node_get(node, "reference_measure");
+    const sluice_node *factor = sluice_node_get(node, "reference_factor");
+    if (reference && other) {
+        study_error(s, other, "measure '%s': give either reference or reference_measure",
+                    m->name);
+        return errors + 1;
+    }
+    if (reference) {
+        m->has_reference = 1;
+        if (number_of(reference, &m->reference) != 0) {
+            study_error(s, reference,
+                        "measure '%s': reference is a number (in the measure's "
+                        "unit)",
+                        m->name);
+            errors++;
+        }
+    }
+    m->reference_factor = 1;
+    if (factor && !other) {
+        study_error(s, factor, "measure '%s': reference_factor belongs to reference_measure",
+                    m->name);
+        errors++;
+    } else if (factor && (number_of(factor, &m->reference_factor) != 0 ||
+                          !isfinite(m->reference_factor) || m->reference_factor == 0)) {
+        study_error(s, factor, "measure '%s': reference_factor is a non-zero number", m->name);
+        errors++;
+    }
+    if (other) {
+        if (!is_string(other)) {
+            study_error(s, other, "measure '%s': reference_measure is the name of a measure",
+                        m->name);
+            return errors + 1;
+        }
+        m->has_reference = 1;
+        m->reference_measure = study_strdup(other->value);
+        m->reference_measure_at = other;
+    }
+    return errors;
+}
+
 static int read_measure(study *s, const sluice_node *node, study_measure *m)
 {
-    static const char *const keys[] = {"name", "unit",      "gauge", "column",   "reduce",
-                                       "from", "to",        "last",  "analysis", "key",
-                                       "run",  "reference", "error"};
+    static const char *const keys[] = {"name",      "unit",      "gauge",
+                                       "column",    "reduce",    "from",
+                                       "to",        "last",      "analysis",
+                                       "key",       "run",       "reference",
+                                       "error",     "scale",     "reference_measure",
+                                       "reference_factor"};
     if (node->kind != SLUICE_NODE_MAPPING) {
         study_error(s, node, "a measure is a mapping: name and one source (gauge, analysis, run)");
         return 1;
@@ -635,19 +694,9 @@ static int read_measure(study *s, const sluice_node *node, study_measure *m)
                     m->to);
         errors++;
     }
-    const sluice_node *reference = sluice_node_get(node, "reference");
-    if (reference) {
-        m->has_reference = 1;
-        if (number_of(reference, &m->reference) != 0) {
-            study_error(s, reference,
-                        "measure '%s': reference is a number (in the measure's "
-                        "unit)",
-                        m->name);
-            errors++;
-        }
-    }
+    errors += read_scale_and_reference(s, node, m);
     const sluice_node *error = sluice_node_get(node, "error");
-    m->absolute = m->has_reference && m->reference == 0;
+    m->absolute = m->has_reference && !m->reference_measure && m->reference == 0;
     if (error) {
         if (error->kind == SLUICE_NODE_SCALAR && strcmp(error->value, "absolute") == 0)
             m->absolute = 1;
@@ -757,6 +806,23 @@ static int check_names(study *s)
                             s->measures[i].name);
                 errors++;
             }
+    for (size_t i = 0; i < s->measure_count; i++) {
+        study_measure *m = &s->measures[i];
+        if (!m->reference_measure)
+            continue;
+        size_t j = 0;
+        while (j < s->measure_count &&
+               (!s->measures[j].name || strcmp(s->measures[j].name, m->reference_measure) != 0))
+            j++;
+        if (j == s->measure_count || j == i) {
+            study_error(s, m->reference_measure_at,
+                        "measure '%s': reference_measure '%s' %s", m->name,
+                        m->reference_measure,
+                        j == i ? "is the measure itself" : "is not a measure of the study");
+            errors++;
+        }
+        m->reference_index = j;
+    }
     return errors;
 }
 
@@ -1214,6 +1280,7 @@ void study_free(study *s)
         free(me->file);
         free(me->column);
         free(me->key);
+        free(me->reference_measure);
         for (size_t i = 0; i < me->argument_count; i++)
             free(me->arguments[i]);
         free(me->arguments);

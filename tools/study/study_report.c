@@ -238,10 +238,19 @@ int study_measure_runs(study *s)
                 v = m->source == SOURCE_GAUGE      ? gauge_value(s, r, m)
                     : m->source == SOURCE_ANALYSIS ? analysis_value(s, r, m)
                                                    : run_value(s, r, m->key);
-            r->values[k] = v;
+            r->values[k] = v * m->scale;
+        }
+        /* the errors once every value is known (a reference may be another
+         * measure's value) */
+        for (size_t k = 0; k < s->measure_count; k++) {
+            const study_measure *m = &s->measures[k];
+            const double v = r->values[k];
+            const double reference = m->reference_measure
+                                         ? m->reference_factor * r->values[m->reference_index]
+                                         : m->reference;
             r->errors[k] = !m->has_reference ? NAN
-                           : m->absolute     ? v - m->reference
-                                             : v / m->reference - 1;
+                           : m->absolute     ? v - reference
+                                             : v / reference - 1;
         }
     }
     return 0;

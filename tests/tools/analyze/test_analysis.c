@@ -1106,6 +1106,61 @@ START_TEST(cli)
         free(drop_run);
     }
 
+    /* impact on a synthetic sensor (wall_pressure.csv, every 1 ms): 0 to
+     * t = 1 s, a linear rise to 10 Pa at 1.2 s, a fall to 2 Pa at 1.6 s,
+     * then 2 Pa. Arrival above 1.06 Pa: the first sample past 1.0212 s,
+     * 1.022 s; over [1.022, 1.522] s the peak 10 Pa at 1.2 s and the
+     * impulse, exact for the trapezoid rule on the linear pieces:
+     * 25 (0.2^2 - 0.022^2) + 10 x 0.322 - 10 x 0.322^2 = 3.17106 Pa s;
+     * scaled by P0 = 2 Pa and T0 = 0.5 s: peak 5, t_peak 2.4, impulse
+     * 3.17106 / (2 x 0.5). */
+    {
+        char *impact_run = test_scratch("analysis-impact");
+        ck_assert_ptr_nonnull(impact_run);
+        ck_assert(asprintf(&path, "%s/wall_pressure.csv", impact_run) > 0);
+        FILE *wp = fopen(path, "w");
+        ck_assert_ptr_nonnull(wp);
+        fputs("time,p_Pa\n", wp);
+        for (int i = 0; i <= 3000; i++) {
+            const double t = 0.001 * i;
+            const double pr = i <= 1000   ? 0.0
+                              : i <= 1200 ? 50.0 * (t - 1.0)
+                              : i <= 1600 ? 10.0 - 20.0 * (t - 1.2)
+                                          : 2.0;
+            fprintf(wp, "%.17g,%.17g\n", t, pr);
+        }
+        fclose(wp);
+        free(path);
+        path = NULL;
+        ck_assert(asprintf(&args, "impact %s --column p_Pa --arrival 1.06 --duration 0.5 --scale 2 "
+                                  "--time-scale 0.5",
+                           impact_run) > 0);
+        status = analyze(impact_run, args, &out, &err);
+        ck_assert_msg(status == 0, "%s%s", out, err);
+        ck_assert_double_eq_tol(headline(out, "t_arrival"), 1.022, 1e-9);
+        ck_assert_double_eq_tol(headline(out, "peak"), 10.0, 1e-9);
+        ck_assert_double_eq_tol(headline(out, "t_peak"), 1.2, 1e-9);
+        ck_assert_double_eq_tol(headline(out, "impulse"), 3.17106, 1e-6);
+        ck_assert_double_eq_tol(headline(out, "peak_scaled"), 5.0, 1e-9);
+        ck_assert_double_eq_tol(headline(out, "t_peak_scaled"), 2.4, 1e-9);
+        ck_assert_double_eq_tol(headline(out, "impulse_scaled"), 3.17106, 1e-6);
+        free(args);
+        free(out);
+        free(err);
+        /* a sensor the impact never reaches: exit 1 (not found), with the reason */
+        ck_assert(asprintf(&args, "impact %s --column p_Pa --arrival 20", impact_run) > 0);
+        status = analyze(impact_run, args, &out, &err);
+        ck_assert_int_eq(status, 1);
+        ck_assert_ptr_nonnull(strstr(err, "never exceeds --arrival 20"));
+        free(args);
+        free(out);
+        free(err);
+        ck_assert(asprintf(&args, "rm -rf '%s'", impact_run) > 0);
+        ck_assert_int_eq(system(args), 0);
+        free(args);
+        free(impact_run);
+    }
+
     /* momentum on a synthetic section table with forces: over [1, 3] s (rows
      * every 1/128 s) the sines average to zero, so the means are the
      * constants: section 0 (x = 0.5 m) d = 0.1 m, q = 0.05, M = 25, P = 49.05,

@@ -499,7 +499,10 @@ END_TEST
 
 /* A parameter axis marked convergence: true is the axis of the observed
  * orders: h = ratio x dx against a reference of 0 falls at exactly first
- * order in the ratio, and Richardson's order of h is 1 (extrapolated 0). */
+ * order in the ratio, and Richardson's order of h is 1 (extrapolated 0).
+ * A measure's scale multiplies its value (h in mm); a reference taken from
+ * another measure of the same run (h in m against 0.001 x h in mm) gives
+ * the error 0, and 2 x h against 1 x h gives +100 %. */
 START_TEST(orders_along_a_parameter_axis)
 {
     char *dir = test_scratch("study-convergence");
@@ -511,11 +514,24 @@ START_TEST(orders_along_a_parameter_axis)
                              "  - {name: ratio, parameter: particles.smoothing_length_ratio, "
                              "values: [2, 1.5, 1.125], convergence: true}\n"
                              "measures:\n"
-                             "  - {name: h, unit: m, run: smoothing_length, reference: 0}\n");
+                             "  - {name: h, unit: m, run: smoothing_length, reference: 0}\n"
+                             "  - {name: h_mm, unit: mm, run: smoothing_length, scale: 1000}\n"
+                             "  - {name: h_again, unit: m, run: smoothing_length, "
+                             "reference_measure: h_mm, reference_factor: 0.001}\n"
+                             "  - {name: twice_h, unit: m, run: smoothing_length, scale: 2, "
+                             "reference_measure: h}\n");
     char *args = NULL, *output = NULL, *path = NULL;
     ck_assert_int_ge(asprintf(&args, "study %s --out %s/out", file, dir), 0);
     ck_assert_int_eq(study(args, &output), 0);
     free(output);
+    ck_assert_int_ge(asprintf(&path, "%s/out/study.csv", dir), 0);
+    char *csv = test_read_file(path);
+    ck_assert_ptr_nonnull(csv);
+    ck_assert_double_eq_tol(csv_number(csv, "1.5", "h_mm"), 75, 1e-9);
+    ck_assert_double_eq_tol(csv_number(csv, "1.5", "h_again_error"), 0, 1e-12);
+    ck_assert_double_eq_tol(csv_number(csv, "1.125", "twice_h_error"), 1, 1e-12);
+    free(csv);
+    free(path);
     ck_assert_int_ge(asprintf(&path, "%s/out/orders.csv", dir), 0);
     char *orders = test_read_file(path);
     ck_assert_ptr_nonnull(orders);
@@ -659,6 +675,15 @@ START_TEST(bad_study_files_are_refused)
                    "4:5",
                    "axis 'dt': a study has one axis of the observed orders (the spacing "
                    "axis, or one parameter axis with convergence: true)");
+    expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p, run: steps, reference_measure: q}\n",
+                   "5:46", "measure 'p': reference_measure 'q' is not a measure of the study");
+    expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p, run: steps, reference_measure: p}\n",
+                   "5:46", "measure 'p': reference_measure 'p' is the measure itself");
+    expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p, run: steps, reference: 1, "
+                   "reference_measure: p}\n",
+                   "5:60", "measure 'p': give either reference or reference_measure");
+    expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p, run: steps, scale: 0}\n", "5:34",
+                   "measure 'p': scale is a non-zero number the value is multiplied by");
     expect_refused("scene: %s\naxes: [\n", "3:1",
                    "YAML syntax error: did not find expected node content");
 }
