@@ -613,7 +613,7 @@ static int write_plots(study *s, FILE *md)
                     "set terminal pngcairo size 800,560 noenhanced\nset grid\nset key outside "
                     "right\ntitles = '%s'\nset logscale x\n%s"
                     "set xlabel 'CPU time of the run (s)'\nset ylabel '%s%s%s%s'\n"
-                    "set title '%s: %s against cost'\nset output '%s/%s_cost.png'\n"
+                    "set title '%s: %s against cost' font ',10'\nset output '%s/%s_cost.png'\n"
                     "plot for [i=0:%zu] '%s' index i using 1:3 with linespoints title "
                     "word(titles, i+1)\n",
                     titles, m->has_reference ? "set logscale y\n" : "", ylabel,
@@ -622,7 +622,7 @@ static int write_plots(study *s, FILE *md)
                     blocks - 1, data);
             if (spacing)
                 fprintf(f,
-                        "set xlabel '%s'\nset title '%s: %s against %s'\nset output "
+                        "set xlabel '%s'\nset title '%s: %s against %s' font ',10'\nset output "
                         "'%s/%s_%s.png'\nplot for [i=0:%zu] '%s' index i using 2:3 with "
                         "linespoints title word(titles, i+1)\n",
                         axis_label, title, m->name, axis_label, dir, m->name, axis_file,
