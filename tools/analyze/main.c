@@ -43,7 +43,8 @@ typedef struct options {
     size_t positional_count;
     double d1, v1, fr, g, x, from, to, fraction, x1, bed, drop, y1, yt, min_wet, fmin, fmax,
         tolerance, drop_x, wave_min, per_line, theta, dc, uc, threshold, h, first_step, cs, cu,
-        calibrate, target, width, shift, series, arrival, duration, scale, time_scale;
+        calibrate, target, width, shift, series, arrival, duration, scale, time_scale, force,
+        viscosity;
     const char *column, *reference, *out, *positions, *points, *field, *edges, *time_column;
     double times[MAX_TIMES];
     size_t time_count;
@@ -91,6 +92,8 @@ static const struct option_spec {
     {"series", OPT_NUMBER, offsetof(options, series)},
     {"target", OPT_NUMBER, offsetof(options, target)},
     {"arrival", OPT_NUMBER, offsetof(options, arrival)},
+    {"force", OPT_NUMBER, offsetof(options, force)},
+    {"viscosity", OPT_NUMBER, offsetof(options, viscosity)},
     {"duration", OPT_NUMBER, offsetof(options, duration)},
     {"scale", OPT_NUMBER, offsetof(options, scale)},
     {"time-scale", OPT_NUMBER, offsetof(options, time_scale)},
@@ -116,6 +119,9 @@ static const char usage[] =
     "  surface   RUN --d1 --v1 [--x1]             free-surface mean/std vs Murzyn & Chanson\n"
     "  spectrum  RUN --column [FILE:]NAME          amplitude spectrum, Strouhal number\n"
     "  correlate A.csv:COL B.csv:COL               Pearson r (seed 004)\n"
+    "  profile   RUN [--column FILE:SUFFIX] [--force F --viscosity NU --width L]\n"
+    "                                              a point_gauge line's time-mean profile:\n"
+    "                                              wall slip, error against Poiseuille\n"
     "  impact    RUN --column [FILE:]NAME --arrival P [--duration D] [--scale P0]\n"
     "            [--time-scale T0] [--time-column t]\n"
     "                                              an impact on a pressure sensor: arrival,\n"
@@ -2502,6 +2508,91 @@ done:
  * column not wet to its top, the hydrostatic force rho0 g d^2 / 2 of its
  * mean depth (rho0 from particles.rest_density, default 1000; --g). A column
  * wet to its top (a face) has none: its surface is not in it. */
+/* A profile across a flow from a point_gauge line (RUN/points.csv, or the
+ * FILE of --column FILE:SUFFIX): each point's time mean of p<k>_SUFFIX over
+ * the window, with the points' coordinates from the scene; the first
+ * point's value over the largest (the slip at a wall when point 0 is the
+ * one next to it); with --force F --viscosity NU --width L the L2 error
+ * against the steady plane Poiseuille profile F / (2 NU) y (L - y) between
+ * walls at y = 0 and y = L. */
+static int cmd_profile(analyze_ctx *cx, const options *o)
+{
+    const char *run = run_dir(cx, o);
+    if (!run)
+        return -1;
+    const int poiseuille = !isnan(o->force) || !isnan(o->viscosity) || !isnan(o->width);
+    if (poiseuille && !(o->force > 0 && o->viscosity > 0 && o->width > 0))
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "the Poiseuille profile needs --force F (m s^-2), --viscosity NU "
+                            "(m^2 s^-1) and --width L (m), each positive");
+    const char *spec = o->column ? o->column : "velocity_x";
+    const char *colon = strrchr(spec, ':');
+    char *file = colon ? analyze_format(cx, "%s/%.*s", run, (int)(colon - spec), spec)
+                       : analyze_format(cx, "%s/points.csv", run);
+    const char *suffix = colon ? colon + 1 : spec;
+    int status = -1;
+    gauge_table g = {0};
+    double *px = NULL, *py = NULL, *mean = NULL, *series = NULL, h;
+    if (!file || gauge_table_load(cx, o, file, &g) != 0)
+        goto done;
+    const size_t n = count_point_columns(&g.table, suffix);
+    if (n == 0) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "%s has no column p0_%s", file, suffix);
+        goto done;
+    }
+    long count = step_points(cx, o, file, &px, &py, &h);
+    if (count < 0)
+        goto done;
+    if ((size_t)count != n) {
+        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "%ld point coordinates for the %zu points of %s",
+                     count, n, file);
+        goto done;
+    }
+    const size_t rows = g.last - g.first;
+    mean = analyze_alloc(cx, n, sizeof *mean);
+    series = analyze_alloc(cx, rows, sizeof *series);
+    if (!mean || !series)
+        goto done;
+    double largest = -INFINITY, error = 0.0, norm = 0.0;
+    for (size_t k = 0; k < n; k++) {
+        long c = point_column(cx, &g, k, suffix);
+        if (c < 0)
+            goto done;
+        for (size_t r = 0; r < rows; r++)
+            series[r] = cell(&g, g.first + r, (size_t)c);
+        double std;
+        size_t used;
+        if (sluice_hyd_mean_std(series, rows, &mean[k], &std, &used) != 0)
+            mean[k] = NAN;
+        if (mean[k] > largest)
+            largest = mean[k];
+        if (poiseuille) {
+            const double exact = o->force / (2 * o->viscosity) * py[k] * (o->width - py[k]);
+            error += (mean[k] - exact) * (mean[k] - exact);
+            norm += exact * exact;
+        }
+    }
+    printf("source = %s p<k>_%s\n", file, suffix);
+    print_window(&g);
+    printf("points = %zu\n", n);
+    headline("first", mean[0], NULL);
+    headline("max", largest, NULL);
+    headline("first_over_max", mean[0] / largest, NULL);
+    if (poiseuille) {
+        headline("u_max_poiseuille", o->force * o->width * o->width / (8 * o->viscosity), "m/s");
+        headline("l2_poiseuille", norm > 0 ? sqrt(error / norm) : NAN, NULL);
+    }
+    status = 0;
+done:
+    free(file);
+    free(px);
+    free(py);
+    free(mean);
+    free(series);
+    gauge_table_free(&g);
+    return status;
+}
+
 static int cmd_momentum(analyze_ctx *cx, const options *o)
 {
     const char *run = run_dir(cx, o);
@@ -2694,6 +2785,7 @@ int main(int argc, char **argv)
     o.d1 = o.v1 = o.fr = o.x = o.x1 = o.drop = o.y1 = o.yt = o.fmin = o.fmax = o.drop_x = NAN;
     o.per_line = o.theta = o.dc = o.uc = o.h = NAN;
     o.cs = o.cu = o.calibrate = o.target = o.arrival = o.duration = o.scale = o.time_scale = NAN;
+    o.force = o.viscosity = NAN;
     o.threshold = 0.05;
     o.first_step = 1;
     o.wave_min = 0.1;
@@ -2713,7 +2805,7 @@ int main(int argc, char **argv)
         {"roller", cmd_roller},     {"vmax", cmd_vmax},           {"surface", cmd_surface},
         {"spectrum", cmd_spectrum}, {"correlate", cmd_correlate}, {"l2", cmd_l2},
         {"classify", cmd_classify}, {"drop-type", cmd_drop_type}, {"momentum", cmd_momentum},
-        {"step-profiles", cmd_step_profiles}, {"impact", cmd_impact}, {"dissolved-oxygen", cmd_dissolved_oxygen},
+        {"step-profiles", cmd_step_profiles}, {"impact", cmd_impact}, {"profile", cmd_profile}, {"dissolved-oxygen", cmd_dissolved_oxygen},
         {"front", cmd_front},
     };
     int (*command)(analyze_ctx *, const options *) = NULL;

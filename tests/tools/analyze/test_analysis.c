@@ -1106,6 +1106,57 @@ START_TEST(cli)
         free(drop_run);
     }
 
+    /* profile on a synthetic point_gauge line of 4 points across a channel
+     * L = 1 mm wide (y = 0.125 .. 0.875 mm), velocity_x the steady
+     * Poiseuille profile F / (2 nu) y (L - y), F = 1e-4 m s^-2, nu = 1e-6
+     * m^2 s^-1 (u_max = F L^2 / (8 nu) = 1.25e-5 m/s), at two samples: the
+     * error against it is 0, the first point over the largest 0.4375 / 0.9375;
+     * with 10 % added to every value the error is 0.1 */
+    for (int scaled = 0; scaled < 2; scaled++) {
+        char *profile_run = test_scratch("analysis-profile");
+        ck_assert_ptr_nonnull(profile_run);
+        ck_assert(asprintf(&path, "%s/scene.resolved.yaml", profile_run) > 0);
+        FILE *sc = fopen(path, "w");
+        ck_assert_ptr_nonnull(sc);
+        fputs("dimensions: 2\nplugins:\n  point_gauge:\n    points: [[1e-4, 1.25e-4], [1e-4, "
+              "3.75e-4], [1e-4, 6.25e-4], [1e-4, 8.75e-4]]\n    fields: velocity\n    file: "
+              "points.csv\n",
+              sc);
+        fclose(sc);
+        free(path);
+        ck_assert(asprintf(&path, "%s/points.csv", profile_run) > 0);
+        FILE *pc = fopen(path, "w");
+        ck_assert_ptr_nonnull(pc);
+        fputs("time,p0_velocity_x,p0_velocity_y,p1_velocity_x,p1_velocity_y,p2_velocity_x,"
+              "p2_velocity_y,p3_velocity_x,p3_velocity_y\n",
+              pc);
+        for (int i = 0; i < 2; i++) {
+            fprintf(pc, "%d", i);
+            for (int k = 0; k < 4; k++) {
+                const double y = 2.5e-4 * (k + 0.5);
+                fprintf(pc, ",%.17g,0", (scaled ? 1.1 : 1.0) * 1e-4 / 2e-6 * y * (1e-3 - y));
+            }
+            fputc('\n', pc);
+        }
+        fclose(pc);
+        free(path);
+        path = NULL;
+        ck_assert(asprintf(&args, "profile %s --force 1e-4 --viscosity 1e-6 --width 1e-3",
+                           profile_run) > 0);
+        status = analyze(profile_run, args, &out, &err);
+        ck_assert_msg(status == 0, "%s%s", out, err);
+        ck_assert_double_eq_tol(headline(out, "l2_poiseuille"), scaled ? 0.1 : 0.0, 1e-12);
+        ck_assert_double_eq_tol(headline(out, "first_over_max"), 0.4375 / 0.9375, 1e-6);
+        ck_assert_double_eq_tol(headline(out, "u_max_poiseuille"), 1.25e-5, 1e-17);
+        free(args);
+        free(out);
+        free(err);
+        ck_assert(asprintf(&args, "rm -rf '%s'", profile_run) > 0);
+        ck_assert_int_eq(system(args), 0);
+        free(args);
+        free(profile_run);
+    }
+
     /* impact on a synthetic sensor (wall_pressure.csv, every 1 ms): 0 to
      * t = 1 s, a linear rise to 10 Pa at 1.2 s, a fall to 2 Pa at 1.6 s,
      * then 2 Pa. Arrival above 1.06 Pa: the first sample past 1.0212 s,
