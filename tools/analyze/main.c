@@ -2520,7 +2520,7 @@ static int cmd_profile(analyze_ctx *cx, const options *o)
     const char *run = run_dir(cx, o);
     if (!run)
         return -1;
-    const int poiseuille = !isnan(o->force) || !isnan(o->viscosity) || !isnan(o->width);
+    const int poiseuille = !isnan(o->force) || !isnan(o->viscosity) || o->width > 0;
     if (poiseuille && !(o->force > 0 && o->viscosity > 0 && o->width > 0))
         return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
                             "the Poiseuille profile needs --force F (m s^-2), --viscosity NU "

@@ -1151,6 +1151,15 @@ START_TEST(cli)
         free(args);
         free(out);
         free(err);
+        /* without the Poiseuille parameters: the profile alone */
+        ck_assert(asprintf(&args, "profile %s", profile_run) > 0);
+        status = analyze(profile_run, args, &out, &err);
+        ck_assert_msg(status == 0, "%s%s", out, err);
+        ck_assert_double_eq_tol(headline(out, "first_over_max"), 0.4375 / 0.9375, 1e-6);
+        ck_assert_ptr_null(strstr(out, "l2_poiseuille"));
+        free(args);
+        free(out);
+        free(err);
         ck_assert(asprintf(&args, "rm -rf '%s'", profile_run) > 0);
         ck_assert_int_eq(system(args), 0);
         free(args);
