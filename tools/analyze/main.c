@@ -1207,14 +1207,9 @@ static int cmd_impact(analyze_ctx *cx, const options *o)
     for (size_t i = a; i < g.last && g.time[i] <= end; i++)
         if (p[i] > p[peak])
             peak = i;
-    double impulse = 0.0;
-    for (size_t i = a + 1; i < g.last && g.time[i - 1] < end; i++) {
-        const double t1 = fmin(g.time[i], end);
-        const double p1 = p[i - 1] + (p[i] - p[i - 1]) * (t1 - g.time[i - 1]) /
-                                         (g.time[i] - g.time[i - 1]);
-        if (isfinite(p1) && isfinite(p[i - 1]))
-            impulse += 0.5 * (p[i - 1] + p1) * (t1 - g.time[i - 1]);
-    }
+    /* the trapezoid rule on the samples from t_a to the impact's end */
+    const double impulse = sluice_hyd_profile_integral(g.time + a, p + a, g.last - a, g.time[a],
+                                                       fmin(end, g.time[g.last - 1]));
     const double ps = isnan(o->scale) ? 1.0 : o->scale;
     const double ts = isnan(o->time_scale) ? 1.0 : o->time_scale;
     printf("source = %s %s\n", path, name);
