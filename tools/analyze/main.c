@@ -13,14 +13,15 @@
  *   sluice-analyze front     RUN --reference REF.csv [--shift DT] [--width A]
  *   sluice-analyze classify  --y1 Y1 --yt YT --v1 V --drop S
  *   sluice-analyze drop-type RUN [--drop-x X] [--drop S]
- *   sluice-analyze step-profiles POINTS.csv --per-line N --edges x,y;.. --theta DEG
+ *   sluice-analyze step-profiles RUN|POINTS.csv --per-line N --edges x,y;.. --theta DEG
  *                                --dc DC --uc UC
  *   sluice-analyze dissolved-oxygen POINTS.csv --per-line N --cs CS --cu CU
  *                                [--calibrate STATION --target C]
  *
  * Each prints its headline figures as `name = value [unit]` lines, writes a
  * CSV and (gnuplot permitting) a PNG into --out (default RUN/analysis);
- * step-profiles and dissolved-oxygen print their CSV on stdout instead.
+ * step-profiles given a CSV file and dissolved-oxygen print their CSV on
+ * stdout instead.
  * Exit status: 0 measured, 1 the feature is absent from the data, 2 bad
  * input (one message on stderr). The numbers come from hydraulics.c. */
 #define _GNU_SOURCE
@@ -134,10 +135,11 @@ static const char usage[] =
     "  drop-type RUN [--drop-x X] [--drop S]       jump type at an abrupt drop from a run\n"
     "  momentum  RUN                               mean momentum function M + P per section\n"
     "                                              (section_gauge with forces: true)\n"
-    "  step-profiles POINTS.csv --per-line N --edges x,y;x,y.. --theta DEG --dc DC --uc UC\n"
+    "  step-profiles RUN|POINTS.csv --per-line N --edges x,y;x,y.. --theta DEG --dc DC --uc UC\n"
     "            [--first-step 1] [--threshold 0.05] [--h H] [--points x,y;..]\n"
-    "                                              U/Uc, air concentration, Y90, inception\n"
-    "                                              on a stepped chute (CSV on stdout)\n"
+    "                                              U/Uc, air concentration, Y90, surface,\n"
+    "                                              inception on a stepped chute (CSV on\n"
+    "                                              stdout given POINTS.csv)\n"
     "  dissolved-oxygen POINTS.csv --per-line N --cs CS --cu CU [--calibrate S --target C]\n"
     "            [--field dissolved_oxygen]        DO per station of N points, the\n"
     "                                              reaeration rate, the source's scale\n"
@@ -2059,14 +2061,44 @@ static int whole_number(double x)
 }
 
 /* Velocity profiles U/Uc against y/dc at step edges, the air concentration,
- * Y90, the clear-water depth, C_mean and the inception step (docs/analysis.md,
- * seed 001 Figure 6 and Chanson 2002). */
-static int cmd_step_profiles(analyze_ctx *cx, const options *o)
+ * Y90, the clear-water depth, C_mean, the time-mean surface and the inception
+ * step (docs/analysis.md, seed 001 Figure 6 and Chanson 2002). */
+typedef struct step_profiles {
+    size_t K, per_line, rows;
+    long lines;
+    int has_air;
+    double h;
+    double *ex, *ey;           /* the step edges (m), one per line */
+    double *px, *py;           /* the points (m) */
+    double *y, *u, *c;         /* per point: y (m), time-mean U/Uc and C */
+    size_t *order;             /* per line, the points in the order of y */
+    size_t *u_count, *c_count; /* per point: wet samples, air samples */
+    double *y90, *depth, *c_mean, *u_max, *c_core, *surface; /* per line */
+    long inception; /* index of the first line above the threshold, -1 none */
+} step_profiles;
+
+static void step_profiles_free(step_profiles *sp)
 {
-    if (o->positional_count != 1)
-        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
-                            "step-profiles needs one point_gauge CSV file, POINTS.csv");
-    const char *file = o->positional[0];
+    free(sp->ex);
+    free(sp->ey);
+    free(sp->px);
+    free(sp->py);
+    free(sp->y);
+    free(sp->u);
+    free(sp->c);
+    free(sp->order);
+    free(sp->u_count);
+    free(sp->c_count);
+    free(sp->y90);
+    free(sp->depth);
+    free(sp->c_mean);
+    free(sp->u_max);
+    free(sp->c_core);
+    free(sp->surface);
+}
+
+static int step_check_options(analyze_ctx *cx, const options *o)
+{
     if (need(cx, o, o->per_line, "per-line", 1) != 0 || need(cx, o, o->theta, "theta", 0) != 0 ||
         need(cx, o, o->dc, "dc", 1) != 0 || need(cx, o, o->uc, "uc", 1) != 0)
         return -1;
@@ -2085,253 +2117,365 @@ static int cmd_step_profiles(analyze_ctx *cx, const options *o)
         return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--h must be positive");
     if (!whole_number(o->first_step))
         return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--first-step must be a whole number");
-    const size_t per_line = (size_t)o->per_line;
-    const double theta = o->theta * M_PI / 180.0;
+    return 0;
+}
 
-    int status = -1;
-    gauge_table g;
-    memset(&g, 0, sizeof g);
-    double *ex = NULL, *ey = NULL, *px = NULL, *py = NULL, *y = NULL, *u = NULL, *c = NULL;
-    double *series = NULL, *y90 = NULL, *depth = NULL, *c_mean = NULL, *u_max = NULL;
-    double *c_core = NULL;
-    size_t *order = NULL, *u_count = NULL, *c_count = NULL;
-    long lines = analyze_parse_points(cx, "--edges", o->edges, &ex, &ey);
-    if (lines < 0 || gauge_table_load(cx, o, file, &g) != 0)
-        goto done;
-    /* velocity columns: p<k>_<field>_x and the vertical, _y (2D) or _z (3D) */
+/* The point_gauge CSV of step-profiles: the file given, or for a run
+ * directory RUN/<plugins.point_gauge.file> (default points.csv). */
+static char *step_points_file(analyze_ctx *cx, const char *given, int *is_run)
+{
+    struct stat st;
+    *is_run = stat(given, &st) == 0 && S_ISDIR(st.st_mode);
+    if (!*is_run)
+        return analyze_format(cx, "%s", given);
+    run_data r;
+    if (run_open(cx, given, &r) != 0)
+        return NULL;
+    char *file = gauge_path(cx, &r, "point_gauge", "points.csv");
+    analyze_scene_free(r.scene);
+    return file;
+}
+
+/* Time means over the window of every point: U/Uc over the samples where
+ * the point is wet (both components finite), C over its finite samples. */
+static int step_point_means(analyze_ctx *cx, const options *o, const char *file,
+                            const gauge_table *g, step_profiles *sp)
+{
+    const double theta = o->theta * M_PI / 180.0;
     char suffix_u[96], suffix_v[96];
     snprintf(suffix_u, sizeof suffix_u, "%s_x", o->field);
     snprintf(suffix_v, sizeof suffix_v, "%s_y", o->field);
     {
         char z[96];
         snprintf(z, sizeof z, "p0_%s_z", o->field);
-        if (analyze_table_find(&g.table, z) >= 0)
+        if (analyze_table_find(&g->table, z) >= 0)
             snprintf(suffix_v, sizeof suffix_v, "%s_z", o->field);
     }
-    const size_t K = count_point_columns(&g.table, suffix_u);
-    if (K == 0) {
-        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
-                     "%s has no column p0_%s (a point_gauge output with the field '%s')", file,
-                     suffix_u, o->field);
-        goto done;
-    }
-    if (K != per_line * (size_t)lines) {
-        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
-                     "%s has %zu points (p0 .. p%zu) but --per-line %zu x %ld edges = %zu: each "
-                     "edge needs its line of --per-line points, in the gauge's order",
-                     file, K, K - 1, per_line, lines, per_line * (size_t)lines);
-        goto done;
-    }
-    const size_t air_points = count_point_columns(&g.table, "air_fraction");
-    if (air_points != 0 && air_points != K) {
-        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
-                     "%s has p<k>_air_fraction for %zu of its %zu points", file, air_points, K);
-        goto done;
-    }
-    const int has_air = air_points == K;
-    double h;
-    long point_count = step_points(cx, o, file, &px, &py, &h);
+    sp->K = count_point_columns(&g->table, suffix_u);
+    if (sp->K == 0)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "%s has no column p0_%s (a point_gauge output with the field '%s')",
+                            file, suffix_u, o->field);
+    if (sp->K != sp->per_line * (size_t)sp->lines)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "%s has %zu points (p0 .. p%zu) but --per-line %zu x %ld edges = "
+                            "%zu: each edge needs its line of --per-line points, in the gauge's "
+                            "order",
+                            file, sp->K, sp->K - 1, sp->per_line, sp->lines,
+                            sp->per_line * (size_t)sp->lines);
+    const size_t air_points = count_point_columns(&g->table, "air_fraction");
+    if (air_points != 0 && air_points != sp->K)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "%s has p<k>_air_fraction for %zu of its %zu points", file, air_points,
+                            sp->K);
+    sp->has_air = air_points == sp->K;
+    long point_count = step_points(cx, o, file, &sp->px, &sp->py, &sp->h);
     if (point_count < 0)
+        return -1;
+    if ((size_t)point_count != sp->K)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "%zu point coordinates (%s) for the "
+                            "%zu points of %s",
+                            (size_t)point_count, o->points ? "--points" : "scene.resolved.yaml",
+                            sp->K, file);
+    const size_t K = sp->K, rows = g->last - g->first;
+    sp->rows = rows;
+    sp->y = analyze_alloc(cx, K, sizeof *sp->y);
+    sp->u = analyze_alloc(cx, K, sizeof *sp->u);
+    sp->c = analyze_alloc(cx, K, sizeof *sp->c);
+    sp->order = analyze_alloc(cx, K, sizeof *sp->order);
+    sp->u_count = analyze_alloc(cx, K, sizeof *sp->u_count);
+    sp->c_count = analyze_alloc(cx, K, sizeof *sp->c_count);
+    double *series = analyze_alloc(cx, rows, sizeof *series);
+    int status = -1;
+    if (!sp->y || !sp->u || !sp->c || !sp->order || !sp->u_count || !sp->c_count || !series)
         goto done;
-    if ((size_t)point_count != K) {
-        analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
-                     "%zu point coordinates (%s) for the %zu points of %s", (size_t)point_count,
-                     o->points ? "--points" : "scene.resolved.yaml", K, file);
-        goto done;
-    }
-    const size_t rows = g.last - g.first;
-    y = analyze_alloc(cx, K, sizeof *y);
-    u = analyze_alloc(cx, K, sizeof *u);
-    c = analyze_alloc(cx, K, sizeof *c);
-    order = analyze_alloc(cx, K, sizeof *order);
-    u_count = analyze_alloc(cx, K, sizeof *u_count);
-    c_count = analyze_alloc(cx, K, sizeof *c_count);
-    series = analyze_alloc(cx, rows, sizeof *series);
-    y90 = analyze_alloc(cx, (size_t)lines, sizeof *y90);
-    depth = analyze_alloc(cx, (size_t)lines, sizeof *depth);
-    c_mean = analyze_alloc(cx, (size_t)lines, sizeof *c_mean);
-    u_max = analyze_alloc(cx, (size_t)lines, sizeof *u_max);
-    c_core = analyze_alloc(cx, (size_t)lines, sizeof *c_core);
-    if (!y || !u || !c || !order || !u_count || !c_count || !series || !y90 || !depth ||
-        !c_mean || !u_max || !c_core)
-        goto done;
-    /* time means over the window: U/Uc over the samples where the point is
-     * wet (both components finite), C over its finite samples */
     for (size_t k = 0; k < K; k++) {
-        long cu = point_column(cx, &g, k, suffix_u), cv = point_column(cx, &g, k, suffix_v);
+        long cu = point_column(cx, g, k, suffix_u), cv = point_column(cx, g, k, suffix_v);
         if (cu < 0 || cv < 0)
             goto done;
         for (size_t r = 0; r < rows; r++) {
-            const double uu = cell(&g, g.first + r, (size_t)cu);
-            const double vv = cell(&g, g.first + r, (size_t)cv);
+            const double uu = cell(g, g->first + r, (size_t)cu);
+            const double vv = cell(g, g->first + r, (size_t)cv);
             series[r] = isfinite(uu) && isfinite(vv)
                             ? sluice_hyd_chute_velocity(uu, vv, theta) / o->uc
                             : NAN;
         }
         double mean, std;
-        u[k] = sluice_hyd_mean_std(series, rows, &mean, &std, &u_count[k]) == 0 ? mean : NAN;
-        c[k] = NAN;
-        c_count[k] = 0;
-        if (has_air) {
-            long cc = point_column(cx, &g, k, "air_fraction");
+        sp->u[k] =
+            sluice_hyd_mean_std(series, rows, &mean, &std, &sp->u_count[k]) == 0 ? mean : NAN;
+        sp->c[k] = NAN;
+        sp->c_count[k] = 0;
+        if (sp->has_air) {
+            long cc = point_column(cx, g, k, "air_fraction");
             if (cc < 0)
                 goto done;
             for (size_t r = 0; r < rows; r++)
-                series[r] = cell(&g, g.first + r, (size_t)cc);
-            c[k] = sluice_hyd_mean_std(series, rows, &mean, &std, &c_count[k]) == 0 ? mean : NAN;
+                series[r] = cell(g, g->first + r, (size_t)cc);
+            sp->c[k] =
+                sluice_hyd_mean_std(series, rows, &mean, &std, &sp->c_count[k]) == 0 ? mean : NAN;
         }
     }
-    /* each line: y along the normal, sorted; the aerated depths */
-    for (long l = 0; l < lines; l++) {
+    status = 0;
+done:
+    free(series);
+    return status;
+}
+
+/* Each line: y along the normal to the pseudo-bottom, the points sorted by
+ * it; a point off its normal or two at one y is bad input. */
+static int step_sort_lines(analyze_ctx *cx, const options *o, step_profiles *sp)
+{
+    const double theta = o->theta * M_PI / 180.0;
+    const size_t per_line = sp->per_line;
+    for (long l = 0; l < sp->lines; l++) {
         const size_t base = (size_t)l * per_line;
         double extent = 0.0, worst = 0.0;
         size_t worst_k = base;
         for (size_t j = 0; j < per_line; j++) {
             const size_t k = base + j;
             double offset;
-            y[k] = sluice_hyd_normal_distance(px[k], py[k], ex[l], ey[l], theta, &offset);
-            extent = fmax(extent, fabs(y[k]));
+            sp->y[k] = sluice_hyd_normal_distance(sp->px[k], sp->py[k], sp->ex[l], sp->ey[l], theta,
+                                                  &offset);
+            extent = fmax(extent, fabs(sp->y[k]));
             if (fabs(offset) > worst) {
                 worst = fabs(offset);
                 worst_k = k;
             }
-            order[k] = k;
+            sp->order[k] = k;
         }
         const double allowed = fmax(o->tolerance, 1e-3 * extent);
-        if (worst > allowed) {
-            analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
-                         "point %zu (%g, %g) is %g m off the normal to the pseudo-bottom at "
-                         "edge %ld (%g, %g) with --theta %g (allowed %g m): check --edges, "
-                         "--theta and --per-line",
-                         worst_k, px[worst_k], py[worst_k], worst, l + 1, ex[l], ey[l],
-                         o->theta, allowed);
-            goto done;
-        }
-        /* insertion sort of the line's points by y */
-        for (size_t j = 1; j < per_line; j++)
-            for (size_t i = base + j; i > base && y[order[i - 1]] > y[order[i]]; i--) {
+        if (worst > allowed)
+            return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                                "point %zu (%g, %g) is %g m off the normal to the pseudo-bottom "
+                                "at edge %ld (%g, %g) with --theta %g (allowed %g m): check "
+                                "--edges, --theta and --per-line",
+                                worst_k, sp->px[worst_k], sp->py[worst_k], worst, l + 1, sp->ex[l],
+                                sp->ey[l], o->theta, allowed);
+        size_t *order = sp->order;
+        for (size_t j = 1; j < per_line; j++) /* insertion sort by y */
+            for (size_t i = base + j; i > base && sp->y[order[i - 1]] > sp->y[order[i]]; i--) {
                 size_t t = order[i];
                 order[i] = order[i - 1];
                 order[i - 1] = t;
             }
         for (size_t j = 1; j < per_line; j++)
-            if (!(y[order[base + j]] > y[order[base + j - 1]])) {
-                analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
-                             "points %zu and %zu of edge %ld lie at the same distance y = %g m "
-                             "from it",
-                             order[base + j - 1], order[base + j], l + 1,
-                             y[order[base + j]]);
-                goto done;
-            }
+            if (!(sp->y[order[base + j]] > sp->y[order[base + j - 1]]))
+                return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                                    "points %zu and %zu of edge %ld lie at the same distance y = "
+                                    "%g m from it",
+                                    order[base + j - 1], order[base + j], l + 1,
+                                    sp->y[order[base + j]]);
     }
-    /* each line's profile in the order of y */
-    {
-        double *ys = analyze_alloc(cx, per_line, sizeof *ys);
-        double *cs = analyze_alloc(cx, per_line, sizeof *cs);
-        if (!ys || !cs) {
-            free(ys);
-            free(cs);
-            goto done;
-        }
-        for (long l = 0; l < lines; l++) {
-            const size_t base = (size_t)l * per_line;
-            u_max[l] = NAN;
-            for (size_t j = 0; j < per_line; j++) {
-                const size_t k = order[base + j];
-                ys[j] = y[k];
-                cs[j] = c[k];
-                if (isfinite(u[k]) && !(u[k] <= u_max[l]))
-                    u_max[l] = u[k];
-            }
-            y90[l] = depth[l] = c_mean[l] = c_core[l] = NAN;
-            if (has_air &&
-                sluice_hyd_aerated_depths(ys, cs, per_line, 0.9, &y90[l], &depth[l],
-                                          &c_mean[l]) == 0)
-                c_core[l] = sluice_hyd_band_mean(ys, cs, per_line, 0.2 * y90[l], 0.5 * y90[l]);
-        }
-        free(ys);
-        free(cs);
-    }
-    const long inception = has_air ? sluice_hyd_first_above(c_core, (size_t)lines, o->threshold)
-                                   : -1;
-    const long first = (long)o->first_step;
+    return 0;
+}
 
-    /* the CSV on stdout: one section per edge, the per-edge summary, the
-     * inception */
-    printf("# step-profiles %s: window [%.10g, %.10g] s, %zu samples; theta = %.10g deg, "
-           "dc = %.10g m, Uc = %.10g m/s (sqrt(g dc) = q/dc = %.6g m/s); %ld edges of %zu "
-           "points; h = %.6g m\n",
-           file, g.time[g.first], g.time[g.last - 1], rows, o->theta, o->dc, o->uc,
-           sqrt(o->g * o->dc), lines, per_line, h);
-    for (long l = 0; l < lines; l++) {
-        printf("\n# step %ld: edge (%.10g, %.10g) m\n", first + l, ex[l], ey[l]);
-        printf("step,point,y,y_dc,U_Uc,U_samples,C,C_samples\n");
+/* The time-mean free surface of a line: the y at which the wet fraction of
+ * the samples (a point is wet where the gauge reads a velocity) falls
+ * through 1/2 going up, linear between points; NaN when the lowest point
+ * is wet less than half of the time or no point above it is. */
+static double step_surface(const step_profiles *sp, size_t base)
+{
+    if (sp->rows == 0)
+        return NAN;
+    double below_y = NAN, below_w = NAN;
+    for (size_t j = 0; j < sp->per_line; j++) {
+        const size_t k = sp->order[base + j];
+        const double w = (double)sp->u_count[k] / (double)sp->rows;
+        if (w < 0.5)
+            return j == 0 ? NAN : below_y + (below_w - 0.5) / (below_w - w) * (sp->y[k] - below_y);
+        below_y = sp->y[k];
+        below_w = w;
+    }
+    return NAN;
+}
+
+/* Each line's profile in the order of y: U/Uc max, the surface, and with
+ * air Y90, d, C_mean and C_core; then the inception line. */
+static int step_line_summaries(analyze_ctx *cx, const options *o, step_profiles *sp)
+{
+    const size_t n = (size_t)sp->lines, per_line = sp->per_line;
+    sp->y90 = analyze_alloc(cx, n, sizeof *sp->y90);
+    sp->depth = analyze_alloc(cx, n, sizeof *sp->depth);
+    sp->c_mean = analyze_alloc(cx, n, sizeof *sp->c_mean);
+    sp->u_max = analyze_alloc(cx, n, sizeof *sp->u_max);
+    sp->c_core = analyze_alloc(cx, n, sizeof *sp->c_core);
+    sp->surface = analyze_alloc(cx, n, sizeof *sp->surface);
+    double *ys = analyze_alloc(cx, per_line, sizeof *ys);
+    double *cs = analyze_alloc(cx, per_line, sizeof *cs);
+    int status = -1;
+    if (!sp->y90 || !sp->depth || !sp->c_mean || !sp->u_max || !sp->c_core || !sp->surface || !ys ||
+        !cs)
+        goto done;
+    for (size_t l = 0; l < n; l++) {
+        const size_t base = l * per_line;
+        sp->u_max[l] = NAN;
         for (size_t j = 0; j < per_line; j++) {
-            const size_t k = order[(size_t)l * per_line + j];
-            printf("%ld,%zu,%.10g,%.10g,%.10g,%zu,%.10g,%zu\n", first + l, k, y[k],
-                   y[k] / o->dc, u[k], u_count[k], c[k], c_count[k]);
+            const size_t k = sp->order[base + j];
+            ys[j] = sp->y[k];
+            cs[j] = sp->c[k];
+            if (isfinite(sp->u[k]) && !(sp->u[k] <= sp->u_max[l]))
+                sp->u_max[l] = sp->u[k];
+        }
+        sp->surface[l] = step_surface(sp, base);
+        sp->y90[l] = sp->depth[l] = sp->c_mean[l] = sp->c_core[l] = NAN;
+        if (sp->has_air && sluice_hyd_aerated_depths(ys, cs, per_line, 0.9, &sp->y90[l],
+                                                     &sp->depth[l], &sp->c_mean[l]) == 0)
+            sp->c_core[l] =
+                sluice_hyd_band_mean(ys, cs, per_line, 0.2 * sp->y90[l], 0.5 * sp->y90[l]);
+    }
+    sp->inception = sp->has_air ? sluice_hyd_first_above(sp->c_core, n, o->threshold) : -1;
+    status = 0;
+done:
+    free(ys);
+    free(cs);
+    return status;
+}
+
+/* The profiles as CSV: a heading, one section per edge, the per-edge
+ * summary and the inception (docs/analysis.md). */
+static void step_write_csv(FILE *f, const options *o, const char *file, const gauge_table *g,
+                           const step_profiles *sp)
+{
+    const long first = (long)o->first_step;
+    fprintf(f,
+            "# step-profiles %s: window [%.10g, %.10g] s, %zu samples; theta = %.10g deg, "
+            "dc = %.10g m, Uc = %.10g m/s (sqrt(g dc) = q/dc = %.6g m/s); %ld edges of %zu "
+            "points; h = %.6g m\n",
+            file, g->time[g->first], g->time[g->last - 1], sp->rows, o->theta, o->dc, o->uc,
+            sqrt(o->g * o->dc), sp->lines, sp->per_line, sp->h);
+    for (long l = 0; l < sp->lines; l++) {
+        fprintf(f, "\n# step %ld: edge (%.10g, %.10g) m\n", first + l, sp->ex[l], sp->ey[l]);
+        fprintf(f, "step,point,y,y_dc,U_Uc,U_samples,C,C_samples\n");
+        for (size_t j = 0; j < sp->per_line; j++) {
+            const size_t k = sp->order[(size_t)l * sp->per_line + j];
+            fprintf(f, "%ld,%zu,%.10g,%.10g,%.10g,%zu,%.10g,%zu\n", first + l, k, sp->y[k],
+                    sp->y[k] / o->dc, sp->u[k], sp->u_count[k], sp->c[k], sp->c_count[k]);
         }
     }
-    printf("\n# per edge: Y90 (C = 0.9), d = integral_0^Y90 (1 - C) dy, C_mean = 1 - d/Y90, "
-           "max U/Uc, C_core = mean C over 0.2-0.5 Y90\n");
-    printf("step,edge_x,edge_y,Y90,Y90_dc,d,d_dc,C_mean,U_Uc_max,C_core\n");
-    for (long l = 0; l < lines; l++)
-        printf("%ld,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n", first + l, ex[l],
-               ey[l], y90[l], y90[l] / o->dc, depth[l], depth[l] / o->dc, c_mean[l], u_max[l],
-               c_core[l]);
-    printf("\n# inception of free-surface aeration: the first edge whose C_core exceeds the "
-           "threshold\n");
-    printf("inception_step,edge_x,edge_y,C_core,threshold\n");
-    if (inception >= 0)
-        printf("%ld,%.10g,%.10g,%.10g,%.10g\n", first + inception, ex[inception], ey[inception],
-               c_core[inception], o->threshold);
+    fprintf(f, "\n# per edge: Y90 (C = 0.9), d = integral_0^Y90 (1 - C) dy, C_mean = 1 - "
+               "d/Y90, max U/Uc, C_core = mean C over 0.2-0.5 Y90, surface = y wet half of the "
+               "time\n");
+    fprintf(f, "step,edge_x,edge_y,Y90,Y90_dc,d,d_dc,C_mean,U_Uc_max,C_core,surface,"
+               "surface_dc\n");
+    for (long l = 0; l < sp->lines; l++)
+        fprintf(f, "%ld,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n",
+                first + l, sp->ex[l], sp->ey[l], sp->y90[l], sp->y90[l] / o->dc, sp->depth[l],
+                sp->depth[l] / o->dc, sp->c_mean[l], sp->u_max[l], sp->c_core[l], sp->surface[l],
+                sp->surface[l] / o->dc);
+    fprintf(f, "\n# inception of free-surface aeration: the first edge whose C_core exceeds the "
+               "threshold\n");
+    fprintf(f, "inception_step,edge_x,edge_y,C_core,threshold\n");
+    const long i = sp->inception;
+    if (i >= 0)
+        fprintf(f, "%ld,%.10g,%.10g,%.10g,%.10g\n", first + i, sp->ex[i], sp->ey[i], sp->c_core[i],
+                o->threshold);
     else
-        printf("nan,nan,nan,nan,%.10g\n", o->threshold);
-    fflush(stdout);
-    if (has_air && isfinite(h))
-        for (long l = 0; l < lines; l++)
-            if (y90[l] < STEP_MIN_Y90_OVER_H * h)
+        fprintf(f, "nan,nan,nan,nan,%.10g\n", o->threshold);
+}
+
+/* For a run directory: the headline figures as `name = value` lines, one
+ * per edge and quantity (named by the step), and the inception step. */
+static void step_print_figures(const options *o, const step_profiles *sp)
+{
+    const long first = (long)o->first_step;
+    for (long l = 0; l < sp->lines; l++) {
+        const long s = first + l;
+        printf("U_Uc_max_step%ld = %.10g\n", s, sp->u_max[l]);
+        printf("surface_dc_step%ld = %.10g\n", s, sp->surface[l] / o->dc);
+        if (sp->has_air) {
+            printf("Y90_dc_step%ld = %.10g\n", s, sp->y90[l] / o->dc);
+            printf("d_dc_step%ld = %.10g\n", s, sp->depth[l] / o->dc);
+            printf("C_mean_step%ld = %.10g\n", s, sp->c_mean[l]);
+            printf("C_core_step%ld = %.10g\n", s, sp->c_core[l]);
+        }
+    }
+    if (sp->has_air) {
+        if (sp->inception >= 0)
+            printf("inception_step = %ld\n", first + sp->inception);
+        else
+            printf("inception_step = nan\n");
+    }
+}
+
+static void step_warnings(const options *o, const char *file, const step_profiles *sp)
+{
+    const long first = (long)o->first_step;
+    if (sp->has_air && isfinite(sp->h))
+        for (long l = 0; l < sp->lines; l++)
+            if (sp->y90[l] < STEP_MIN_Y90_OVER_H * sp->h)
                 fprintf(stderr,
                         "sluice-analyze: warning: step %ld: Y90 = %.4g m < %.1f h = %.4g m: the "
                         "band 0.2-0.5 Y90 reaches the kernel smear of the free surface, so "
                         "C_core there is not entrainment alone\n",
-                        first + l, y90[l], STEP_MIN_Y90_OVER_H, STEP_MIN_Y90_OVER_H * h);
-    if (has_air && !isfinite(h))
-        fprintf(stderr, "sluice-analyze: note: h unknown (no --h, no scene.resolved.yaml): the "
-                        "Y90 >= %.1f h check of the inception band is skipped\n",
+                        first + l, sp->y90[l], STEP_MIN_Y90_OVER_H, STEP_MIN_Y90_OVER_H * sp->h);
+    if (sp->has_air && !isfinite(sp->h))
+        fprintf(stderr,
+                "sluice-analyze: note: h unknown (no --h, no scene.resolved.yaml): the "
+                "Y90 >= %.1f h check of the inception band is skipped\n",
                 STEP_MIN_Y90_OVER_H);
-    if (!has_air) {
-        fprintf(stderr, "sluice-analyze: note: %s has no p<k>_air_fraction columns (point_gauge "
-                        "fields: velocity, air_fraction in a two_phase scene): no Y90, C_mean "
-                        "or inception\n",
+    if (!sp->has_air)
+        fprintf(stderr,
+                "sluice-analyze: note: %s has no p<k>_air_fraction columns (point_gauge "
+                "fields: velocity, air_fraction in a two_phase scene): no Y90, C_mean "
+                "or inception\n",
                 file);
-        status = 0;
-    } else if (inception < 0) {
+}
+
+/* Given a point_gauge CSV, the CSV on stdout and exit 1 when no edge
+ * reaches the threshold; given a run directory, step_profiles.csv in --out
+ * and the figures on stdout, no inception being a figure (nan), not a
+ * failure. */
+static int cmd_step_profiles(analyze_ctx *cx, const options *o)
+{
+    if (o->positional_count != 1)
+        return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
+                            "step-profiles needs a run directory or its point_gauge CSV file");
+    if (step_check_options(cx, o) != 0)
+        return -1;
+    int is_run = 0, status = -1;
+    step_profiles sp;
+    memset(&sp, 0, sizeof sp);
+    sp.per_line = (size_t)o->per_line;
+    gauge_table g;
+    memset(&g, 0, sizeof g);
+    char *out = NULL;
+    char *file = step_points_file(cx, o->positional[0], &is_run);
+    if (!file)
+        goto done;
+    sp.lines = analyze_parse_points(cx, "--edges", o->edges, &sp.ex, &sp.ey);
+    if (sp.lines < 0 || gauge_table_load(cx, o, file, &g) != 0 ||
+        step_point_means(cx, o, file, &g, &sp) != 0 || step_sort_lines(cx, o, &sp) != 0 ||
+        step_line_summaries(cx, o, &sp) != 0)
+        goto done;
+    if (is_run) {
+        char *path;
+        out = out_dir(cx, o, o->positional[0]);
+        FILE *f = out ? open_csv(cx, out, "step_profiles.csv", &path) : NULL;
+        if (!f)
+            goto done;
+        printf("source = %s\n", file);
+        step_write_csv(f, o, file, &g, &sp);
+        if (close_csv(cx, f, path) != 0)
+            goto done;
+        step_print_figures(o, &sp);
+    } else {
+        step_write_csv(stdout, o, file, &g, &sp);
+    }
+    fflush(stdout);
+    step_warnings(o, file, &sp);
+    if (sp.has_air && sp.inception < 0 && !is_run)
         analyze_fail(cx, SLUICE_ANALYZE_NOT_FOUND,
                      "no step edge has a mean air concentration above %g over 0.2-0.5 Y90 (no "
                      "inception of free-surface aeration among these edges)",
                      o->threshold);
-    } else {
+    else
         status = 0;
-    }
 done:
     gauge_table_free(&g);
-    free(ex);
-    free(ey);
-    free(px);
-    free(py);
-    free(y);
-    free(u);
-    free(c);
-    free(order);
-    free(u_count);
-    free(c_count);
-    free(series);
-    free(y90);
-    free(depth);
-    free(c_mean);
-    free(u_max);
-    free(c_core);
+    step_profiles_free(&sp);
+    free(file);
+    free(out);
     return status;
 }
 

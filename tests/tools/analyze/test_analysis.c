@@ -1513,7 +1513,7 @@ static char *make_step_run(int with_air)
             step_point(k, &l, &j);
             const double y = j * STEP_DY;
             const double U = inside ? step_u(l, y) * (1 + 0.2 * si) : 100.0, W = 0.3;
-            if (j == STEP_N - 1 || (y >= 0.085 - 1e-12 && i % 2))
+            if (j == STEP_N - 1 || (y >= 0.085 - 1e-12 && i % 4 == 3))
                 fputs(",nan,nan", f);
             else
                 fprintf(f, ",%.17g,%.17g", U * c + W * s, -U * s + W * c);
@@ -1585,9 +1585,13 @@ START_TEST(cli_step_profiles)
             if (j == STEP_N - 1) {
                 ck_assert(isnan(u));
                 ck_assert_uint_eq(nu, 0);
+            } else if (ye >= 0.085 - 1e-12) {
+                /* wet at 3 of every 4 samples: the pattern's mean (1 + 0.5 - 1) / 3 */
+                ck_assert_double_eq_tol(u, step_u(l, ye) * (1 + 0.2 / 6) / uc, 1e-9);
+                ck_assert_uint_eq(nu, 75);
             } else {
                 ck_assert_double_eq_tol(u, step_u(l, ye) / uc, 1e-9);
-                ck_assert_uint_eq(nu, ye >= 0.085 - 1e-12 ? 50 : 100);
+                ck_assert_uint_eq(nu, 100);
             }
             ck_assert_double_eq_tol(cc, step_c(l, ye), 1e-9);
             ck_assert_uint_eq(nc, 100);
@@ -1598,14 +1602,19 @@ START_TEST(cli_step_profiles)
      * rise: error (0.9 - C0) Delta^2 / (6 L) in the integral of C; line 5
      * linear: exact), C_mean, max U/Uc = Umax/Uc, C_core = C0 */
     const char *row = csv_section(out, "step,edge_x,edge_y,Y90,Y90_dc,d,d_dc,C_mean,U_Uc_max,"
-                                       "C_core", 0);
+                                       "C_core,surface,surface_dc", 0);
     ck_assert_ptr_nonnull(row);
     for (int l = 0; l < 6; l++) {
         long step;
-        double ex, ey, y90, y90dc, d, ddc, cm, um, core;
-        ck_assert_int_eq(sscanf(row, "%ld,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &step, &ex, &ey,
-                                &y90, &y90dc, &d, &ddc, &cm, &um, &core),
-                         10);
+        double ex, ey, y90, y90dc, d, ddc, cm, um, core, surface, surface_dc;
+        ck_assert_int_eq(sscanf(row, "%ld,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%lf", &step,
+                                &ex, &ey, &y90, &y90dc, &d, &ddc, &cm, &um, &core, &surface,
+                                &surface_dc),
+                         12);
+        /* the surface: wet 3/4 of the time at y = 0.095 m, never at 0.1 m,
+         * so 1/2 is crossed a third of the way up, linearly */
+        ck_assert_double_eq_tol(surface, 0.095 + STEP_DY / 3, 1e-11);
+        ck_assert_double_eq_tol(surface_dc, (0.095 + STEP_DY / 3) / dc, 1e-9);
         const step_line_spec *sp = &step_lines[l];
         double y90e, de, exact;
         if (sp->b > 0) {
@@ -1626,7 +1635,7 @@ START_TEST(cli_step_profiles)
         ck_assert_double_eq_tol(y90dc, y90e / dc, 1e-9);
         ck_assert_double_eq_tol(d, de, 1e-11);
         ck_assert_double_eq_tol(cm, 1 - de / y90e, 1e-9);
-        ck_assert_double_eq_tol(um, (1.0 + 0.2 * l) / uc, 1e-9);
+        ck_assert_double_eq_tol(um, (1.0 + 0.2 * l) * (1 + 0.2 / 6) / uc, 1e-9);
         ck_assert_double_eq_tol(core, sp->c0, 1e-9);
         row = strchr(row, '\n') + 1;
     }
@@ -1674,6 +1683,57 @@ START_TEST(cli_step_profiles)
     free(args);
     free(out);
     free(err);
+
+    /* given the run directory: the same CSV in RUN/analysis/step_profiles.csv,
+     * the figures as name = value lines (what a study reads); no inception
+     * is the figure nan, exit 0 */
+    char *csv_mode = NULL;
+    for (int pass = 0; pass < 3; pass++) {
+        ck_assert(asprintf(&args,
+                           "step-profiles %s%s --per-line 21 --edges '%s' --theta 21.8 "
+                           "--dc 0.07 --uc 0.668 --from 0.995 --to 1.995 --first-step 3%s",
+                           run, pass == 0 ? "/points.csv" : "", edges,
+                           pass == 2 ? " --threshold 0.5" : "") > 0);
+        status = analyze(run, args, &out, &err);
+        fprintf(stderr, "cli step-profiles (pass %d): exit %d\n%s%s", pass, status,
+                pass ? out : "", err);
+        ck_assert_int_eq(status, 0);
+        free(args);
+        if (pass == 0) {
+            csv_mode = out;
+            free(err);
+            continue;
+        }
+        char *written = NULL;
+        ck_assert(asprintf(&args, "%s/analysis/step_profiles.csv", run) > 0);
+        written = test_read_file(args);
+        free(args);
+        ck_assert_ptr_nonnull(written);
+        if (pass == 1)
+            ck_assert_str_eq(written, csv_mode);
+        free(written);
+        ck_assert_ptr_nonnull(strstr(out, "/points.csv\n"));
+        double figure = NAN;
+        const char *at = strstr(out, "\nU_Uc_max_step4 = ");
+        ck_assert_ptr_nonnull(at);
+        ck_assert_double_eq_tol(strtod(strchr(at, '=') + 1, NULL), 1.2 * (1 + 0.2 / 6) / uc, 1e-9);
+        at = strstr(out, "\nsurface_dc_step8 = ");
+        ck_assert_ptr_nonnull(at);
+        ck_assert_double_eq_tol(strtod(strchr(at, '=') + 1, NULL), (0.095 + STEP_DY / 3) / dc, 1e-9);
+        at = strstr(out, "\nC_core_step5 = ");
+        ck_assert_ptr_nonnull(at);
+        ck_assert_double_eq_tol(strtod(strchr(at, '=') + 1, NULL), 0.06, 1e-9);
+        at = strstr(out, "\ninception_step = ");
+        ck_assert_ptr_nonnull(at);
+        figure = strtod(strchr(at, '=') + 1, NULL);
+        if (pass == 1)
+            ck_assert_double_eq(figure, 5);
+        else
+            ck_assert(isnan(figure));
+        free(out);
+        free(err);
+    }
+    free(csv_mode);
 
     /* bad input: one line on stderr naming the problem, exit 2 */
     char points[8192] = "";
