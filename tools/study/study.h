@@ -108,6 +108,10 @@ typedef struct study_measure {
     size_t reference_index;
     const sluice_node *reference_measure_at;
     int absolute; /* error = value - reference (else relative) */
+    /* the target a run meets (NAN: none): |error| <= within, value < below,
+     * value > above */
+    int has_target;
+    double within, below, above;
     const sluice_node *at;
 } study_measure;
 

@@ -628,6 +628,44 @@ static int read_scale_and_reference(study *s, const sluice_node *node, study_mea
     return errors;
 }
 
+/* A measure's target: within (the largest |error| against the reference,
+ * a fraction, or in the measure's unit when the error is absolute), below
+ * and above (bounds on the value itself); NAN where not given. */
+static int read_target(study *s, const sluice_node *node, study_measure *m)
+{
+    static const char *const names[] = {"within", "below", "above"};
+    double *slots[] = {&m->within, &m->below, &m->above};
+    int errors = 0;
+    for (int i = 0; i < 3; i++) {
+        *slots[i] = NAN;
+        const sluice_node *n = sluice_node_get(node, names[i]);
+        if (!n)
+            continue;
+        if (number_of(n, slots[i]) != 0 || !isfinite(*slots[i])) {
+            study_error(s, n, "measure '%s': %s is a number", m->name, names[i]);
+            errors++;
+        } else if (i == 0 && !(*slots[i] > 0)) {
+            study_error(s, n,
+                        "measure '%s': within is the largest error allowed, a positive number "
+                        "(0.1: 10 %% of the reference)",
+                        m->name);
+            errors++;
+        } else if (i == 0 && !m->has_reference) {
+            study_error(s, n, "measure '%s': within needs a reference (or give below/above)",
+                        m->name);
+            errors++;
+        }
+        m->has_target = 1;
+    }
+    if (m->below <= m->above) {
+        study_error(s, sluice_node_get(node, "below"),
+                    "measure '%s': below %g is not above above %g: no value meets both",
+                    m->name, m->below, m->above);
+        errors++;
+    }
+    return errors;
+}
+
 static int read_measure(study *s, const sluice_node *node, study_measure *m)
 {
     static const char *const keys[] = {"name",      "unit",      "gauge",
@@ -635,7 +673,7 @@ static int read_measure(study *s, const sluice_node *node, study_measure *m)
                                        "to",        "last",      "analysis",
                                        "key",       "run",       "reference",
                                        "error",     "scale",     "reference_measure",
-                                       "reference_factor"};
+                                       "reference_factor", "within", "below", "above"};
     if (node->kind != SLUICE_NODE_MAPPING) {
         study_error(s, node, "a measure is a mapping: name and one source (gauge, analysis, run)");
         return 1;
@@ -716,7 +754,7 @@ static int read_measure(study *s, const sluice_node *node, study_measure *m)
             errors++;
         }
     }
-    return errors;
+    return errors + read_target(s, node, m);
 }
 
 static int read_list(study *s, const char *key, int required)

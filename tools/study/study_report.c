@@ -406,6 +406,146 @@ static void write_orders(study *s, FILE *csv, FILE *md)
     free(members);
 }
 
+/* ------------------------------------------------------------- targets -- */
+
+/* How far run r misses measure k's target: 0 met, > 0 the miss in units of
+ * the target (|error| / within - 1, or the value's distance past a bound
+ * over the bound's size); +inf without a value (failed, unstable, not run). */
+static double target_miss(const study_measure *m, const study_run *r, size_t k)
+{
+    if (r->state != RUN_DONE || !r->values || !isfinite(r->values[k]))
+        return INFINITY;
+    const double v = r->values[k];
+    double miss = 0;
+    if (isfinite(m->within)) {
+        if (!isfinite(r->errors[k]))
+            return INFINITY;
+        miss = fmax(miss, fabs(r->errors[k]) / m->within - 1);
+    }
+    if (isfinite(m->below) && v > m->below)
+        miss = fmax(miss, (v - m->below) / fmax(fabs(m->below), 1e-300));
+    if (isfinite(m->above) && v < m->above)
+        miss = fmax(miss, (m->above - v) / fmax(fabs(m->above), 1e-300));
+    return miss;
+}
+
+/* Every run of r's group (done or not), coarse to fine. */
+static size_t group_runs(const study *s, const study_run *r, const study_run **out)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < s->run_count; i++)
+        if (same_group(s, r, &s->runs[i]))
+            out[n++] = &s->runs[i];
+    for (size_t i = 1; i < n; i++)
+        for (size_t j = i; j > 0 && out[j]->resolution > out[j - 1]->resolution; j--) {
+            const study_run *t = out[j];
+            out[j] = out[j - 1];
+            out[j - 1] = t;
+        }
+    return n;
+}
+
+static void target_text(const study_measure *m, char *text, size_t size)
+{
+    text[0] = '\0';
+    if (isfinite(m->within)) {
+        if (m->absolute)
+            append(text, size, "|error| <= %g%s%s", m->within, *m->unit ? " " : "", m->unit);
+        else
+            append(text, size, "within %g %% of the reference", 100 * m->within);
+    }
+    if (isfinite(m->above))
+        append(text, size, "%sat least %g", *text ? ", " : "", m->above);
+    if (isfinite(m->below))
+        append(text, size, "%sat most %g", *text ? ", " : "", m->below);
+}
+
+/* One row per group: each target's misses at each spacing (coarse to
+ * fine), how many targets it meets at every spacing; then the best group:
+ * the most targets met at every spacing, then at the finest, then the
+ * smallest sum of misses at the finest. */
+static void write_targets(const study *s, FILE *md)
+{
+    size_t targets = 0;
+    for (size_t k = 0; k < s->measure_count; k++)
+        targets += s->measures[k].has_target != 0;
+    const study_run **members = calloc(s->run_count + 1, sizeof *members);
+    if (targets == 0 || !members) {
+        free(members);
+        return;
+    }
+    fprintf(md, "\n## Against the targets\n\nTargets:");
+    for (size_t k = 0, j = 0; k < s->measure_count; k++) {
+        char text[256];
+        if (!s->measures[k].has_target)
+            continue;
+        target_text(&s->measures[k], text, sizeof text);
+        fprintf(md, "%s %s %s", j++ ? ";" : "", s->measures[k].name, text);
+    }
+    fprintf(md, ". Each cell: met (yes) or missed (no) at each spacing, coarse to fine "
+                "(- : no value: the run failed, went unstable or has not run).\n\n| group |");
+    for (size_t k = 0; k < s->measure_count; k++)
+        if (s->measures[k].has_target)
+            fprintf(md, " %s |", s->measures[k].name);
+    fprintf(md, " met at every spacing | met at the finest |\n|---|");
+    for (size_t k = 0; k < targets + 2; k++)
+        fprintf(md, "---|");
+    fprintf(md, "\n");
+    char *best = NULL;
+    size_t best_every = 0, best_finest = 0;
+    double best_miss = INFINITY;
+    int best_set = 0;
+    for (size_t i = 0; i < s->run_count; i++) {
+        const study_run *r = &s->runs[i];
+        int first = 1;
+        for (size_t j = 0; j < i && first; j++)
+            first = !same_group(s, r, &s->runs[j]);
+        if (!first)
+            continue;
+        size_t n = group_runs(s, r, members), every = 0, finest = 0;
+        double miss_sum = 0;
+        char *label = group_label(s, r);
+        fprintf(md, "| %s |", label);
+        for (size_t k = 0; k < s->measure_count; k++) {
+            const study_measure *m = &s->measures[k];
+            if (!m->has_target)
+                continue;
+            int all = 1;
+            fprintf(md, " ");
+            for (size_t j = 0; j < n; j++) {
+                double miss = target_miss(m, members[j], k);
+                all &= miss == 0;
+                fprintf(md, "%s%s", j ? " " : "", isinf(miss) ? "-" : miss == 0 ? "yes" : "no");
+                if (j == n - 1) {
+                    finest += miss == 0;
+                    miss_sum += miss;
+                }
+            }
+            every += all && n > 0;
+            fprintf(md, " |");
+        }
+        fprintf(md, " %zu of %zu | %zu of %zu |\n", every, targets, finest, targets);
+        if (!best_set || every > best_every || (every == best_every && finest > best_finest) ||
+            (every == best_every && finest == best_finest && miss_sum < best_miss)) {
+            free(best);
+            best = study_strdup(label);
+            best_every = every;
+            best_finest = finest;
+            best_miss = miss_sum;
+            best_set = 1;
+        }
+        free(label);
+    }
+    if (best)
+        fprintf(md,
+                "\n**Best against the targets: %s**, meeting %zu of the %zu targets at every "
+                "spacing and %zu at the finest%s.\n",
+                best, best_every, targets, best_finest,
+                best_every == targets ? "" : "; no group meets every target at every spacing");
+    free(best);
+    free(members);
+}
+
 /* ---------------------------------------------------------------- tables -- */
 
 static const char *state_name(const study_run *r)
@@ -688,6 +828,7 @@ int study_write_reports(study *s)
                 s->profile ? s->profile : "", s->out);
         write_table(s, files[0], md);
         write_notes(s, md);
+        write_targets(s, md);
         write_orders(s, files[1], md);
         write_plots(s, md);
         for (int i = 0; i < 3; i++)

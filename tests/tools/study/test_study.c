@@ -551,6 +551,48 @@ START_TEST(orders_along_a_parameter_axis)
 }
 END_TEST
 
+/* Targets: h = ratio x dx against 0.05 m within 30 % (0.035-0.065 m), h in
+ * mm at most 40 and h at least 1 mm. Ratio 1.2 (h 0.06, 0.03 m) meets the
+ * first at dx 0.05 only and the second at 0.025 only; ratio 1.5 (0.075,
+ * 0.0375 m) meets both at 0.025: no group meets two targets at every
+ * spacing, and 1.5 is best by the finest spacing (3 of 3 against 2). */
+START_TEST(targets_name_the_best_group)
+{
+    char *dir = test_scratch("study-targets");
+    char *file = write_study(dir, "t.yaml",
+                             "scene: %s\n"
+                             "set: {time.end: 0.01, plugins.hdf5.interval: 0.01}\n"
+                             "jobs: 2\n"
+                             "axes:\n"
+                             "  - {name: ratio, parameter: particles.smoothing_length_ratio, "
+                             "values: [1.2, 1.5]}\n"
+                             "  - {name: dx, spacing: [0.05, 0.025]}\n"
+                             "measures:\n"
+                             "  - {name: h, unit: m, run: smoothing_length, reference: 0.05, "
+                             "within: 0.3}\n"
+                             "  - {name: h_mm, unit: mm, run: smoothing_length, scale: 1000, "
+                             "below: 40}\n"
+                             "  - {name: h_m, unit: m, run: smoothing_length, above: 0.001}\n");
+    char *args = NULL, *output = NULL, *path = NULL;
+    ck_assert_int_ge(asprintf(&args, "study %s --out %s/out", file, dir), 0);
+    ck_assert_int_eq(study(args, &output), 0);
+    free(output);
+    ck_assert_int_ge(asprintf(&path, "%s/out/study.md", dir), 0);
+    char *md = test_read_file(path);
+    ck_assert_ptr_nonnull(md);
+    ck_assert_msg(strstr(md, "| 1.2 | yes no | no yes | yes yes | 1 of 3 | 2 of 3 |"), "%s", md);
+    ck_assert_msg(strstr(md, "| 1.5 | no yes | no yes | yes yes | 1 of 3 | 3 of 3 |"), "%s", md);
+    ck_assert_msg(strstr(md, "**Best against the targets: 1.5**, meeting 1 of the 3 targets at "
+                             "every spacing and 3 at the finest; no group meets every target"),
+                  "%s", md);
+    free(md);
+    free(path);
+    free(args);
+    free(file);
+    free(dir);
+}
+END_TEST
+
 /* A study file that is refused: exit 2, the message at file:line:column,
  * nothing written. */
 static void expect_refused(const char *body, const char *position, const char *message)
@@ -684,6 +726,13 @@ START_TEST(bad_study_files_are_refused)
                    "5:60", "measure 'p': give either reference or reference_measure");
     expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p, run: steps, scale: 0}\n", "5:34",
                    "measure 'p': scale is a non-zero number the value is multiplied by");
+    expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p, run: steps, within: 0.1}\n",
+                   "5:35", "measure 'p': within needs a reference (or give below/above)");
+    expect_refused("scene: %s\n" AXIS
+                   "measures:\n  - {name: p, run: steps, reference: 1, within: -0.1}\n",
+                   "5:49", "measure 'p': within is the largest error allowed, a positive number");
+    expect_refused("scene: %s\n" AXIS "measures:\n  - {name: p, run: steps, below: 1, above: 2}\n",
+                   "5:34", "measure 'p': below 1 is not above above 2: no value meets both");
     expect_refused("scene: %s\naxes: [\n", "3:1",
                    "YAML syntax error: did not find expected node content");
 }
@@ -699,6 +748,7 @@ int main(void)
     tcase_add_test(runs, interrupted_study_continues_from_the_checkpoint);
     tcase_add_test(runs, external_programs_as_axis_values);
     tcase_add_test(runs, orders_along_a_parameter_axis);
+    tcase_add_test(runs, targets_name_the_best_group);
     suite_add_tcase(s, runs);
     TCase *refusals = tcase_create("refusals");
     tcase_add_test(refusals, bad_study_files_are_refused);
