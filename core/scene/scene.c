@@ -1815,8 +1815,19 @@ static int apply_edits(sluice_scene *scene, const sluice_scene_edits *edits, slu
     for (size_t i = 0; !errors && i < edits->override_count; i++) {
         char origin[32];
         snprintf(origin, sizeof origin, "--set #%zu", i + 1);
-        if (sluice_yaml_override(scene->root, edits->overrides[i], origin, diag) != 0)
+        const char *text = edits->overrides[i];
+        if (strncmp(text, "variant", 7) == 0 && (text[7] == '=' || text[7] == '.')) {
+            /* setting it would only write the record of a resolved scene and
+             * apply nothing */
+            sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, origin, 1, 1,
+                            "--set '%s': a variant is applied with --variant NAME (in a study, "
+                            "the key 'variant' beside 'set'); the scene key 'variant' only "
+                            "records the variant a resolved scene was made from",
+                            text);
             errors++;
+        } else if (sluice_yaml_override(scene->root, text, origin, diag) != 0) {
+            errors++;
+        }
     }
     return errors;
 }

@@ -445,6 +445,13 @@ START_TEST(variant_errors)
     ck_assert_int_eq(o.status, 2);
     ck_assert_msg(strstr(o.output, "--variant is given twice"), "%s", o.output);
     done(&o);
+    /* setting the record would apply nothing: refused at the --set */
+    o = run_case(text, "--set variant=inviscid");
+    ck_assert_int_eq(o.status, 2);
+    ck_assert_msg(strstr(o.output, "--set #1:1:1: error: --set 'variant=inviscid': a variant is "
+                                   "applied with --variant NAME"),
+                  "%s", o.output);
+    done(&o);
     free(text);
 
     text = scene_text(0, NULL, NULL);
