@@ -406,6 +406,77 @@ static void write_orders(study *s, FILE *csv, FILE *md)
     free(members);
 }
 
+/* ---------------------------------------------------------- status map -- */
+
+static const char *state_name(const study_run *r);
+
+/* The run with values i and j of the first two axes and r's values of the
+ * others, or NULL. */
+static const study_run *map_run(const study *s, const study_run *r, size_t i, size_t j)
+{
+    for (size_t n = 0; n < s->run_count; n++) {
+        const study_run *o = &s->runs[n];
+        int same = o->choice[0] == i && o->choice[1] == j;
+        for (size_t a = 2; same && a < s->axis_count; a++)
+            same = o->choice[a] == r->choice[a];
+        if (same)
+            return o;
+    }
+    return NULL;
+}
+
+/* How each run ended, on the grid of the first two axes (one grid per
+ * combination of the other axes): complete with its largest density
+ * deviation, or the time a run stopped at (a stability map). */
+static void write_status_map(const study *s, FILE *md)
+{
+    if (s->axis_count < 2)
+        return;
+    const study_axis *rows = &s->axes[0], *columns = &s->axes[1];
+    fprintf(md, "\n## Status map\n\nHow each run ended, %s (rows) against %s (columns): "
+                "complete with its largest fluid density deviation |rho/rho0 - 1|, or the "
+                "simulated time at which it stopped (the reason under *Runs skipped or "
+                "failed*).\n",
+            rows->name, columns->name);
+    for (size_t n = 0; n < s->run_count; n++) {
+        const study_run *r = &s->runs[n];
+        if (r->choice[0] != 0 || r->choice[1] != 0)
+            continue;
+        if (s->axis_count > 2) {
+            fprintf(md, "\n###");
+            for (size_t a = 2; a < s->axis_count; a++)
+                fprintf(md, " %s %s", s->axes[a].name, s->axes[a].values[r->choice[a]].label);
+            fprintf(md, "\n");
+        }
+        fprintf(md, "\n| %s \\ %s |", rows->name, columns->name);
+        for (size_t j = 0; j < columns->count; j++)
+            fprintf(md, " %s |", columns->values[j].label);
+        fprintf(md, "\n|---|");
+        for (size_t j = 0; j < columns->count; j++)
+            fprintf(md, "---|");
+        fprintf(md, "\n");
+        for (size_t i = 0; i < rows->count; i++) {
+            fprintf(md, "| %s |", rows->values[i].label);
+            for (size_t j = 0; j < columns->count; j++) {
+                const study_run *c = map_run(s, r, i, j);
+                if (!c) {
+                    fprintf(md, " |");
+                    continue;
+                }
+                const double deviation = run_value(s, c, "max_density_deviation");
+                const double reached = run_value(s, c, "simulated_time");
+                if (c->state == RUN_DONE)
+                    fprintf(md, " complete, %.2g %% |", 100 * deviation);
+                else if (c->state == RUN_FAILED && isfinite(reached))
+                    fprintf(md, " %s at %.3g s |", state_name(c), reached);
+                else
+                    fprintf(md, " %s |", state_name(c));
+            }
+            fprintf(md, "\n");
+        }
+    }
+}
+
 /* ------------------------------------------------------------- targets -- */
 
 /* How far run r misses measure k's target: 0 met, > 0 the miss in units of
@@ -828,6 +899,7 @@ int study_write_reports(study *s)
                 s->profile ? s->profile : "", s->out);
         write_table(s, files[0], md);
         write_notes(s, md);
+        write_status_map(s, md);
         write_targets(s, md);
         write_orders(s, files[1], md);
         write_plots(s, md);

@@ -259,25 +259,39 @@ START_TEST(unstable_run_is_recorded_not_fatal)
                              "axes:\n"
                              "  - {name: c0, parameter: plugins.tait.speed_of_sound, values: "
                              "[22.1, 1]}\n"
+                             "  - {name: walls, values: {dbc: {}}}\n"
                              "measures:\n"
                              "  - {name: steps, run: steps}\n");
     char *args = NULL, *output = NULL;
     ck_assert_int_ge(asprintf(&args, "study %s --out %s/out", file, dir), 0);
     ck_assert_int_eq(study(args, &output), 0);
-    ck_assert_ptr_nonnull(strstr(output, "run 1 failed (exit 3: step 1"));
+    ck_assert_ptr_nonnull(strstr(output, "run 1_dbc failed (exit 3: step 1"));
     free(output);
     char *path = NULL;
     ck_assert_int_ge(asprintf(&path, "%s/out/study.csv", dir), 0);
     char *csv = test_read_file(path);
     ck_assert_ptr_nonnull(csv);
-    char *state = csv_field(csv, "1", "status");
+    char *state = csv_field(csv, "1_dbc", "status");
     ck_assert_str_eq(state, "unstable");
     free(state);
-    state = csv_field(csv, "22.1", "status");
+    state = csv_field(csv, "22.1_dbc", "status");
     ck_assert_str_eq(state, "complete");
     free(state);
-    ck_assert(csv_number(csv, "22.1", "steps") > 0);
-    ck_assert(isnan(csv_number(csv, "1", "steps"))); /* no measure of a failed run */
+    ck_assert(csv_number(csv, "22.1_dbc", "steps") > 0);
+    ck_assert(isnan(csv_number(csv, "1_dbc", "steps"))); /* no measure of a failed run */
+    /* the status map: the first axis against the second, the unstable run
+     * with the time it stopped at (after its first step, before the end) */
+    char *md_path = NULL;
+    ck_assert_int_ge(asprintf(&md_path, "%s/out/study.md", dir), 0);
+    char *md = test_read_file(md_path);
+    ck_assert_ptr_nonnull(md);
+    ck_assert_msg(strstr(md, "| c0 \\ walls | dbc |\n|---|---|\n| 22.1 | complete, "), "%s", md);
+    const char *stopped = strstr(md, "\n| 1 | unstable at ");
+    ck_assert_msg(stopped, "%s", md);
+    double t_stop = strtod(stopped + strlen("\n| 1 | unstable at "), NULL);
+    ck_assert_msg(t_stop > 0 && t_stop < 0.02, "%g", t_stop);
+    free(md);
+    free(md_path);
     /* a failed run is kept as failed; --retry-failed runs it again */
     ck_assert_int_eq(study(args, &output), 0);
     ck_assert_ptr_nonnull(strstr(output, "2/2 runs done (1 failed, 0 running, 2 from before)"));
