@@ -124,11 +124,23 @@ static int parse(int argc, char **argv, int first, arguments *a, int allow_out)
             a->restart = arg + 10;
         } else if (strcmp(arg, "--threads") == 0 || strcmp(arg, "-j") == 0) {
             char *end = NULL;
-            if (i + 1 >= argc || (a->threads = (int)strtol(argv[i + 1], &end, 10), *end) ||
-                a->threads < 1) {
+            long threads = 0;
+            if (i + 1 >= argc || (threads = strtol(argv[i + 1], &end, 10), *end) || threads < 1) {
                 fprintf(stderr, "sluice: error: --threads needs a positive integer\n");
                 return -1;
             }
+            /* more threads than 16 per processor only compete (and libgomp
+             * crashes creating tens of thousands) */
+            long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+            long most = 16 * (cpus > 0 ? cpus : 1);
+            if (threads > most) {
+                fprintf(stderr,
+                        "sluice: error: --threads %s: at most %ld, 16 per processor (this "
+                        "machine has %ld)\n",
+                        argv[i + 1], most, cpus > 0 ? cpus : 1);
+                return -1;
+            }
+            a->threads = (int)threads;
             i++;
         } else if (allow_out && strcmp(arg, "--progress") == 0) {
             a->progress = 1;

@@ -1,10 +1,12 @@
 #define _GNU_SOURCE
 #include "scene.h"
 
+#include <errno.h>
 #include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "schema.h"
 
@@ -37,9 +39,10 @@ typedef struct {
 } time_config;
 
 static const sluice_param_spec time_specs[] = {
-    {"end", SLUICE_PARAM_REAL, OFF(time_config, end), NULL, 0, 0,
-     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "s", "simulated time at which the run ends",
-     NULL, 0},
+    /* at least 1e-6 s, as every output interval: below 1e-12 s the time loop
+     * counts the end as reached before the first step */
+    {"end", SLUICE_PARAM_REAL, OFF(time_config, end), NULL, 1e-6, 0, SLUICE_PARAM_HAS_MIN, "s",
+     "simulated time at which the run ends", NULL, 0},
     {"max_step", SLUICE_PARAM_REAL, OFF(time_config, max_step), "0", 0, 0, SLUICE_PARAM_HAS_MIN,
      "s", "upper limit of the time step (0: no limit beyond the stability conditions)", NULL, 0},
 };
@@ -1282,6 +1285,13 @@ static int load_plugin_path(sluice_scene *scene, sluice_diag *diag)
             snprintf(full, len, "%s", tok);
         else
             snprintf(full, len, "%s/%s", scene->directory, tok);
+        struct stat st;
+        const int missing = stat(full, &st) != 0;
+        if (missing || !S_ISDIR(st.st_mode)) {
+            error_at(diag, scene, node, "plugin_path: '%s' is not a directory (%s)", full,
+                     missing ? strerror(errno) : "a file");
+            return 1;
+        }
         scene->plugin_path[scene->plugin_path_count++] = full;
     }
     return 0;

@@ -195,6 +195,36 @@ START_TEST(interval_too_small)
 }
 END_TEST
 
+/* Accepted silently before: an end time the time loop counts as reached
+ * before the first step ("completed 0 steps"), a plugin directory that does
+ * not exist, a thread count that crashed libgomp. */
+START_TEST(silent_acceptances_refused)
+{
+    char *text = scene_text(5, "  end: 1e-300", NULL);
+    outcome o = run_case(text, NULL);
+    expect_error(&o, 5, 8, "time.end");
+    ck_assert(strstr(o.output, "range"));
+    done(&o);
+    free(text);
+
+    text = scene_text(0, NULL, "plugin_path: /nonexistent/sluice-plugins\n");
+    o = run_case(text, NULL);
+    expect_error(&o, 25, 14, "plugin_path: '/nonexistent/sluice-plugins' is not a directory "
+                             "(No such file or directory)");
+    done(&o);
+    free(text);
+
+    text = scene_text(0, NULL, NULL);
+    o = run_case(text, "--threads 100000");
+    ck_assert_int_eq(o.status, 2);
+    ck_assert_msg(strstr(o.output, "sluice: error: --threads 100000: at most ") &&
+                      test_count_lines(o.output, "error:") == 1,
+                  "%s", o.output);
+    done(&o);
+    free(text);
+}
+END_TEST
+
 START_TEST(missing_plugin_suggests)
 {
     char *text = scene_text(16, "  taitt:", NULL);
@@ -614,6 +644,7 @@ int main(void)
     tcase_add_test(tc, wrong_type);
     tcase_add_test(tc, out_of_range);
     tcase_add_test(tc, interval_too_small);
+    tcase_add_test(tc, silent_acceptances_refused);
     tcase_add_test(tc, missing_plugin_suggests);
     tcase_add_test(tc, plugin_wrong_abi_major);
     tcase_add_test(tc, plugin_newer_abi_minor);
