@@ -152,7 +152,7 @@ typedef struct study_run {
     double cpu_seconds, wall_seconds;
     /* run.json */
     double steps, particle_steps;
-    char failure[256];
+    char failure[1024];
     /* the measures */
     double *values, *errors;
 } study_run;

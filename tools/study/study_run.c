@@ -345,7 +345,7 @@ int study_read_run_json(study *s, study_run *r)
     const char *particle_steps = strstr(text, "\"particle_steps\": ");
     r->failure[0] = '\0';
     if (failure)
-        sscanf(failure + 12, "%255[^\"]", r->failure);
+        sscanf(failure + 12, "%1023[^\"]", r->failure);
     const char *end_time = strstr(text, "\"end_time\": ");
     if (end_time && !(r->end_time > 0))
         r->end_time = strtod(end_time + 12, NULL);
