@@ -116,6 +116,64 @@ void sluice_sim_request_time(sluice_sim *sim, double t)
 
 /* ------------------------------------------------------------ schedule -- */
 
+/* Whether instance `instance` writes a field for particles of `kind`: its
+ * component targets that kind (pair terms) or says it is meant for it
+ * (particle terms); a component that says neither may write any kind. */
+static int writes_kind(const sluice_sim *sim, uint32_t instance, uint8_t kind)
+{
+    if (instance == SLUICE_CORE_INSTANCE || instance >= sim->instance_count)
+        return 1;
+    const sluice_component *c = sim->instances[instance].component;
+    const uint32_t kinds = c->target_kinds | c->particle_kinds;
+    return kinds == 0 || (kinds & SLUICE_KIND_MASK(kind)) != 0;
+}
+
+/* The writers of `field` for one kind of particle, the names joined by ", "
+ * after `used` characters of buffer; returns the new length. */
+static size_t kind_writers(const sluice_sim *sim, const sluice_field_entry *field, uint8_t kind,
+                           char *buffer, size_t size, size_t used)
+{
+    for (uint32_t d = 0; d < field->declarer_count; d++) {
+        const sluice_declarer *e = &field->declarers[d];
+        if (!(e->access & (SLUICE_WRITE | SLUICE_ACCUMULATE)) || !writes_kind(sim, e->instance, kind))
+            continue;
+        int w = snprintf(buffer + used, size - used, "%s'%s'", used ? ", " : "",
+                         sluice_sim_instance_name(sim, e->instance));
+        if (w < 0 || (size_t)w >= size - used)
+            break;
+        used += (size_t)w;
+    }
+    return used;
+}
+
+const char *sluice_field_writers_for(const sluice_sim *sim, const sluice_field_entry *field,
+                                     uint8_t kind, char *buffer, size_t size)
+{
+    const char *head = "written by ";
+    snprintf(buffer, size, "%s", head);
+    size_t used = kind_writers(sim, field, kind, buffer, size, strlen(head));
+    if (used == strlen(head))
+        used = 0, buffer[0] = '\0';
+    /* an integrated field: the plugins that accumulate its rate for this kind */
+    for (uint32_t f = 0; f < sim->field_count; f++) {
+        const sluice_field_entry *rate = &sim->fields[f];
+        if (!rate->rate_of || strcmp(rate->rate_of, field->name) != 0 ||
+            !(rate->kinds & SLUICE_KIND_MASK(kind)))
+            continue;
+        char names[384];
+        names[0] = '\0';
+        if (kind_writers(sim, rate, kind, names, sizeof names, 0) == 0)
+            continue;
+        int w = snprintf(buffer + used, size - used, "%sfrom its rate '%s' accumulated by %s",
+                         used ? ", " : "", rate->name, names);
+        if (w > 0 && (size_t)w < size - used)
+            used += (size_t)w;
+    }
+    if (!used)
+        snprintf(buffer, size, "written by the core");
+    return buffer;
+}
+
 const char *sluice_field_writers(const sluice_sim *sim, const sluice_field_entry *field,
                                  char *buffer, size_t size)
 {

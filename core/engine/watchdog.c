@@ -197,10 +197,11 @@ static void report_finding(sluice_sim *sim, const watch_finding *w)
         if (w->field->components > 1)
             snprintf(comp, sizeof comp, "[%u]", w->component);
         sluice_sim_fail(sim,
-                        "step %lld, t = %.9g s: %s: field '%s'%s = %g is not finite (written by "
-                        "%s; integrated by '%s')",
+                        "step %lld, t = %.9g s: %s: field '%s'%s = %g is not finite (%s; "
+                        "integrated by '%s')",
                         (long long)sim->step, sim->time, who, w->field->name, comp, (double)x[i],
-                        sluice_field_writers(sim, w->field, writers, sizeof writers),
+                        sluice_field_writers_for(sim, w->field, v->kind[i], writers,
+                                                 sizeof writers),
                         sim->instances[sim->integrator].name);
     } else if (w->what == 2) {
         const sluice_field_entry *e = sluice_sim_find_field(sim, "density");
@@ -208,10 +209,11 @@ static void report_finding(sluice_sim *sim, const watch_finding *w)
         sluice_sim_fail(sim,
                         "step %lld, t = %.9g s: %s: field 'density' = %.6g kg m^-3 is outside the "
                         "band [%.6g, %.6g] = its rest density (mass / spacing^d) x (1 -/+ "
-                        "watchdog.density_band) (written by %s; integrated by '%s')",
+                        "watchdog.density_band) (%s; integrated by '%s')",
                         (long long)sim->step, sim->time, who, (double)column_or_null(sim, sim->density)[i],
                         rest * (1 - band), rest * (1 + band),
-                        e ? sluice_field_writers(sim, e, writers, sizeof writers) : "?",
+                        e ? sluice_field_writers_for(sim, e, v->kind[i], writers, sizeof writers)
+                          : "?",
                         sim->instances[sim->integrator].name);
     } else if (w->what == 4) {
         const sluice_scene_wall *wall = &scene->walls[w->wall];
