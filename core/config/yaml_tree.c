@@ -802,6 +802,10 @@ sluice_node *sluice_yaml_parse_string(const char *text, size_t length, const cha
     return root;
 }
 
+/* The largest YAML file read (scenes and studies are text of kilobytes;
+ * the largest shipped, a scene with 240 gauge points, is 16 KiB). */
+#define SLUICE_YAML_MAX_BYTES (64 << 20)
+
 sluice_node *sluice_yaml_parse_file(const char *path, sluice_diag *diag)
 {
     FILE *f = fopen(path, "rb");
@@ -829,6 +833,15 @@ sluice_node *sluice_yaml_parse_file(const char *path, sluice_diag *diag)
         errno = 0;
         size_t n = fread(text + length, 1, capacity - length, f);
         length += n;
+        if (length > SLUICE_YAML_MAX_BYTES) {
+            /* /dev/zero, a device, a binary file given by mistake */
+            sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, path, 1, 1,
+                            "cannot read file: it is longer than %d MiB, the most a YAML file "
+                            "may hold (is it the right file?)",
+                            SLUICE_YAML_MAX_BYTES >> 20);
+            failed = 1;
+            break;
+        }
         if (n == 0) {
             if (ferror(f)) {
                 int e = errno ? errno : EIO;

@@ -343,6 +343,16 @@ START_TEST(unreadable_scene_files)
     ck_assert_msg(strstr(output, ":1:1: error: cannot read file"), "%s", output);
     free(args);
     free(output);
+    /* an endless file: read up to the 64 MiB limit, then refused */
+    ck_assert_int_ge(asprintf(&args, "run /dev/zero --out %s/out", dir), 0);
+    status = test_sluice(args, &output);
+    ck_assert_int_eq(status, 2);
+    ck_assert_msg(strstr(output, "/dev/zero:1:1: error: cannot read file: it is longer than 64 "
+                                 "MiB") &&
+                      test_count_lines(output, "error:") == 1,
+                  "%s", output);
+    free(args);
+    free(output);
     char *out = NULL;
     ck_assert_int_ge(asprintf(&out, "%s/out", dir), 0);
     ck_assert(!test_exists(out));
