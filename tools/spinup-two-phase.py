@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-# Research helper (docs/validation.md: "What fills the cavities" and "Cheng's
-# spillway from a single-phase spin-up"): a two-phase checkpoint whose water
+# Research helper (docs/validation.md: "What fills the cavities" and "Cheng at
+# the seed's spacing from a single-phase spin-up"): a two-phase checkpoint whose water
 # is a single-phase run's state and whose air fills the rest of the scene's
 # initial fluid lattice. Needs Debian's python3-h5py and python3-yaml (not
 # build dependencies).
