@@ -44,7 +44,7 @@ run() { # name scene args...
     name=$1 scene=$2
     shift 2
     echo "tools/drift.sh: $name: $scene to $end s ..." >&2
-    OMP_NUM_THREADS=$threads "$sluice" run "$scene" --out "$out/$name" --no-progress \
+    OMP_NUM_THREADS=$threads "$sluice" run "$scene" --out "$out/$name" --overwrite --no-progress \
         --set time.end="$end" "$@" >"$out/$name.log" 2>&1 ||
         { echo "tools/drift.sh: $name failed (see $out/$name.log):" >&2; tail -3 "$out/$name.log" >&2; exit 1; }
     grep -E '"(wall_seconds|particle_steps_per_second|steps)"' "$out/$name/run.json" | tr -d ' \n' >&2

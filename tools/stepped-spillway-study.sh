@@ -60,13 +60,13 @@ for scene in $scenes; do
         one="$out/$scene-spinup-1p" template="$out/$scene-spinup-template"
         [ "$scene" = cheng ] && below=${WATER_BELOW-0.7144 1.3213 1.7144 0.0013} ||
             below=${WATER_BELOW:-}
-        "$build/sluice" run "$config" --variant single_phase --out "$one" \
+        "$build/sluice" run "$config" --variant single_phase --out "$one" --overwrite \
             --set particles.spacing="$dx" --set time.end="$SPINUP" --no-progress \
             ${THREADS:+--threads "$THREADS"}
         # the template: the same run as below, 0.0002 s long (later
         # --set and --out override the earlier ones)
         "$build/sluice" "$@" --set time.end=0.0002 --set checkpoint.interval=0.0002 \
-            --out "$template"
+            --out "$template" --overwrite
         mkdir -p "$dir"
         newest="$dir/spinup.h5"
         # shellcheck disable=SC2086 # WATER_BELOW is four numbers

@@ -11,6 +11,7 @@
 
 #include "build_config.h"
 #include "diag.h"
+#include "output_dir.h"
 #include "sim.h"
 
 static void usage(FILE *out)
@@ -19,8 +20,8 @@ static void usage(FILE *out)
             "usage:\n"
             "  sluice run SCENE.yaml --out DIR [--variant NAME] [--remove PATH ...]\n"
             "             [--swap OLD=NEW ...] [--set key=value ...]\n"
-            "             [--threads N] [--restart CHECKPOINT.h5] [--progress | --no-progress]\n"
-            "             [--quiet]\n"
+            "             [--threads N] [--restart CHECKPOINT.h5 | --overwrite]\n"
+            "             [--progress | --no-progress] [--quiet]\n"
             "  sluice check SCENE.yaml [--variant NAME] [--remove PATH ...] [--swap OLD=NEW ...]\n"
             "               [--set key=value ...] [--schedule]\n"
             "  sluice inspect [PLUGIN] [--markdown]\n"
@@ -39,6 +40,8 @@ static void usage(FILE *out)
             "terms, integrated fields (run.json holds it too).\n"
             "--restart continues the run of SCENE from a checkpoint (DIR/checkpoint_*.h5,\n"
             "written every checkpoint.interval s and when SIGINT or SIGTERM stops a run).\n"
+            "A run refuses an --out that holds another run (--overwrite replaces it) or\n"
+            "that another live run writes to (DIR/.sluice.lock).\n"
             "Exit status: 0 success, 2 bad input, 3 the run went unstable, 4 other failure,\n"
             "5 stopped by SIGINT/SIGTERM after a whole step (a checkpoint was written).\n");
 }
@@ -47,7 +50,7 @@ typedef struct arguments {
     const char *scene, *out, *plugin, *restart, *variant;
     const char **sets, **removals, **swaps;
     size_t set_count, removal_count, swap_count;
-    int threads, progress, quiet, markdown, schedule;
+    int threads, progress, quiet, markdown, schedule, overwrite;
 } arguments;
 
 static void free_arguments(arguments *a)
@@ -122,6 +125,8 @@ static int parse(int argc, char **argv, int first, arguments *a, int allow_out)
             a->restart = argv[++i];
         } else if (allow_out && strncmp(arg, "--restart=", 10) == 0) {
             a->restart = arg + 10;
+        } else if (allow_out && strcmp(arg, "--overwrite") == 0) {
+            a->overwrite = 1;
         } else if (strcmp(arg, "--threads") == 0 || strcmp(arg, "-j") == 0) {
             char *end = NULL;
             long threads = 0;
@@ -218,6 +223,12 @@ static int command_run(int argc, char **argv, int across_ranks)
         free_arguments(&a);
         return 2;
     }
+    if (a.overwrite && a.restart) {
+        fprintf(stderr, "sluice: error: give either --overwrite (replace the run in --out) or "
+                        "--restart (continue a run)\n");
+        free_arguments(&a);
+        return 2;
+    }
 #ifdef SLUICE_MPI
     /* under mpiexec: one run across the ranks of MPI_COMM_WORLD */
     MPI_Comm world = MPI_COMM_WORLD;
@@ -230,6 +241,22 @@ static int command_run(int argc, char **argv, int across_ranks)
     free_arguments(&a);
     if (!sim)
         return 2;
+    /* the scene is valid: claim the output directory (rank 0 for all) */
+    int lock_fd = -1, claim = SLUICE_OUTPUT_OK;
+    char claim_error[4096] = "";
+    if (!quiet_rank)
+        claim = sluice_output_dir_claim(a.out, a.restart != NULL, a.overwrite, &lock_fd,
+                                        claim_error, sizeof claim_error);
+#ifdef SLUICE_MPI
+    if (across_ranks)
+        MPI_Bcast(&claim, 1, MPI_INT, 0, MPI_COMM_WORLD);
+#endif
+    if (claim != SLUICE_OUTPUT_OK) {
+        if (!quiet_rank)
+            fprintf(stderr, "sluice: error: %s\n", claim_error);
+        sluice_sim_free(sim);
+        return claim == SLUICE_OUTPUT_REFUSED ? 2 : 4;
+    }
     if (a.restart) {
         char error[2048];
         if (sluice_sim_restart(sim, a.restart, error, sizeof error) != 0) {
@@ -273,6 +300,8 @@ static int command_run(int argc, char **argv, int across_ranks)
                     (long long)sluice_sim_steps(sim), a.out);
     }
     sluice_sim_free(sim);
+    if (lock_fd >= 0)
+        close(lock_fd);
     return status;
 }
 

@@ -265,6 +265,104 @@ START_TEST(killed_runs_leave_readable_outputs)
 }
 END_TEST
 
+/* Output directories: a second run into a directory that holds a run is
+ * refused and leaves it as it was; --overwrite replaces the run's outputs
+ * and nothing else; a run that another live run writes to is refused
+ * (DIR/.sluice.lock), and the lock goes with its process, even killed. */
+START_TEST(output_directories_are_protected)
+{
+    char *scratch = test_scratch("outdir");
+    char *scene = test_config("still_water_2d.yaml");
+    char *args = NULL, *output = NULL, *path = NULL;
+    const char *fast = "--quiet --no-progress --threads 1 --set time.end=0.01 "
+                       "--set particles.spacing=0.05";
+    ck_assert_int_ge(asprintf(&args, "run %s --out %s/a %s --set "
+                                     "plugins.energy_gauge.file=only_first.csv",
+                              scene, scratch, fast), 0);
+    ck_assert_int_eq(test_sluice(args, &output), 0);
+    free(args);
+    free(output);
+    ck_assert_int_ge(asprintf(&path, "%s/a/run.json", scratch), 0);
+    char *first = test_read_file(path);
+    ck_assert_ptr_nonnull(first);
+    char *notes = test_write_file(scratch, "a/notes.txt", "a user's file\n");
+    /* the same --out again: refused, the run left as it was */
+    ck_assert_int_ge(asprintf(&args, "run %s --out %s/a %s", scene, scratch, fast), 0);
+    ck_assert_int_eq(test_sluice(args, &output), 2);
+    ck_assert_msg(strstr(output, "holds another run (run.json): --overwrite replaces it") &&
+                      test_count_lines(output, "error:") == 1,
+                  "%s", output);
+    free(output);
+    char *again = test_read_file(path);
+    ck_assert_str_eq(again, first);
+    free(again);
+    free(args);
+    /* --overwrite: the earlier run's outputs go, other files stay */
+    ck_assert_int_ge(asprintf(&args, "run %s --out %s/a %s --overwrite", scene, scratch, fast),
+                     0);
+    ck_assert_int_eq(test_sluice(args, &output), 0);
+    free(output);
+    free(args);
+    char *gone = NULL;
+    ck_assert_int_ge(asprintf(&gone, "%s/a/only_first.csv", scratch), 0);
+    ck_assert(!test_exists(gone));
+    ck_assert(test_exists(notes));
+    free(gone);
+    /* --overwrite and --restart contradict each other */
+    ck_assert_int_ge(asprintf(&args, "run %s --out %s/a %s --overwrite --restart %s/x.h5", scene,
+                              scratch, fast, scratch), 0);
+    ck_assert_int_eq(test_sluice(args, &output), 2);
+    ck_assert_ptr_nonnull(strstr(output, "give either --overwrite"));
+    free(output);
+    free(args);
+    /* a live run holds its directory */
+    char *program = NULL, *out_b = NULL, *lock = NULL;
+    ck_assert_int_ge(asprintf(&program, "%s/sluice", test_build_dir()), 0);
+    ck_assert_int_ge(asprintf(&out_b, "%s/b", scratch), 0);
+    ck_assert_int_ge(asprintf(&lock, "%s/b/.sluice.lock", scratch), 0);
+    char *argv[] = {program, "run", scene, "--out", out_b, "--quiet", "--no-progress",
+                    "--threads", "1", "--set", "time.end=100", NULL};
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+    pid_t pid;
+    ck_assert_int_eq(posix_spawn(&pid, program, &actions, NULL, argv, environ), 0);
+    posix_spawn_file_actions_destroy(&actions);
+    char *held = NULL;
+    for (int i = 0; i < 600 && !(held && *held); i++) { /* up to 60 s on a busy machine */
+        struct timespec pause = {0, 100000000L};
+        nanosleep(&pause, NULL);
+        free(held);
+        held = test_exists(lock) ? test_read_file(lock) : NULL;
+    }
+    ck_assert_msg(held && atol(held) == (long)pid, "lock file: %s", held ? held : "(none)");
+    free(held);
+    ck_assert_int_ge(asprintf(&args, "run %s --out %s %s --overwrite", scene, out_b, fast), 0);
+    ck_assert_int_eq(test_sluice(args, &output), 2);
+    char *expected = NULL;
+    ck_assert_int_ge(asprintf(&expected, "another sluice run (pid %ld) is writing to '%s'",
+                              (long)pid, out_b), 0);
+    ck_assert_msg(strstr(output, expected), "%s", output);
+    free(expected);
+    free(output);
+    kill(pid, SIGKILL);
+    int status = 0;
+    ck_assert_int_eq(waitpid(pid, &status, 0), pid);
+    /* killed: the lock went with it; its outputs are replaced on request */
+    ck_assert_int_eq(test_sluice(args, &output), 0);
+    free(output);
+    free(args);
+    free(lock);
+    free(out_b);
+    free(program);
+    free(notes);
+    free(first);
+    free(path);
+    free(scene);
+    free(scratch);
+}
+END_TEST
+
 START_TEST(failed_write_is_reported_with_its_path)
 {
     /* A full disk, as the file-size limit: 100 blocks hold the tables but
@@ -330,6 +428,7 @@ int main(void)
     tcase_set_timeout(tc, 300);
     tcase_add_test(tc, killed_runs_leave_readable_outputs);
     tcase_add_test(tc, failed_write_is_reported_with_its_path);
+    tcase_add_test(tc, output_directories_are_protected);
     suite_add_tcase(s, tc);
     return test_run_suite(s);
 }
