@@ -533,8 +533,9 @@ static void target_text(const study_measure *m, char *text, size_t size)
 
 /* One row per group: each target's misses at each spacing (coarse to
  * fine), how many targets it meets at every spacing; then the best group:
- * the most targets met at every spacing, then at the finest, then the
- * smallest sum of misses at the finest. */
+ * the most targets met at every spacing, then at the finest, then the most
+ * (target, spacing) pairs met, then the smallest sum of misses at the
+ * finest. */
 static void write_targets(const study *s, FILE *md)
 {
     size_t targets = 0;
@@ -563,7 +564,7 @@ static void write_targets(const study *s, FILE *md)
         fprintf(md, "---|");
     fprintf(md, "\n");
     char *best = NULL;
-    size_t best_every = 0, best_finest = 0;
+    size_t best_every = 0, best_finest = 0, best_cells = 0;
     double best_miss = INFINITY;
     int best_set = 0;
     for (size_t i = 0; i < s->run_count; i++) {
@@ -573,7 +574,7 @@ static void write_targets(const study *s, FILE *md)
             first = !same_group(s, r, &s->runs[j]);
         if (!first)
             continue;
-        size_t n = group_runs(s, r, members), every = 0, finest = 0;
+        size_t n = group_runs(s, r, members), every = 0, finest = 0, cells = 0;
         double miss_sum = 0;
         char *label = group_label(s, r);
         fprintf(md, "| %s |", label);
@@ -586,6 +587,7 @@ static void write_targets(const study *s, FILE *md)
             for (size_t j = 0; j < n; j++) {
                 double miss = target_miss(m, members[j], k);
                 all &= miss == 0;
+                cells += miss == 0;
                 fprintf(md, "%s%s", j ? " " : "", isinf(miss) ? "-" : miss == 0 ? "yes" : "no");
                 if (j == n - 1) {
                     finest += miss == 0;
@@ -596,12 +598,19 @@ static void write_targets(const study *s, FILE *md)
             fprintf(md, " |");
         }
         fprintf(md, " %zu of %zu | %zu of %zu |\n", every, targets, finest, targets);
-        if (!best_set || every > best_every || (every == best_every && finest > best_finest) ||
-            (every == best_every && finest == best_finest && miss_sum < best_miss)) {
+        /* the most targets met at every spacing, then at the finest, then
+         * (target, spacing) cells met, then the smallest misses at the finest */
+        const int better =
+            every != best_every     ? every > best_every
+            : finest != best_finest ? finest > best_finest
+            : cells != best_cells   ? cells > best_cells
+                                    : miss_sum < best_miss;
+        if (!best_set || better) {
             free(best);
             best = study_strdup(label);
             best_every = every;
             best_finest = finest;
+            best_cells = cells;
             best_miss = miss_sum;
             best_set = 1;
         }
