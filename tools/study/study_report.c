@@ -695,8 +695,9 @@ static void write_table(study *s, FILE *csv, FILE *md)
     fprintf(md, "\n");
     for (size_t i = 0; i < s->run_count; i++) {
         const study_run *r = &s->runs[i];
-        double rate = r->particle_steps / r->cpu_seconds;
-        double wall_rate = r->particle_steps / r->wall_seconds;
+        /* a run not run has no rate (not 0/0 printed as -nan) */
+        double rate = r->cpu_seconds > 0 ? r->particle_steps / r->cpu_seconds : NAN;
+        double wall_rate = r->wall_seconds > 0 ? r->particle_steps / r->wall_seconds : NAN;
         fprintf(csv, "%s", r->name);
         fprintf(md, "| %s |", r->name);
         for (size_t a = 0; a < s->axis_count; a++) {
