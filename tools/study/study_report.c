@@ -800,6 +800,13 @@ static int write_plots(study *s, FILE *md)
                     first = 0;
             if (!first)
                 continue;
+            /* a group without a value has no block (gnuplot's index counts
+             * only blocks with data: an empty one would shift the titles) */
+            size_t values = 0;
+            for (size_t j = 0; j < s->run_count; j++)
+                values += same_group(s, r, &s->runs[j]) && isfinite(s->runs[j].values[k]);
+            if (values == 0)
+                continue;
             char *label = group_label(s, r);
             char *more = study_printf("%s%s%s", titles, blocks ? " " : "", label);
             free(titles);
