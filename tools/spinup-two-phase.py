@@ -96,7 +96,33 @@ def near(grid, cell, x, y):
     return np.concatenate(parts) if parts else np.zeros(0, int)
 
 
+# sluice's checkpoints end in a checksum trailer (core/checkpoint/file_checksum.h):
+# 8 bytes of magic and the 64-bit FNV-1a hash of every byte before them
+MAGIC = b'SLUICE\x01\x0f'
+
+
+def strip_trailer(path):
+    with open(path, 'r+b') as fh:
+        fh.seek(0, 2)
+        n = fh.tell()
+        if n >= 16:
+            fh.seek(n - 16)
+            if fh.read(8) == MAGIC:
+                fh.truncate(n - 16)
+
+
+def append_trailer(path):
+    h = 0xcbf29ce484222325
+    with open(path, 'rb') as fh:
+        data = fh.read()
+    for b in data:
+        h = ((h ^ b) * 0x100000001b3) & 0xffffffffffffffff
+    with open(path, 'ab') as fh:
+        fh.write(MAGIC + h.to_bytes(8, 'little'))
+
+
 shutil.copy(tpl, out)
+strip_trailer(out)
 f = h5py.File(out, 'r+')
 P = f['particles']
 fields = list(P.keys())
@@ -216,6 +242,7 @@ f.attrs.modify('particle_count', np.uint64(data.shape[1]))
 f.attrs.modify('next_id', np.uint64(next_id + nw + na))
 f.attrs.modify('grid_valid', np.int32(0))
 f.close()
+append_trailer(out)
 print('water %d (%d on the inlet buffer left out, %d added under the segment), air %d (of %d lattice sites; '
       '%d enclosed by water left empty), walls/open %d; '
       'B = %.6g Pa, c0_a = %.6g m/s, p_b = %g Pa' % (nw, int(drop.sum()), filled, na, len(sites), enclosed, keep.sum(), B, c0_a, pb))

@@ -48,6 +48,7 @@
 #include "ranks.h"
 #include "schema.h"
 #include "decomposition.h"
+#include "file_checksum.h"
 #include "sim_internal.h"
 #include "yaml_tree.h"
 
@@ -620,8 +621,11 @@ static size_t checkpoint_shared(sluice_sim *sim, const char *path, char *why, si
     size_t size = 0;
     if (c->rank == 0) {
         struct stat st;
+        char sum_error[600];
         if (e.text[0])
             unlink(partial);
+        else if (sluice_checksum_append(partial, sum_error, sizeof sum_error) != 0)
+            fail(&e, "%s", sum_error);
         else if (stat(partial, &st) != 0 || rename(partial, path) != 0)
             fail(&e, "cannot rename '%s' to '%s': %s", partial, path, strerror(errno));
         else
@@ -710,6 +714,18 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
     rc = checkpoint_image(sim, &image, &size, why, sizeof why);
 #endif
     sim->state_file = NULL;
+    if (rc == 0 && sim->comm.rank == 0) {
+        /* the checksum trailer after the HDF5 image */
+        unsigned char *whole = realloc(image, size + SLUICE_CHECKSUM_BYTES);
+        if (!whole) {
+            rc = -1;
+            snprintf(why, sizeof why, "out of memory adding the checksum");
+        } else {
+            image = whole;
+            sluice_checksum_trailer(image, size, whole + size);
+            size += SLUICE_CHECKSUM_BYTES;
+        }
+    }
     if (rc == 0 && sim->comm.rank == 0) {
         rc = sluice_write_file_atomic(path, image, size, error, sizeof error);
         if (rc != 0)
@@ -1227,6 +1243,12 @@ int sluice_sim_restart(sluice_sim *sim, const char *path, char *error, size_t er
     }
     if (!S_ISREG(st.st_mode)) {
         snprintf(error, error_size, "checkpoint '%s' is not a regular file", path);
+        return SLUICE_ERROR;
+    }
+    /* every byte as written before HDF5 reads one */
+    char why[600];
+    if (sluice_checksum_verify(path, why, sizeof why) != 0) {
+        snprintf(error, error_size, "cannot restart from checkpoint '%s': %s", path, why);
         return SLUICE_ERROR;
     }
     quiet_hdf5 q;

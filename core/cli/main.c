@@ -241,7 +241,20 @@ static int command_run(int argc, char **argv, int across_ranks)
     free_arguments(&a);
     if (!sim)
         return 2;
-    /* the scene is valid: claim the output directory (rank 0 for all) */
+    if (a.restart) {
+        char error[2048];
+        if (sluice_sim_restart(sim, a.restart, error, sizeof error) != 0) {
+            if (!quiet_rank)
+                fprintf(stderr, "sluice: error: %s\n", error);
+            sluice_sim_free(sim);
+            return 2;
+        }
+        if (!a.quiet && !quiet_rank)
+            fprintf(stderr, "sluice: restarting from %s at step %lld, t = %.9g s\n", a.restart,
+                    (long long)sluice_sim_steps(sim), sluice_sim_time(sim));
+    }
+    /* the scene and the checkpoint are valid: claim the output directory
+     * (rank 0 for all) */
     int lock_fd = -1, claim = SLUICE_OUTPUT_OK;
     char claim_error[4096] = "";
     if (!quiet_rank)
@@ -256,18 +269,6 @@ static int command_run(int argc, char **argv, int across_ranks)
             fprintf(stderr, "sluice: error: %s\n", claim_error);
         sluice_sim_free(sim);
         return claim == SLUICE_OUTPUT_REFUSED ? 2 : 4;
-    }
-    if (a.restart) {
-        char error[2048];
-        if (sluice_sim_restart(sim, a.restart, error, sizeof error) != 0) {
-            if (!quiet_rank)
-                fprintf(stderr, "sluice: error: %s\n", error);
-            sluice_sim_free(sim);
-            return 2;
-        }
-        if (!a.quiet && !quiet_rank)
-            fprintf(stderr, "sluice: restarting from %s at step %lld, t = %.9g s\n", a.restart,
-                    (long long)sluice_sim_steps(sim), sluice_sim_time(sim));
     }
     if (sluice_install_stop_handlers() != 0 && !quiet_rank)
         fprintf(stderr, "sluice: warning: cannot catch SIGINT/SIGTERM; an interrupted run "

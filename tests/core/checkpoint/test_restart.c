@@ -15,6 +15,7 @@
 
 #include "sim_util.h"
 /* Internal: compares the restored particle columns and fields with the saved ones byte by byte (not in sim.h) */
+#include "file_checksum.h"
 #include "sim_internal.h"
 
 /* A horizontal frictionless channel (penalty_contact) between an inlet at
@@ -626,7 +627,10 @@ static char *without_state_of(const char *checkpoint, const char *bytes, long si
     ck_assert_int_ge(asprintf(&path, "%s/without_%s.h5", dir, plugin), 0);
     FILE *f = fopen(path, "wb");
     ck_assert_ptr_nonnull(f);
-    ck_assert_int_eq(fwrite(bytes, 1, (size_t)size, f), (size_t)size);
+    /* the HDF5 file without its checksum trailer, edited, then summed again:
+     * what that version of sluice would have written */
+    const size_t hdf5_size = (size_t)size - SLUICE_CHECKSUM_BYTES;
+    ck_assert_int_eq(fwrite(bytes, 1, hdf5_size, f), hdf5_size);
     fclose(f);
     hid_t file = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
     ck_assert_msg(file >= 0, "cannot open %s (a copy of %s)", path, checkpoint);
@@ -634,6 +638,8 @@ static char *without_state_of(const char *checkpoint, const char *bytes, long si
     ck_assert_msg(H5Lexists(file, link, H5P_DEFAULT) > 0, "%s has no group %s", checkpoint, link);
     ck_assert_int_ge(H5Ldelete(file, link, H5P_DEFAULT), 0);
     H5Fclose(file);
+    char error[600];
+    ck_assert_msg(sluice_checksum_append(path, error, sizeof error) == 0, "%s", error);
     free(link);
     return path;
 }
@@ -687,10 +693,24 @@ START_TEST(bad_checkpoints_refused)
     f = fopen(truncated, "wb");
     fwrite(bytes, 1, (size_t)size / 2, f);
     fclose(f);
-    refused(scene, truncated, "cannot restart from checkpoint");
+    refused(scene, truncated, "it does not end in a sluice checksum");
     /* not HDF5 at all */
     text = test_write_file(dir, "text_checkpoint.h5", "time,x\n0,1\n");
-    refused(scene, text, "not an HDF5 file");
+    refused(scene, text, "not a checkpoint");
+    /* one bit changed anywhere in it: the checksum (before HDF5 reads a
+     * byte); at the first byte, the middle and in the trailer's hash */
+    const long at[3] = {0, size / 2, size - 1};
+    for (int k = 0; k < 3; k++) {
+        char *flipped = NULL;
+        ck_assert_int_ge(asprintf(&flipped, "%s/flipped_%d.h5", dir, k), 0);
+        bytes[at[k]] ^= 0x20;
+        f = fopen(flipped, "wb");
+        ck_assert_int_eq(fwrite(bytes, 1, (size_t)size, f), (size_t)size);
+        fclose(f);
+        bytes[at[k]] ^= 0x20;
+        refused(scene, flipped, "its checksum does not match its");
+        free(flipped);
+    }
     ck_assert_int_ge(asprintf(&missing, "%s/no_such_checkpoint.h5", dir), 0);
     refused(scene, missing, "No such file");
     /* another scene: the dam break's plugins, and a 3D scene */
