@@ -767,6 +767,73 @@ START_TEST(bad_checkpoints_refused)
 }
 END_TEST
 
+/* Single bits flipped at places drawn over the whole checkpoint (a fixed
+ * generator): every restart is refused by the checksum with exit 2, none
+ * crashes, none goes on from a changed state. SLUICE_FLIP_COUNT sets a
+ * longer campaign (docs/reliability.md: 260). */
+START_TEST(bit_flips_never_accepted)
+{
+    char *dir = test_scratch("restart-flips");
+    char *scene = test_config("dam_break_2d.yaml"), *args = NULL;
+    ck_assert_int_ge(asprintf(&args,
+                              "run %s --out %s/out --quiet --set particles.spacing=0.04 "
+                              "--set time.end=0.02 --set checkpoint.interval=0.02",
+                              scene, dir),
+                     0);
+    ck_assert_int_eq(test_sluice(args, NULL), 0);
+    free(args);
+    char *out = NULL;
+    ck_assert_int_ge(asprintf(&out, "%s/out", dir), 0);
+    int count = 0;
+    char *good = first_checkpoint(out, &count);
+    ck_assert_int_ge(count, 1);
+    FILE *f = fopen(good, "rb");
+    ck_assert_ptr_nonnull(f);
+    fseek(f, 0, SEEK_END);
+    const long size = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *bytes = malloc((size_t)size);
+    ck_assert_int_eq(fread(bytes, 1, (size_t)size, f), (size_t)size);
+    fclose(f);
+    const char *requested = getenv("SLUICE_FLIP_COUNT");
+    const int flips = requested && atoi(requested) > 0 ? atoi(requested) : 24;
+    char *flipped = NULL;
+    ck_assert_int_ge(asprintf(&flipped, "%s/flipped.h5", dir), 0);
+    unsigned long long state = 88172645463325252ull;
+    int refused_by_checksum = 0;
+    for (int k = 0; k < flips; k++) {
+        state ^= state << 13, state ^= state >> 7, state ^= state << 17; /* xorshift64 */
+        const long at = (long)(state % (unsigned long long)size);
+        const int bit = (int)((state >> 40) % 8);
+        bytes[at] ^= (unsigned char)(1u << bit);
+        f = fopen(flipped, "wb");
+        ck_assert_int_eq(fwrite(bytes, 1, (size_t)size, f), (size_t)size);
+        fclose(f);
+        bytes[at] ^= (unsigned char)(1u << bit);
+        char *output = NULL;
+        ck_assert_int_ge(asprintf(&args, "run %s --out %s/again --quiet --set "
+                                         "particles.spacing=0.04 --set time.end=0.03 "
+                                         "--restart %s",
+                                  scene, dir, flipped),
+                         0);
+        const int status = test_sluice(args, &output);
+        ck_assert_msg(status == 2, "bit %d of byte %ld: exit %d\n%s", bit, at, status, output);
+        refused_by_checksum += strstr(output, "its checksum does not match") != NULL;
+        free(output);
+        free(args);
+    }
+    fprintf(stderr, "bit flips: %d of %d refused by the checksum (%ld-byte checkpoint)\n",
+            refused_by_checksum, flips, size);
+    ck_assert_int_eq(refused_by_checksum, flips);
+    free(flipped);
+    free(bytes);
+    free(good);
+    free(out);
+    free(scene);
+    free(dir);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("restart");
@@ -782,6 +849,7 @@ int main(void)
     TCase *bad = tcase_create("refused");
     tcase_set_timeout(bad, 120);
     tcase_add_test(bad, bad_checkpoints_refused);
+    tcase_add_test(bad, bit_flips_never_accepted);
     suite_add_tcase(s, bad);
     return test_run_suite(s);
 }
