@@ -285,6 +285,37 @@ int sluice_point_in_polygon(const sluice_real *polygon, uint32_t n, sluice_real 
     return inside;
 }
 
+/* Orientation of c against the line a -> b: +1 left, -1 right, 0 on it. */
+static int orientation(const sluice_real *a, const sluice_real *b, const sluice_real *c)
+{
+    double v = ((double)b[0] - (double)a[0]) * ((double)c[1] - (double)a[1]) -
+               ((double)b[1] - (double)a[1]) * ((double)c[0] - (double)a[0]);
+    return (v > 0) - (v < 0);
+}
+
+int sluice_polygon_crossing(const sluice_real *polygon, uint32_t n, uint32_t *edge_a,
+                            uint32_t *edge_b)
+{
+    if (!polygon || n < 4)
+        return 0;
+    for (uint32_t i = 0; i < n; i++) {
+        const sluice_real *p1 = polygon + 2 * i, *p2 = polygon + 2 * ((i + 1) % n);
+        for (uint32_t j = i + 2; j < n; j++) {
+            if (i == 0 && j == n - 1)
+                continue; /* the closing edge meets the first at vertex 0 */
+            const sluice_real *q1 = polygon + 2 * j, *q2 = polygon + 2 * ((j + 1) % n);
+            const int o1 = orientation(p1, p2, q1), o2 = orientation(p1, p2, q2);
+            const int o3 = orientation(q1, q2, p1), o4 = orientation(q1, q2, p2);
+            if (o1 * o2 < 0 && o3 * o4 < 0) {
+                *edge_a = i;
+                *edge_b = j;
+                return 1;
+            }
+        }
+    }
+    return 0;
+}
+
 /* Boxes take the lattice index range directly (half-open with the lattice
  * tolerance, so boundaries on lattice points behave exactly). Polygons and
  * prisms test every candidate of the bounding box with

@@ -46,6 +46,14 @@ int sluice_region_fill(const sluice_region *region, uint32_t dimensions, sluice_
 /* 2D point in polygon (even-odd rule); polygon is n vertices (x, y). */
 int sluice_point_in_polygon(const sluice_real *polygon, uint32_t n, sluice_real x, sluice_real y);
 
+/* Whether two edges of the closed polygon cross (a proper crossing: each
+ * edge's ends strictly on both sides of the other), edge k running from
+ * vertex k to vertex k + 1 (mod n); the first such pair in *edge_a <
+ * *edge_b. A self-crossing outline has loops of opposite turn, which the
+ * crossing-number fill counts as outside. */
+int sluice_polygon_crossing(const sluice_real *polygon, uint32_t n, uint32_t *edge_a,
+                            uint32_t *edge_b);
+
 /* ---------------------------------------------------------------- walls -- */
 
 /* Internal wall: the same layout as the public sluice_wall (points, normals)

@@ -857,6 +857,27 @@ static int load_piece(sluice_scene *scene, sluice_node **slot, const char *path,
     return 0;
 }
 
+/* A fluid outline that crosses itself is refused at `at`: the fill would
+ * leave out the loops that turn the other way (fewer particles than its
+ * area). */
+static int refuse_crossing(sluice_scene *scene, sluice_node *item, sluice_node *at,
+                           const char *path, const sluice_region *region, sluice_diag *diag)
+{
+    uint32_t a = 0, b = 0;
+    if (!sluice_polygon_crossing(region->polygon, region->vertex_count, &a, &b))
+        return 0;
+    const sluice_real *p = region->polygon;
+    const uint32_t n = region->vertex_count;
+    error_at(diag, scene, at ? at : item,
+             "%s crosses itself: its edge from (%g, %g) to (%g, %g) crosses the edge from "
+             "(%g, %g) to (%g, %g); a fluid region is a simple outline (one loop without "
+             "crossings)",
+             path, (double)p[2 * a], (double)p[2 * a + 1], (double)p[2 * ((a + 1) % n)],
+             (double)p[2 * ((a + 1) % n) + 1], (double)p[2 * b], (double)p[2 * b + 1],
+             (double)p[2 * ((b + 1) % n)], (double)p[2 * ((b + 1) % n) + 1]);
+    return 1;
+}
+
 /* Reads and builds the profile of item (a wall or fluid region already bound
  * to its own keys, `pieces` excepted): pieces, then the vertices into *out.
  * Returns the number of errors reported. */
@@ -1020,6 +1041,11 @@ static int load_fluids(sluice_scene *scene, sluice_node *geometry, sluice_diag *
                 f->region.polygon = xy;
                 f->region.vertex_count = outline.vertex_count;
                 sluice_profile_path_free(&outline);
+                if (refuse_crossing(scene, item, sluice_node_get(item, "pieces"), path,
+                                    &f->region, diag)) {
+                    errors++;
+                    continue;
+                }
                 scene->fluid_count++;
                 continue;
             }
@@ -1034,6 +1060,11 @@ static int load_fluids(sluice_scene *scene, sluice_node *geometry, sluice_diag *
             f->region.vertex_count = c.points.count;
             if (!f->region.polygon)
                 return errors + 1;
+            if (refuse_crossing(scene, item, sluice_node_get(item, "points"), path, &f->region,
+                                diag)) {
+                errors++;
+                continue;
+            }
         }
         scene->fluid_count++;
     }

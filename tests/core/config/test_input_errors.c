@@ -391,6 +391,17 @@ START_TEST(geometry_errors)
     ck_assert_msg(strstr(o.output, "outside the domain"), "%s", o.output);
     done(&o);
     free(text);
+    /* a bow tie: its two loops turn opposite ways, and the fill left one
+     * out (fewer particles than its area, accepted silently before) */
+    text = scene_text(11,
+                      "    - {shape: polygon, points: [[0, 0], [0.5, 0.5], [0.5, 0], [0, 0.5]]}",
+                      NULL);
+    o = run_case(text, NULL);
+    expect_error(&o, 11, 32,
+                 "geometry.fluid.0 crosses itself: its edge from (0, 0) to (0.5, 0.5) crosses "
+                 "the edge from (0.5, 0) to (0, 0.5)");
+    done(&o);
+    free(text);
 }
 END_TEST
 
