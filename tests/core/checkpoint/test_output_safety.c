@@ -363,6 +363,68 @@ START_TEST(output_directories_are_protected)
 }
 END_TEST
 
+/* A snapshot's datasets carry Fletcher-32 checksums: one bit changed in a
+ * chunk of positions makes the HDF5 read fail instead of returning a
+ * wrong number. */
+START_TEST(snapshot_chunks_are_checksummed)
+{
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+    char *dir = test_scratch("snapshot-sum");
+    char *scene = test_config("still_water_2d.yaml"), *args = NULL, *path = NULL;
+    ck_assert_int_ge(asprintf(&args, "run %s --out %s/out --quiet --no-progress --threads 1 "
+                                     "--set time.end=0.01 --set particles.spacing=0.05",
+                              scene, dir), 0);
+    ck_assert_int_eq(test_sluice(args, NULL), 0);
+    ck_assert_int_ge(asprintf(&path, "%s/out/particles_000000.h5", dir), 0);
+    hid_t file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    ck_assert_int_ge(file, 0);
+    hid_t set = H5Dopen2(file, "position", H5P_DEFAULT), dcpl = H5Dget_create_plist(set);
+    ck_assert_int_eq(H5Pget_layout(dcpl), H5D_CHUNKED);
+    int fletcher = 0;
+    for (int k = 0; k < H5Pget_nfilters(dcpl); k++) {
+        unsigned flags = 0;
+        size_t count = 0;
+        fletcher |= H5Pget_filter2(dcpl, (unsigned)k, &flags, &count, NULL, 0, NULL, NULL) ==
+                    H5Z_FILTER_FLETCHER32;
+    }
+    ck_assert(fletcher);
+    haddr_t offset = 0;
+    hsize_t chunk_size = 0;
+    unsigned mask = 0;
+    hsize_t origin[2] = {0, 0};
+    ck_assert_int_ge(H5Dget_chunk_info_by_coord(set, origin, &mask, &offset, &chunk_size), 0);
+    hid_t space = H5Dget_space(set);
+    hssize_t points = H5Sget_simple_extent_npoints(space);
+    double *xy = malloc((size_t)points * sizeof *xy);
+    ck_assert_int_ge(H5Dread(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, xy), 0);
+    H5Sclose(space);
+    H5Pclose(dcpl);
+    H5Dclose(set);
+    H5Fclose(file);
+    /* one bit of the chunk's data changed */
+    FILE *f = fopen(path, "r+b");
+    ck_assert_ptr_nonnull(f);
+    ck_assert_int_eq(fseek(f, (long)offset + (long)chunk_size / 2, SEEK_SET), 0);
+    int byte = fgetc(f);
+    ck_assert_int_ge(byte, 0);
+    ck_assert_int_eq(fseek(f, (long)offset + (long)chunk_size / 2, SEEK_SET), 0);
+    fputc(byte ^ 0x08, f);
+    fclose(f);
+    file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    ck_assert_int_ge(file, 0);
+    set = H5Dopen2(file, "position", H5P_DEFAULT);
+    ck_assert_msg(H5Dread(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, xy) < 0,
+                  "a changed chunk was read without an error");
+    H5Dclose(set);
+    H5Fclose(file);
+    free(xy);
+    free(path);
+    free(args);
+    free(scene);
+    free(dir);
+}
+END_TEST
+
 START_TEST(failed_write_is_reported_with_its_path)
 {
     /* A full disk, as the file-size limit: 100 blocks hold the tables but
@@ -429,6 +491,7 @@ int main(void)
     tcase_add_test(tc, killed_runs_leave_readable_outputs);
     tcase_add_test(tc, failed_write_is_reported_with_its_path);
     tcase_add_test(tc, output_directories_are_protected);
+    tcase_add_test(tc, snapshot_chunks_are_checksummed);
     suite_add_tcase(s, tc);
     return test_run_suite(s);
 }
