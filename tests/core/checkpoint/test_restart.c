@@ -796,7 +796,7 @@ START_TEST(bit_flips_never_accepted)
     ck_assert_int_eq(fread(bytes, 1, (size_t)size, f), (size_t)size);
     fclose(f);
     const char *requested = getenv("SLUICE_FLIP_COUNT");
-    const int flips = requested && atoi(requested) > 0 ? atoi(requested) : 24;
+    const int flips = requested && atoi(requested) > 0 ? atoi(requested) : 12;
     char *flipped = NULL;
     ck_assert_int_ge(asprintf(&flipped, "%s/flipped.h5", dir), 0);
     unsigned long long state = 88172645463325252ull;
