@@ -4,6 +4,8 @@
 #define _GNU_SOURCE
 #include "output_dir.h"
 
+#include "sim.h"
+
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -30,38 +32,6 @@ static size_t matches(const char *name, const char *const *patterns, size_t coun
     for (size_t i = 0; i < count; i++)
         if (fnmatch(patterns[i], name, 0) == 0)
             return i + 1;
-    return 0;
-}
-
-/* Creates path and its parents. */
-static int make_directories(const char *path, char *error, size_t size)
-{
-    char *copy = strdup(path);
-    if (!copy) {
-        snprintf(error, size, "out of memory");
-        return -1;
-    }
-    for (char *p = copy + 1;; p++) {
-        const char c = *p;
-        if (c != '/' && c != '\0')
-            continue;
-        *p = '\0';
-        if (mkdir(copy, 0755) != 0 && errno != EEXIST) {
-            snprintf(error, size, "cannot create output directory '%s': %s", copy,
-                     strerror(errno));
-            free(copy);
-            return -1;
-        }
-        *p = c;
-        if (c == '\0')
-            break;
-    }
-    free(copy);
-    struct stat st;
-    if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode)) {
-        snprintf(error, size, "output path '%s' is not a directory", path);
-        return -1;
-    }
     return 0;
 }
 
@@ -168,7 +138,7 @@ int sluice_output_dir_claim(const char *dir, int restart, int overwrite, int *lo
                             char *error, size_t size)
 {
     *lock_fd = -1;
-    if (make_directories(dir, error, size) != 0)
+    if (sluice_sim_make_directory(dir, error, size) != 0)
         return SLUICE_OUTPUT_FAILED;
     if (take_lock(dir, lock_fd, error, size) != 0)
         return SLUICE_OUTPUT_REFUSED;

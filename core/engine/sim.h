@@ -56,6 +56,10 @@ void sluice_sim_free(sluice_sim *sim);
 /* Runs to the end time. Returns a sluice_run_status. */
 int sluice_sim_run(sluice_sim *sim, const sluice_run_options *options);
 
+/* Creates an output directory and its parents and checks it is a writable
+ * directory: 0, or -1 with one message in error. */
+int sluice_sim_make_directory(const char *path, char *error, size_t size);
+
 /* Step-wise use (tests, benchmarks). begin() prepares outputs (may be NULL
  * directory for none), step() advances one step, end() finishes. */
 int sluice_sim_begin(sluice_sim *sim, const char *output_directory);

@@ -299,7 +299,6 @@ int sluice_sim_fill_fluid(sluice_sim *sim);
 extern const sluice_api sluice_sim_api_table;
 
 /* files.c */
-int sluice_sim_make_directory(const char *path, char *error, size_t size);
 /* Appends one row to a table's file (api->output->table_row). */
 int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t length);
 
