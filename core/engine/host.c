@@ -133,11 +133,12 @@ static int writes_kind(const sluice_sim *sim, uint32_t instance, uint8_t kind)
 static size_t kind_writers(const sluice_sim *sim, const sluice_field_entry *field, uint8_t kind,
                            char *buffer, size_t size, size_t used)
 {
+    const size_t start = used;
     for (uint32_t d = 0; d < field->declarer_count; d++) {
         const sluice_declarer *e = &field->declarers[d];
         if (!(e->access & (SLUICE_WRITE | SLUICE_ACCUMULATE)) || !writes_kind(sim, e->instance, kind))
             continue;
-        int w = snprintf(buffer + used, size - used, "%s'%s'", used ? ", " : "",
+        int w = snprintf(buffer + used, size - used, "%s'%s'", used > start ? ", " : "",
                          sluice_sim_instance_name(sim, e->instance));
         if (w < 0 || (size_t)w >= size - used)
             break;
@@ -174,21 +175,3 @@ const char *sluice_field_writers_for(const sluice_sim *sim, const sluice_field_e
     return buffer;
 }
 
-const char *sluice_field_writers(const sluice_sim *sim, const sluice_field_entry *field,
-                                 char *buffer, size_t size)
-{
-    size_t used = 0;
-    buffer[0] = '\0';
-    for (uint32_t d = 0; d < field->declarer_count; d++) {
-        if (!(field->declarers[d].access & (SLUICE_WRITE | SLUICE_ACCUMULATE)))
-            continue;
-        int w = snprintf(buffer + used, size - used, "%s%s", used ? ", " : "",
-                         sluice_sim_instance_name(sim, field->declarers[d].instance));
-        if (w < 0 || (size_t)w >= size - used)
-            break;
-        used += (size_t)w;
-    }
-    if (!used)
-        snprintf(buffer, size, "the core");
-    return buffer;
-}

@@ -245,9 +245,7 @@ static inline const char *sluice_kind_name(uint8_t kind)
 /* host.c */
 void sluice_sim_refresh_view(sluice_sim *sim);
 void sluice_sim_fail(sluice_sim *sim, const char *format, ...) SLUICE_PRINTF(2, 3);
-const char *sluice_field_writers(const sluice_sim *sim, const sluice_field_entry *field,
-                                 char *buffer, size_t size);
-/* For one particle's kind, as a phrase ("written by 'mdbc'", "from its rate
+/* The plugins behind a field for one particle's kind, as a phrase ("written by 'mdbc'", "from its rate
  * 'density_rate' accumulated by 'continuity', 'delta_sph'"): the writers
  * that target that kind and, for an integrated field, the plugins that
  * accumulate its rate for it. */

@@ -224,14 +224,15 @@ static void report_finding(sluice_sim *sim, const watch_finding *w)
         sluice_sim_fail(sim,
                         "step %lld, t = %.9g s: %s has gone through wall %u%s (handled by '%s'): "
                         "it is %.4g m = %.3g spacings behind its %s %u, deeper than "
-                        "watchdog.wall_penetration = %g spacings (field 'position', written by "
-                        "%s; integrated by '%s')",
+                        "watchdog.wall_penetration = %g spacings (field 'position', %s; "
+                        "integrated by '%s')",
                         (long long)sim->step, sim->time, who, w->wall, name,
                         sim->walls[w->wall].scheme ? sim->walls[w->wall].scheme : "?",
                         w->wall_depth, w->wall_depth / (double)sim->spacing,
                         v->dimensions == 3 ? "triangle" : "segment", w->element,
                         (double)scene->watchdog.wall_penetration,
-                        e ? sluice_field_writers(sim, e, writers, sizeof writers) : "?",
+                        e ? sluice_field_writers_for(sim, e, v->kind[i], writers, sizeof writers)
+                          : "?",
                         sim->instances[sim->integrator].name);
     } else {
         sluice_sim_fail(sim,

@@ -323,7 +323,9 @@ START_TEST(particle_through_wall_stops_the_run)
     ck_assert_msg(strstr(output, "step ") && strstr(output, "particle id ") &&
                       strstr(output, "has gone through wall 0 ('tank')") &&
                       strstr(output, "handled by 'dbc'") &&
-                      strstr(output, "watchdog.wall_penetration = 0.5 spacings"),
+                      strstr(output, "watchdog.wall_penetration = 0.5 spacings") &&
+                      strstr(output, "(field 'position', written by 'core'; integrated by "
+                                     "'symplectic')"),
                   "diagnostic must name step, particle, wall and depth:\n%s", output);
     /* the depth it reports is past the allowed one */
     const char *depth = strstr(output, " m = ");
