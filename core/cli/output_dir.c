@@ -10,6 +10,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <fnmatch.h>
+#include <ftw.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -67,29 +68,17 @@ static int take_lock(const char *dir, int *fd_out, char *error, size_t size)
     return 0;
 }
 
-/* Removes a directory tree (the analyses of an earlier run). */
+static int remove_entry(const char *path, const struct stat *st, int flag, struct FTW *ftw)
+{
+    (void)st, (void)flag, (void)ftw;
+    return remove(path);
+}
+
+/* Removes a directory tree (the analyses of an earlier run), depth first,
+ * links not followed. */
 static int remove_tree(const char *path)
 {
-    DIR *d = opendir(path);
-    if (!d)
-        return errno == ENOENT ? 0 : -1;
-    int status = 0;
-    struct dirent *e;
-    while ((e = readdir(d))) {
-        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
-            continue;
-        char child[4096];
-        snprintf(child, sizeof child, "%s/%s", path, e->d_name);
-        struct stat st;
-        if (lstat(child, &st) != 0)
-            status = -1;
-        else if (S_ISDIR(st.st_mode))
-            status |= remove_tree(child);
-        else if (unlink(child) != 0)
-            status = -1;
-    }
-    closedir(d);
-    return rmdir(path) != 0 ? -1 : status;
+    return nftw(path, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
 }
 
 /* The first mark of an earlier run in dir ("" none); with clear, removes

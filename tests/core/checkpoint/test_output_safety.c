@@ -8,6 +8,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <time.h>
 
@@ -286,6 +287,10 @@ START_TEST(output_directories_are_protected)
     char *first = test_read_file(path);
     ck_assert_ptr_nonnull(first);
     char *notes = test_write_file(scratch, "a/notes.txt", "a user's file\n");
+    char *analysis = NULL;
+    ck_assert_int_ge(asprintf(&analysis, "%s/a/analysis", scratch), 0);
+    ck_assert_int_eq(mkdir(analysis, 0755), 0);
+    free(test_write_file(analysis, "conjugate.csv", "time,d2\n0,0.08\n"));
     /* the same --out again: refused, the run left as it was */
     ck_assert_int_ge(asprintf(&args, "run %s --out %s/a %s", scene, scratch, fast), 0);
     ck_assert_int_eq(test_sluice(args, &output), 2);
@@ -306,8 +311,10 @@ START_TEST(output_directories_are_protected)
     char *gone = NULL;
     ck_assert_int_ge(asprintf(&gone, "%s/a/only_first.csv", scratch), 0);
     ck_assert(!test_exists(gone));
+    ck_assert(!test_exists(analysis)); /* sluice-analyze's outputs of the first run */
     ck_assert(test_exists(notes));
     free(gone);
+    free(analysis);
     /* --overwrite and --restart contradict each other */
     ck_assert_int_ge(asprintf(&args, "run %s --out %s/a %s --overwrite --restart %s/x.h5", scene,
                               scratch, fast, scratch), 0);
