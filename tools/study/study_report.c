@@ -298,13 +298,15 @@ static char *group_label(const study *s, const study_run *r)
     return label;
 }
 
-/* The runs of r's group with a value of measure k, coarse to fine. */
+/* The runs of r's group with a value of measure k (k = measure_count:
+ * every run of the group), coarse to fine. */
 static size_t group_members(const study *s, const study_run *r, size_t k, const study_run **out)
 {
     size_t n = 0;
     for (size_t i = 0; i < s->run_count; i++) {
         const study_run *o = &s->runs[i];
-        if (same_group(s, r, o) && isfinite(o->values[k]) && isfinite(o->resolution))
+        if (same_group(s, r, o) &&
+            (k == s->measure_count || (isfinite(o->values[k]) && isfinite(o->resolution))))
             out[n++] = o;
     }
     for (size_t i = 1; i < n; i++) /* insertion sort by spacing, descending */
@@ -500,22 +502,6 @@ static double target_miss(const study_measure *m, const study_run *r, size_t k)
     return miss;
 }
 
-/* Every run of r's group (done or not), coarse to fine. */
-static size_t group_runs(const study *s, const study_run *r, const study_run **out)
-{
-    size_t n = 0;
-    for (size_t i = 0; i < s->run_count; i++)
-        if (same_group(s, r, &s->runs[i]))
-            out[n++] = &s->runs[i];
-    for (size_t i = 1; i < n; i++)
-        for (size_t j = i; j > 0 && out[j]->resolution > out[j - 1]->resolution; j--) {
-            const study_run *t = out[j];
-            out[j] = out[j - 1];
-            out[j - 1] = t;
-        }
-    return n;
-}
-
 static void target_text(const study_measure *m, char *text, size_t size)
 {
     text[0] = '\0';
@@ -574,7 +560,8 @@ static void write_targets(const study *s, FILE *md)
             first = !same_group(s, r, &s->runs[j]);
         if (!first)
             continue;
-        size_t n = group_runs(s, r, members), every = 0, finest = 0, cells = 0;
+        size_t n = group_members(s, r, s->measure_count, members), every = 0, finest = 0,
+               cells = 0;
         double miss_sum = 0;
         char *label = group_label(s, r);
         fprintf(md, "| %s |", label);
