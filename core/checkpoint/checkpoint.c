@@ -27,9 +27,10 @@
  *  - /plugins/<component>/: the arrays a component stored with
  *    api->state->state_write in its save_state callback.
  *
- * The file is built in memory (HDF5's core driver) and reaches the disk
- * through sluice_write_file_atomic: a killed run never leaves a half-written
- * checkpoint. Across MPI ranks (with a parallel HDF5) every rank writes its
+ * HDF5 writes the file straight from the particle store into a temporary
+ * file in a child process (sluice_write_file_with: no copy of the file in
+ * memory), which is renamed once whole: a killed run never leaves a
+ * half-written checkpoint. Across MPI ranks (with a parallel HDF5) every rank writes its
  * particles into <path>.partial, which rank 0 renames once whole
  * (checkpoint_shared). */
 #define _GNU_SOURCE
@@ -99,6 +100,15 @@ static herr_t innermost_error(unsigned n, const H5E_error2_t *e, void *data)
     ck_error *f = data;
     if (n == 0 && e && e->desc && e->desc[0]) {
         size_t used = strlen(f->text);
+        /* a failed system call: the system's message, not HDF5's record of
+         * the time, descriptor and buffer */
+        const char *system = strstr(e->desc, "error message = '");
+        const char *end = system ? strchr(system + 17, '\'') : NULL;
+        if (system && end) {
+            snprintf(f->text + used, sizeof f->text - used, ": %.*s", (int)(end - system - 17),
+                     system + 17);
+            return 0;
+        }
         snprintf(f->text + used, sizeof f->text - used, " (HDF5: %s)", e->desc);
         for (char *p = f->text + used; *p; p++)
             if (*p == '\n' || *p == '\r' || *p == '\t')
@@ -465,46 +475,30 @@ static void write_state(sluice_sim *sim, hid_t file, ck_error *e)
     close_id(&group, H5Gclose);
 }
 
-/* The checkpoint of the current state as a file image in memory. */
-static int checkpoint_image(sluice_sim *sim, void **image, size_t *size, char *error,
-                            size_t error_size)
+/* The checkpoint file of the current state, written by HDF5 straight to
+ * `temporary` (sluice_write_file_with runs this in a child process: a full
+ * disk cannot leave HDF5 half-closed in the run), then its checksum
+ * trailer. */
+static int write_checkpoint_file(void *context, const char *temporary, char *error,
+                                 size_t error_size)
 {
-    *image = NULL;
-    *size = 0;
+    sluice_sim *sim = context;
     quiet_hdf5 q;
     quiet_begin(&q);
     ck_error e = ck_clear();
-    size_t estimate = 65536 + strlen(sim->resolved_scene ? sim->resolved_scene : "") +
-                      (size_t)sim->particles.count * (sim->column_count + 3) * 8;
-    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), file = -1;
-    if (fapl < 0 || H5Pset_fapl_core(fapl, estimate, 0) < 0)
-        fail(&e, "H5Pset_fapl_core failed");
-    if (!e.text[0] &&
-        (file = H5Fcreate("sluice-checkpoint-image", H5F_ACC_TRUNC, H5P_DEFAULT, fapl)) < 0)
-        fail(&e, "H5Fcreate failed");
-    close_id(&fapl, H5Pclose);
-    if (!e.text[0])
+    errno = 0;
+    hid_t file = H5Fcreate(temporary, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    if (file < 0)
+        fail(&e, "cannot create it: %s", errno ? strerror(errno) : "H5Fcreate failed");
+    else
         write_state(sim, file, &e);
-    if (!e.text[0] && H5Fflush(file, H5F_SCOPE_LOCAL) < 0)
-        fail(&e, "H5Fflush failed");
-    if (!e.text[0]) {
-        ssize_t bytes = H5Fget_file_image(file, NULL, 0);
-        void *buffer = bytes > 0 ? malloc((size_t)bytes) : NULL;
-        if (!buffer || H5Fget_file_image(file, buffer, (size_t)bytes) != bytes) {
-            free(buffer);
-            fail(&e, "H5Fget_file_image failed (%zd bytes)", bytes);
-        } else {
-            *image = buffer;
-            *size = (size_t)bytes;
-        }
-    }
-    if (file >= 0 && H5Fclose(file) < 0)
-        fail(&e, "H5Fclose failed");
+    if (file >= 0 && H5Fclose(file) < 0 && !e.text[0])
+        fail(&e, "%s", errno ? strerror(errno) : "H5Fclose failed");
     quiet_end(&q);
+    char sum_error[600];
+    if (!e.text[0] && sluice_checksum_append(temporary, sum_error, sizeof sum_error) != 0)
+        fail(&e, "%s", sum_error);
     if (e.text[0]) {
-        free(*image);
-        *image = NULL;
-        *size = 0;
         snprintf(error, error_size, "%s", e.text);
         return -1;
     }
@@ -641,7 +635,7 @@ static size_t checkpoint_shared(sluice_sim *sim, const char *path, char *why, si
 
 int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
 {
-    char name[64], full[4096], error[1200];
+    char name[64], full[4096];
     if (!path) {
         if (!sim->output_directory) {
             sluice_sim_fail(sim, "a checkpoint needs an output directory");
@@ -656,7 +650,6 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
     }
     sim->state_file = path;
     const double started = sluice_wall_clock();
-    void *image = NULL;
     size_t size = 0;
     char why[1400] = "";
     int rc = 0;
@@ -702,7 +695,7 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
         }
     }
     if (sim->comm.rank == 0)
-        rc = checkpoint_image(sim, &image, &size, why, sizeof why);
+        rc = sluice_write_file_with(path, write_checkpoint_file, sim, why, sizeof why);
     if (sim->comm.size > 1 && sim->comm.rank == 0) {
         sim->particles = own;
         sluice_particles_free(&all);
@@ -711,30 +704,20 @@ int sluice_sim_checkpoint(sluice_sim *sim, const char *path)
         sim->next_id = own_next_id;
     }
 #else
-    rc = checkpoint_image(sim, &image, &size, why, sizeof why);
+    rc = sluice_write_file_with(path, write_checkpoint_file, sim, why, sizeof why);
 #endif
     sim->state_file = NULL;
-    if (rc == 0 && sim->comm.rank == 0) {
-        /* the checksum trailer after the HDF5 image */
-        unsigned char *whole = realloc(image, size + SLUICE_CHECKSUM_BYTES);
-        if (!whole) {
-            rc = -1;
-            snprintf(why, sizeof why, "out of memory adding the checksum");
-        } else {
-            image = whole;
-            sluice_checksum_trailer(image, size, whole + size);
-            size += SLUICE_CHECKSUM_BYTES;
-        }
-    }
-    if (rc == 0 && sim->comm.rank == 0) {
-        rc = sluice_write_file_atomic(path, image, size, error, sizeof error);
-        if (rc != 0)
-            snprintf(why, sizeof why, "%s", error);
-    }
-    free(image);
+    struct stat st;
+    if (rc == 0 && sim->comm.rank == 0 && stat(path, &st) == 0)
+        size = (size_t)st.st_size;
     if (sluice_comm_any(&sim->comm, rc != 0)) {
-        sluice_sim_fail(sim, "cannot write checkpoint '%s' (step %lld, t = %.9g s): %s", path,
-                        (long long)sim->step, sim->time, why[0] ? why : "rank 0 failed");
+        if (why[0]) /* names the file */
+            sluice_sim_fail(sim, "%s (the checkpoint of step %lld, t = %.9g s)", why,
+                            (long long)sim->step, sim->time);
+        else
+            sluice_sim_fail(sim, "cannot write checkpoint '%s' (step %lld, t = %.9g s): rank 0 "
+                                 "failed",
+                            path, (long long)sim->step, sim->time);
         return SLUICE_ERROR;
     }
     return checkpoint_written(sim, path, full, started, size);

@@ -597,6 +597,21 @@ static int api_write_file_atomic(sluice_host *host, const char *path, const void
     return SLUICE_OK;
 }
 
+static int api_write_file_with(sluice_host *host, const char *path, sluice_file_writer writer,
+                               void *context)
+{
+    if (across_ranks_only(host, "writing files (api->output->write_file_with)") != SLUICE_OK)
+        return SLUICE_ERROR;
+    if (host->sim->comm.rank != 0)
+        return SLUICE_OK; /* across ranks, rank 0 writes the file */
+    char error[1400];
+    if (sluice_write_file_with(path, writer, context, error, sizeof error) != 0) {
+        api_error(host, "%s", error);
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
 /* api->walls->wall_distance's cells over the domain, about a kernel support (2h)
  * wide, built at the first call: from a component's init, or from within a
  * pass, where the first thread to arrive builds them (with the threads of a
@@ -959,7 +974,7 @@ static const sluice_api_evaluation evaluation_table = {
 
 static const sluice_api_output output_table = {
     sizeof(sluice_api_output), api_output_path, api_resolved_scene, api_plugin_count,
-    api_plugin, api_table_open, api_table_row, api_write_file_atomic,
+    api_plugin, api_table_open, api_table_row, api_write_file_atomic, api_write_file_with,
 };
 
 static const sluice_api_state state_table = {

@@ -12,7 +12,10 @@
 #include <string.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <omp.h>
 
 #include "build_config.h"
 #include "sim_internal.h"
@@ -65,6 +68,112 @@ int sluice_write_file_atomic(const char *path, const void *data, size_t size, ch
     }
     free(tmp);
     return 0;
+}
+
+/* The child's side of sluice_write_file_with: the writer's message, if
+ * any, goes back through the pipe. OpenMP runs on one thread here: GNU
+ * libgomp's thread pool does not survive fork, and a parallel region of
+ * more threads would wait for it for ever. */
+static void write_file_child(const char *temporary, sluice_file_writer write_file, void *context,
+                             int pipe_out)
+{
+    omp_set_num_threads(1);
+    char message[1024] = "";
+    int rc = write_file(context, temporary, message, sizeof message);
+    if (rc != 0) {
+        if (!message[0])
+            snprintf(message, sizeof message, "the writer failed");
+        size_t left = strlen(message);
+        const char *p = message;
+        while (left > 0) {
+            ssize_t w = write(pipe_out, p, left);
+            if (w < 0 && errno == EINTR)
+                continue;
+            if (w <= 0)
+                break;
+            p += w;
+            left -= (size_t)w;
+        }
+    }
+    _exit(rc == 0 ? 0 : 1);
+}
+
+/* Waits for the writing child; 0 when it wrote the file. */
+static int write_file_wait(pid_t child, int pipe_in, const char *path, char *error,
+                           size_t error_size)
+{
+    size_t used = 0;
+    char message[1024];
+    for (;;) {
+        ssize_t got = read(pipe_in, message + used, sizeof message - 1 - used);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got <= 0)
+            break;
+        used += (size_t)got;
+        if (used == sizeof message - 1)
+            break;
+    }
+    message[used] = '\0';
+    int status = 0;
+    while (waitpid(child, &status, 0) < 0)
+        if (errno != EINTR) {
+            snprintf(error, error_size, "cannot write '%s': waiting for the writer: %s", path,
+                     strerror(errno));
+            return -1;
+        }
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 0)
+        return 0;
+    if (WIFSIGNALED(status))
+        snprintf(error, error_size, "cannot write '%s': the writing process died of signal %d (%s)",
+                 path, WTERMSIG(status), strsignal(WTERMSIG(status)));
+    else
+        snprintf(error, error_size, "cannot write '%s': %s", path,
+                 message[0] ? message : "the writer failed");
+    return -1;
+}
+
+int sluice_write_file_with(const char *path, sluice_file_writer write_file, void *context,
+                           char *error, size_t error_size)
+{
+    size_t n = strlen(path) + 32;
+    char *temporary = malloc(n);
+    if (!temporary) {
+        snprintf(error, error_size, "out of memory writing '%s'", path);
+        return -1;
+    }
+    snprintf(temporary, n, "%s.tmp.%ld", path, (long)getpid());
+    int pipe_ends[2] = {-1, -1};
+    pid_t child = pipe2(pipe_ends, O_CLOEXEC) == 0 ? fork() : -1;
+    int rc;
+    if (child == 0) {
+        close(pipe_ends[0]);
+        write_file_child(temporary, write_file, context, pipe_ends[1]);
+    }
+    if (child > 0) {
+        close(pipe_ends[1]);
+        rc = write_file_wait(child, pipe_ends[0], path, error, error_size);
+        close(pipe_ends[0]);
+    } else {
+        /* no second process (out of processes or memory): written here */
+        if (pipe_ends[0] >= 0) {
+            close(pipe_ends[0]);
+            close(pipe_ends[1]);
+        }
+        char message[1024] = "";
+        rc = write_file(context, temporary, message, sizeof message) == 0 ? 0 : -1;
+        if (rc != 0)
+            snprintf(error, error_size, "cannot write '%s': %s", path,
+                     message[0] ? message : "the writer failed");
+    }
+    if (rc == 0 && rename(temporary, path) != 0) {
+        snprintf(error, error_size, "cannot write '%s': %s", path, strerror(errno));
+        rc = -1;
+    }
+    if (rc != 0)
+        unlink(temporary);
+    free(temporary);
+    return rc;
 }
 
 static int write_all(int fd, const char *data, size_t size)

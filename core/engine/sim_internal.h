@@ -257,6 +257,16 @@ sluice_field_entry *sluice_sim_find_field(const sluice_sim *sim, const char *nam
 void sluice_sim_request_time(sluice_sim *sim, double t);
 int sluice_write_file_atomic(const char *path, const void *data, size_t size, char *error,
                              size_t error_size);
+/* Writes `path` through write_file(context, temporary, ...) in a child
+ * process (fork), then renames the temporary file over `path`. The child
+ * reads this process's memory as it is (copy-on-write), so the writer
+ * streams from the live arrays without a copy of the file in memory, and a
+ * library that fails badly after a failed write (HDF5 1.10 crashes at exit
+ * after a failed H5Fclose) takes only the child down. The child runs OpenMP
+ * on one thread. When no process can be started the writer runs here. 0, or
+ * -1 with `error` naming `path`; no temporary file is left either way. */
+int sluice_write_file_with(const char *path, sluice_file_writer write_file, void *context,
+                           char *error, size_t error_size);
 
 /* The engine's files, lowest first: host.c, fields.c, evaluate.c, api.c,
  * schedule.c, fill.c, load.c; files.c, watchdog.c, run.c (the time loop);

@@ -3,9 +3,10 @@
  * Every `interval` seconds of simulated time (t = 0, interval, 2 interval, ...,
  * the core ends steps exactly on these times) and once more at the end of the
  * run, the particles are written to DIR/<prefix>_<index>.h5 (index with at
- * least six digits). A file is built complete in memory, written under a
- * temporary name in the same directory and renamed, so a reader never sees a
- * half-written snapshot. When the run fails (the watchdog stopped
+ * least six digits). HDF5 writes it from the particle store, field by field
+ * in chunks, under a temporary name in the same directory, and the core
+ * renames it once whole (api->output->write_file_with, in a child
+ * process), so a reader never sees a half-written snapshot. When the run fails (the watchdog stopped
  * an unstable run, or another failure) the final snapshot is still written:
  * it holds the state that made the run stop, and its root attribute `status`
  * is "failed" (every other snapshot has "ok").
@@ -535,6 +536,17 @@ static herr_t innermost_error(unsigned n, const H5E_error2_t *e, void *data)
     h5w_failure *f = data;
     if (n == 0 && e && e->desc && e->desc[0]) {
         size_t used = strlen(f->text);
+        /* a failed system call: HDF5's description holds the time, the
+         * descriptor and the buffer address; the system's message is the
+         * news ("file write failed: ..., error message = 'No space left on
+         * device', ...") */
+        const char *system = strstr(e->desc, "error message = '");
+        const char *end = system ? strchr(system + 17, '\'') : NULL;
+        if (system && end) {
+            snprintf(f->text + used, sizeof f->text - used, ": %.*s", (int)(end - system - 17),
+                     system + 17);
+            return 0;
+        }
         snprintf(f->text + used, sizeof f->text - used, ": %s", e->desc);
         for (char *p = f->text + used; *p; p++)
             if (*p == '\n' || *p == '\r' || *p == '\t')
@@ -793,70 +805,40 @@ static void write_attributes(h5w_state *s, hid_t file, const sluice_view *v, uin
         attr_string(file, "status", status, f);
 }
 
-/* Builds the complete snapshot file in memory (HDF5's core driver, no
- * backing store) and returns its image in *image (malloc'd, *image_size
- * bytes). The file reaches the disk only through write_file_atomic: HDF5
- * never writes to the disk itself, so a full disk is an ordinary write error
- * (a failed H5Fclose of an on-disk file leaves HDF5 1.10 with a half-closed
- * file that crashes the library when it shuts down). */
-static int build_image(h5w_state *s, sluice_host *host, const sluice_view *v, const char *name,
-                       const char *status, void **image, size_t *image_size, h5w_failure *f)
+/* What a snapshot's writer needs (write_snapshot_file). */
+typedef struct h5w_job {
+    h5w_state *s;
+    sluice_host *host;
+    const sluice_view *v;
+    const char *status;
+} h5w_job;
+
+/* Writes the complete snapshot to `temporary`, HDF5 streaming each field
+ * from the particle store in chunks. It runs through the core's
+ * write_file_with (a child process, which renames the file once whole): a
+ * full disk makes HDF5 1.10's H5Fclose fail and leaves the library broken,
+ * which must not happen in the run itself. */
+static int write_snapshot_file(void *context, const char *temporary, char *error,
+                               size_t error_size)
 {
-    const sluice_api *api = s->api;
-    const char *scene = api->output->resolved_scene(host);
-    if (!scene)
-        scene = "";
-    /* the core driver grows its buffer in steps of `increment`: one step
-     * should hold the whole file */
-    size_t estimate = 65536 + strlen(scene) + strlen(s->plugins);
-    for (uint32_t i = 0; i < s->field_count; i++)
-        estimate += 4096 + strlen(s->fields[i].units) + strlen(s->fields[i].doc) +
-                    (size_t)v->count * s->fields[i].components * 8;
-    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
-    if (fapl < 0) {
-        fail(f, "H5Pcreate(H5P_FILE_ACCESS) failed");
-        return -1;
-    }
-    if (H5Pset_fapl_core(fapl, estimate, 0) < 0) {
-        fail(f, "H5Pset_fapl_core failed");
-        close_id(&fapl, H5Pclose, f, "H5Pclose");
-        return -1;
-    }
-    hid_t file = H5Fcreate(name, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
-    close_id(&fapl, H5Pclose, f, "H5Pclose");
-    if (file < 0) {
-        fail(f, "H5Fcreate failed");
-        return -1;
-    }
+    const h5w_job *job = context;
+    h5w_state *s = job->s;
+    const sluice_view *v = job->v;
+    const char *scene = s->api->output->resolved_scene(job->host);
+    h5w_failure failure = {{0}}, *f = &failure;
+    errno = 0;
+    hid_t file = H5Fcreate(temporary, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    if (file < 0)
+        fail(f, "cannot create it: %s", errno ? strerror(errno) : "H5Fcreate failed");
     const h5w_part whole = {0, v->count, H5P_DEFAULT, 0};
     for (uint32_t i = 0; i < s->field_count && !f->text[0]; i++)
         write_field(s, file, &s->fields[i], v, &whole, f);
     if (!f->text[0])
-        write_attributes(s, file, v, v->count, scene, status, f);
-    if (!f->text[0] && H5Fflush(file, H5F_SCOPE_LOCAL) < 0)
-        fail(f, "H5Fflush failed");
-    if (!f->text[0]) {
-        ssize_t size = H5Fget_file_image(file, NULL, 0);
-        void *buffer = size > 0 ? malloc((size_t)size) : NULL;
-        if (size <= 0)
-            fail(f, "H5Fget_file_image failed");
-        else if (!buffer)
-            fail(f, "out of memory for the file image (%zd bytes)", size);
-        else if (H5Fget_file_image(file, buffer, (size_t)size) != size)
-            fail(f, "H5Fget_file_image failed");
-        if (f->text[0]) {
-            free(buffer);
-        } else {
-            *image = buffer;
-            *image_size = (size_t)size;
-        }
-    }
-    if (H5Fclose(file) < 0)
-        fail(f, "H5Fclose failed");
+        write_attributes(s, file, v, v->count, scene ? scene : "", job->status, f);
+    if (file >= 0 && H5Fclose(file) < 0 && !f->text[0])
+        fail(f, "%s", errno ? strerror(errno) : "H5Fclose failed");
     if (f->text[0]) {
-        free(*image);
-        *image = NULL;
-        *image_size = 0;
+        snprintf(error, error_size, "%s", f->text);
         return -1;
     }
     return 0;
@@ -948,6 +930,53 @@ static void xdmf_data_item(h5w_text *t, const h5w_field *field, size_t n, const 
     text_append(t, "</DataItem>", 11);
 }
 
+/* The vertex file's writer (write_file_with): /index = 0 .. capacity - 1
+ * (int64), written in blocks. */
+static int write_vertex_file(void *context, const char *temporary, char *error,
+                             size_t error_size)
+{
+    const uint64_t capacity = *(const uint64_t *)context;
+    enum { BLOCK = 65536 };
+    int64_t *index = malloc(BLOCK * sizeof *index);
+    h5w_failure failure = {{0}}, *f = &failure;
+    hid_t file = H5W_NONE, space = H5W_NONE, set = H5W_NONE, block = H5W_NONE;
+    hsize_t dims[1] = {capacity};
+    errno = 0;
+    if (!index)
+        fail(f, "out of memory");
+    else if ((file = H5Fcreate(temporary, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT)) < 0)
+        fail(f, "cannot create it: %s", errno ? strerror(errno) : "H5Fcreate failed");
+    else if ((space = H5Screate_simple(1, dims, NULL)) < 0)
+        fail(f, "H5Screate_simple failed");
+    else if ((set = H5Dcreate2(file, "index", H5T_STD_I64LE, space, H5P_DEFAULT, H5P_DEFAULT,
+                               H5P_DEFAULT)) < 0)
+        fail(f, "H5Dcreate2 failed");
+    for (uint64_t first = 0; first < capacity && !f->text[0]; first += BLOCK) {
+        hsize_t start[1] = {first}, count[1] = {capacity - first < BLOCK ? capacity - first : BLOCK};
+        for (hsize_t i = 0; i < count[0]; i++)
+            index[i] = (int64_t)(first + i);
+        if ((block = H5Screate_simple(1, count, NULL)) < 0 ||
+            H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, count, NULL) < 0 ||
+            H5Dwrite(set, H5T_NATIVE_INT64, block, space, H5P_DEFAULT, index) < 0)
+            fail(f, "writing /index failed: %s", errno ? strerror(errno) : "H5Dwrite failed");
+        if (block >= 0)
+            H5Sclose(block);
+        block = H5W_NONE;
+    }
+    if (set >= 0)
+        H5Dclose(set);
+    if (space >= 0)
+        H5Sclose(space);
+    if (file >= 0 && H5Fclose(file) < 0 && !f->text[0])
+        fail(f, "%s", errno ? strerror(errno) : "H5Fclose failed");
+    free(index);
+    if (f->text[0]) {
+        snprintf(error, error_size, "%s", f->text);
+        return -1;
+    }
+    return 0;
+}
+
 /* Writes <prefix>_vertices.h5 with /index = 0 .. capacity - 1 (int64). */
 static int write_vertex_index(h5w_state *s, sluice_host *host, uint64_t capacity)
 {
@@ -958,60 +987,13 @@ static int write_vertex_index(h5w_state *s, sluice_host *host, uint64_t capacity
         api->messages->error(host, "the path of '%s' in the output directory is too long", name);
         return SLUICE_ERROR;
     }
-    int64_t *index = malloc((size_t)capacity * sizeof *index);
-    if (!index) {
-        api->messages->error(host, "out of memory for the vertex index (%llu entries)",
-                   (unsigned long long)capacity);
-        return SLUICE_ERROR;
-    }
-    for (uint64_t i = 0; i < capacity; i++)
-        index[i] = (int64_t)i;
     H5E_auto2_t old_func = NULL;
     void *old_data = NULL;
     H5Eget_auto2(H5E_DEFAULT, &old_func, &old_data);
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-    h5w_failure f = {{0}};
-    void *image = NULL;
-    ssize_t size = -1;
-    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), file = -1, space = -1, set = -1;
-    hsize_t dims[1] = {capacity};
-    if (fapl < 0 || H5Pset_fapl_core(fapl, 65536 + (size_t)capacity * 8, 0) < 0)
-        fail(&f, "H5Pset_fapl_core failed");
-    if (!f.text[0] && (file = H5Fcreate(name, H5F_ACC_TRUNC, H5P_DEFAULT, fapl)) < 0)
-        fail(&f, "H5Fcreate failed");
-    if (!f.text[0] && (space = H5Screate_simple(1, dims, NULL)) < 0)
-        fail(&f, "H5Screate_simple failed");
-    if (!f.text[0] && (set = H5Dcreate2(file, "index", H5T_STD_I64LE, space, H5P_DEFAULT,
-                                        H5P_DEFAULT, H5P_DEFAULT)) < 0)
-        fail(&f, "H5Dcreate2 failed");
-    if (!f.text[0] && H5Dwrite(set, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, index) < 0)
-        fail(&f, "H5Dwrite failed");
-    if (set >= 0)
-        close_id(&set, H5Dclose, &f, "H5Dclose");
-    if (space >= 0)
-        close_id(&space, H5Sclose, &f, "H5Sclose");
-    if (!f.text[0] && H5Fflush(file, H5F_SCOPE_LOCAL) < 0)
-        fail(&f, "H5Fflush failed");
-    if (!f.text[0]) {
-        size = H5Fget_file_image(file, NULL, 0);
-        image = size > 0 ? malloc((size_t)size) : NULL;
-        if (!image || H5Fget_file_image(file, image, (size_t)size) != size)
-            fail(&f, "H5Fget_file_image failed");
-    }
-    if (file >= 0 && H5Fclose(file) < 0)
-        fail(&f, "H5Fclose failed");
-    if (fapl >= 0)
-        close_id(&fapl, H5Pclose, &f, "H5Pclose");
+    int rc = api->output->write_file_with(host, path, write_vertex_file, &capacity);
     H5Eclear2(H5E_DEFAULT);
     H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
-    free(index);
-    if (f.text[0]) {
-        free(image);
-        api->messages->error(host, "cannot write '%s': %s", path, f.text);
-        return SLUICE_ERROR;
-    }
-    int rc = api->output->write_file_atomic(host, path, image, (size_t)size);
-    free(image);
     if (rc == SLUICE_OK)
         s->vertex_capacity = capacity;
     return rc;
@@ -1155,23 +1137,19 @@ static int write_snapshot(h5w_state *s, sluice_host *host, const char *status)
         s->broken = 1;
         return SLUICE_ERROR;
     }
-    void *image = NULL;
-    size_t image_size = 0;
-    int rc = ranks.count > 1
-                 ? write_shared(s, host, v, &ranks, path, status, &failure)
-                 : build_image(s, host, v, name, status, &image, &image_size, &failure);
+    int rc = SLUICE_OK;
+    if (ranks.count > 1 && write_shared(s, host, v, &ranks, path, status, &failure) != 0) {
+        api->messages->error(host, "cannot write snapshot '%s' (t = %.9g s): %s", path, v->time,
+                             failure.text);
+        rc = SLUICE_ERROR;
+    } else if (ranks.count <= 1) {
+        /* a temporary file in the same directory, renamed once complete;
+         * the core reports a failure with the path */
+        h5w_job job = {s, host, v, status};
+        rc = api->output->write_file_with(host, path, write_snapshot_file, &job);
+    }
     H5Eclear2(H5E_DEFAULT);
     H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
-    if (rc != 0) {
-        api->messages->error(host, "cannot write snapshot '%s' (t = %.9g s): %s", path, v->time,
-                   failure.text);
-        s->broken = 1;
-        return SLUICE_ERROR;
-    }
-    /* a temporary file in the same directory, renamed once complete; the
-     * core reports a failure with the path */
-    rc = ranks.count > 1 ? SLUICE_OK : api->output->write_file_atomic(host, path, image, image_size);
-    free(image);
     if (rc != SLUICE_OK) {
         s->broken = 1;
         return SLUICE_ERROR;

@@ -8,7 +8,7 @@
  * Plugins never link against the core: every service of the core is reached
  * through the sluice_api table handed to each component's create().
  *
- * ABI 2.0, frozen (docs/plugin-abi.md; its history: docs/abi-changelog.md):
+ * ABI 2.1, frozen (docs/plugin-abi.md; its history: docs/abi-changelog.md):
  *  - SLUICE_ABI_MAJOR changes when anything existing changes; the core refuses
  *    a plugin with another major version.
  *  - SLUICE_ABI_MINOR grows when members are appended at the end of a host
@@ -42,7 +42,7 @@ extern "C" {
 #endif
 
 #define SLUICE_ABI_MAJOR 2
-#define SLUICE_ABI_MINOR 0
+#define SLUICE_ABI_MINOR 1
 #define SLUICE_PLUGIN_MAGIC 0x534c4349u /* "SLCI" */
 
 #if defined(__GNUC__)
@@ -483,6 +483,12 @@ typedef struct sluice_api_evaluation {
                                  sluice_real *density);
 } sluice_api_evaluation;
 
+/* Writes a whole file to `path`, a temporary path that the core renames
+ * to the file's own once the writer returns 0. On failure the writer puts
+ * a message (without the path) in `error` and returns non-zero. */
+typedef int (*sluice_file_writer)(void *context, const char *path, char *error,
+                                  size_t error_size);
+
 /* The run's output directory, tables and files. */
 typedef struct sluice_api_output {
     uint32_t size;
@@ -499,6 +505,17 @@ typedef struct sluice_api_output {
     int (*table_row)(sluice_table *table, const double *values, uint32_t count);
     /* Writes `size` bytes to `path` atomically (temporary file, then rename). */
     int (*write_file_atomic)(sluice_host *host, const char *path, const void *data, size_t size);
+    /* Since ABI 2.1. Writes `path` atomically through `writer`, which
+     * writes the whole file to the temporary path it is given. The writer
+     * runs in a child process that sees the run's memory as it is
+     * (copy-on-write): it streams the data from the component's arrays, with
+     * no copy of the file in memory, and a writer that crashes or a library
+     * left broken by a failed write (HDF5 1.10 after a failed H5Fclose on a
+     * full disk) fails this call only. The writer must not rely on changes
+     * to memory surviving it (they stay in the child) and runs OpenMP on one
+     * thread. Across ranks, rank 0 writes the file. */
+    int (*write_file_with)(sluice_host *host, const char *path, sluice_file_writer writer,
+                           void *context);
 } sluice_api_output;
 
 /* Plugin state in checkpoints (docs/reliability.md, "Checkpoints and
