@@ -186,8 +186,12 @@ static int world_rank(void)
 #endif
 }
 
-static sluice_sim *load(const arguments *a, int check_only, const void *communicator)
+/* The scene loaded, or NULL with its messages printed; *resources is set
+ * when it failed for want of memory (exit 4) rather than bad input (2). */
+static sluice_sim *load(const arguments *a, int check_only, const void *communicator,
+                        int *resources)
 {
+    *resources = 0;
     sluice_diag *diag = sluice_diag_create();
     if (!diag) {
         fprintf(stderr, "sluice: error: out of memory\n");
@@ -205,6 +209,7 @@ static sluice_sim *load(const arguments *a, int check_only, const void *communic
     sluice_sim *sim = sluice_sim_load_variant(a->scene, a->variant, &options, diag);
     if (world_rank() == 0)
         sluice_diag_print(diag, stderr);
+    *resources = !sim && sluice_diag_resources(diag);
     sluice_diag_destroy(diag);
     return sim;
 }
@@ -229,18 +234,19 @@ static int command_run(int argc, char **argv, int across_ranks)
         free_arguments(&a);
         return 2;
     }
+    int resources = 0;
 #ifdef SLUICE_MPI
     /* under mpiexec: one run across the ranks of MPI_COMM_WORLD */
     MPI_Comm world = MPI_COMM_WORLD;
-    sluice_sim *sim = load(&a, 0, across_ranks ? &world : NULL);
+    sluice_sim *sim = load(&a, 0, across_ranks ? &world : NULL, &resources);
 #else
     (void)across_ranks;
-    sluice_sim *sim = load(&a, 0, NULL);
+    sluice_sim *sim = load(&a, 0, NULL, &resources);
 #endif
     const int quiet_rank = world_rank() != 0;
     free_arguments(&a);
     if (!sim)
-        return 2;
+        return resources ? 4 : 2;
     if (a.restart) {
         char error[2048];
         if (sluice_sim_restart(sim, a.restart, error, sizeof error) != 0) {
@@ -315,10 +321,11 @@ static int command_check(int argc, char **argv)
         usage(stderr);
         return 2;
     }
-    sluice_sim *sim = load(&a, 1, NULL);
+    int resources = 0;
+    sluice_sim *sim = load(&a, 1, NULL, &resources);
     free_arguments(&a);
     if (!sim)
-        return 2;
+        return resources ? 4 : 2;
     const sluice_view *v = sluice_sim_view(sim);
     sluice_index kinds[SLUICE_KIND_COUNT] = {0};
     for (sluice_index i = 0; i < v->count; i++)

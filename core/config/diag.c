@@ -8,6 +8,7 @@ struct sluice_diag {
     char **messages;
     sluice_severity *severities;
     size_t count, capacity, errors;
+    int resources; /* an error was for want of memory */
 };
 
 sluice_diag *sluice_diag_create(void)
@@ -76,6 +77,8 @@ void sluice_diag_add(sluice_diag *diag, sluice_severity severity, const char *fi
         if (message)
             snprintf(message, n + 1, "%s: %s", label, body);
     }
+    if (severity == SLUICE_SEVERITY_ERROR && (!text || strstr(text, "out of memory")))
+        diag->resources = 1;
     free(text);
     if (severity == SLUICE_SEVERITY_ERROR)
         diag->errors++;
@@ -104,6 +107,16 @@ void sluice_diag_add(sluice_diag *diag, sluice_severity severity, const char *fi
 size_t sluice_diag_count(const sluice_diag *diag)
 {
     return diag->count;
+}
+
+void sluice_diag_mark_resources(sluice_diag *diag)
+{
+    diag->resources = 1;
+}
+
+int sluice_diag_resources(const sluice_diag *diag)
+{
+    return diag->resources;
 }
 
 size_t sluice_diag_error_count(const sluice_diag *diag)

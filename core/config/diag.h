@@ -22,6 +22,12 @@ void sluice_diag_add(sluice_diag *diag, sluice_severity severity, const char *fi
 
 size_t sluice_diag_count(const sluice_diag *diag);
 size_t sluice_diag_error_count(const sluice_diag *diag);
+/* Errors for want of resources rather than bad input: the machine's memory
+ * cannot hold the scene (sluice_diag_mark_resources) or an allocation
+ * failed (any error whose text says "out of memory"). `sluice run` and
+ * `sluice check` then exit 4, not 2. */
+void sluice_diag_mark_resources(sluice_diag *diag);
+int sluice_diag_resources(const sluice_diag *diag);
 /* The i-th formatted message, "file:line:col: error: text". */
 const char *sluice_diag_message(const sluice_diag *diag, size_t index);
 /* Prints every message, one per line, in the order they were added. */

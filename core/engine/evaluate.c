@@ -82,6 +82,14 @@ int sluice_sim_update_neighbours(sluice_sim *sim)
     if (rebuild) {
         sluice_index bad = 0;
         int rc;
+        /* the list may grow into the memory this process may still take,
+         * not past it (docs/reliability.md, "Memory") */
+        const char *room_from = NULL;
+        const double room = sluice_memory_available(&room_from);
+        sim->grid.list_limit = room < 0 ? 0
+                               : room / sizeof(sluice_index) < 1e18
+                                   ? (size_t)(room / sizeof(sluice_index)) + 1
+                                   : 0;
 #ifdef SLUICE_MPI
         if (sim->comm.size > 1) {
             const int migrated = sluice_ranks_migrate(&sim->ranks_run);
@@ -109,6 +117,19 @@ int sluice_sim_update_neighbours(sluice_sim *sim)
                             "(domain.min/max; field 'position', written by the integrator)",
                             (long long)sim->step, sim->time,
                             describe_particle(sim, bad, where, sizeof where));
+            return SLUICE_ERROR;
+        }
+        if (rc == -4) {
+            sluice_sim_fail(sim,
+                            "step %lld, t = %.9g s: the neighbour list of %u particles needs %zu "
+                            "entries (%.3g GB, %.1f per particle), more than this process may "
+                            "still take (%.3g GB, %s): use a larger spacing or run across more "
+                            "machines",
+                            (long long)sim->step, sim->time, sim->particles.count,
+                            sim->grid.list_needed,
+                            (double)sim->grid.list_needed * sizeof(sluice_index) / 1e9,
+                            (double)sim->grid.list_needed / (double)sim->particles.count,
+                            room / 1e9, room_from ? room_from : "unknown");
             return SLUICE_ERROR;
         }
         if (rc != 0) {

@@ -64,68 +64,59 @@ static const char *library_version(const sluice_instance *in)
     return in->library->version ? in->library->version : "?";
 }
 
-/* Before anything is allocated: the particles the scene would create, from
- * the lattice points of every fluid region's bounding box (what filling it
- * visits) and wall layers along every wall (a few spacings deep; counted as
- * SLUICE_SIZE_WALL_LAYERS layers). A scene whose particles would not fit in
- * this machine's memory at SLUICE_SIZE_BYTES_PER_PARTICLE (docs/performance.md
- * measures 325-436 bytes per particle in 2D), or that exceeds `limit` (> 0;
- * the fuzzer's), is refused with the count instead of running out of memory
- * or time half-way through the set-up. */
+/* Before the plugins are loaded: the particles the scene would create
+ * (sluice_sim_count_particles, with SLUICE_SIZE_WALL_LAYERS layers behind
+ * every wall), refused when a particle index cannot count them or past
+ * `limit` (> 0; the fuzzer's). What they need in memory is checked once the
+ * plugins have declared their fields (check_memory). */
 #define SLUICE_SIZE_WALL_LAYERS 4.0
-#define SLUICE_SIZE_BYTES_PER_PARTICLE 300.0
 static int check_scene_size(sluice_sim *sim, double limit)
 {
-    const sluice_scene *scene = &sim->scene;
-    const uint32_t dims = scene->dimensions;
-    const double dx = (double)scene->particles.spacing;
     double fluid = 0, wall = 0;
-    for (size_t r = 0; r < scene->fluid_count; r++) {
-        sluice_real lo[3], hi[3];
-        sluice_region_bounds(&scene->fluids[r].region, dims, lo, hi);
-        double points = 1;
-        for (uint32_t d = 0; d < dims; d++)
-            points *= floor(((double)hi[d] - (double)lo[d]) / dx) + 1;
-        fluid += points;
-    }
-    for (size_t w = 0; w < scene->wall_count; w++) {
-        const sluice_wall_geometry *g = &scene->walls[w].geometry;
-        for (uint32_t e = 0; e < g->element_count; e++) {
-            const sluice_real *p = g->points + (size_t)e * dims * 3;
-            double measure;
-            if (dims == 2) {
-                measure = hypot((double)(p[3] - p[0]), (double)(p[4] - p[1])) / dx + 1;
-            } else {
-                double a[3], b[3];
-                for (int d = 0; d < 3; d++) {
-                    a[d] = (double)(p[3 + d] - p[d]);
-                    b[d] = (double)(p[6 + d] - p[d]);
-                }
-                double c0 = a[1] * b[2] - a[2] * b[1], c1 = a[2] * b[0] - a[0] * b[2],
-                       c2 = a[0] * b[1] - a[1] * b[0];
-                measure = 0.5 * sqrt(c0 * c0 + c1 * c1 + c2 * c2) / (dx * dx) + 1;
-            }
-            wall += SLUICE_SIZE_WALL_LAYERS * measure;
-        }
-    }
+    sluice_sim_count_particles(sim, SLUICE_SIZE_WALL_LAYERS, &fluid, &wall);
     const double count = fluid + wall;
-    const long pages = sysconf(_SC_PHYS_PAGES), page_size = sysconf(_SC_PAGESIZE);
-    const double memory = pages > 0 && page_size > 0 ? (double)pages * (double)page_size : 0;
-    const double needed = count * SLUICE_SIZE_BYTES_PER_PARTICLE;
-    const sluice_node *node = sluice_node_get(scene->root, "particles");
-    if (!(count < 4e9) || (memory > 0 && needed > memory) || (limit > 0 && count > limit)) {
-        sluice_diag_add(sim->diag, SLUICE_SEVERITY_ERROR, node ? node->file : scene->path,
-                        node ? node->line : 1, node ? node->column : 1,
-                        "at particles.spacing = %g m the scene would create about %.3g particles "
-                        "(%.3g fluid, %.3g wall), %s: use a larger spacing or smaller regions",
-                        dx, count, fluid, wall,
-                        limit > 0 && count > limit ? "more than this run's limit"
-                        : memory > 0 && needed > memory
-                            ? "more than this machine's memory holds at about 300 bytes each"
-                            : "more than a particle index can count");
-        return 1;
-    }
-    return 0;
+    if (count < 4e9 && !(limit > 0 && count > limit))
+        return 0;
+    const sluice_node *node = sluice_node_get(sim->scene.root, "particles");
+    sluice_diag_add(sim->diag, SLUICE_SEVERITY_ERROR, node ? node->file : sim->scene.path,
+                    node ? node->line : 1, node ? node->column : 1,
+                    "at particles.spacing = %g m the scene would create about %.3g particles "
+                    "(%.3g fluid, %.3g wall), %s: use a larger spacing or smaller regions",
+                    (double)sim->scene.particles.spacing, count, fluid, wall,
+                    limit > 0 && count > limit ? "more than this run's limit"
+                                               : "more than a particle index can count");
+    return 1;
+}
+
+/* Once every field is declared and before any particle is allocated: the
+ * memory the run needs (sluice_sim_estimate_memory, kept for run.json),
+ * with the wall layers that cover the kernel support behind every wall.
+ * A scene that needs more than this process may still take is refused
+ * with the figures (a failure for want of resources: exit 4). */
+static int check_memory(sluice_sim *sim)
+{
+    const double dx = (double)sim->spacing;
+    const double layers = ceil((double)sim->support / dx - 1e-9);
+    double fluid = 0, wall = 0;
+    sluice_sim_count_particles(sim, layers, &fluid, &wall);
+    sluice_memory_estimate *m = &sim->memory;
+    sluice_sim_estimate_memory(sim, fluid + wall, m);
+    const double needed = m->total - m->resident;
+    if (m->available < 0 || needed <= m->available)
+        return 0;
+    const sluice_node *node = sluice_node_get(sim->scene.root, "particles");
+    sluice_diag_add(sim->diag, SLUICE_SEVERITY_ERROR, node ? node->file : sim->scene.path,
+                    node ? node->line : 1, node ? node->column : 1,
+                    "at particles.spacing = %g m the run needs about %.3g GB: %.3g particles "
+                    "(%.3g fluid, %.3g wall) of %.0f bytes each (fields %.0f, neighbour list "
+                    "%.0f for %.0f neighbours, grid and reordering %.0f) and %.0f MB besides "
+                    "(program, cell grid, wall check); %s leaves this process %.3g GB: use a "
+                    "larger spacing or smaller regions, or run across more machines",
+                    dx, m->total / 1e9, m->particles, fluid, wall, m->per_particle, m->store,
+                    m->list, m->neighbours, m->grid + m->scratch, m->fixed / 1e6,
+                    m->available_from ? m->available_from : "the machine", m->available / 1e9);
+    sluice_diag_mark_resources(sim->diag);
+    return 1;
 }
 
 /* The scene's plugins found on the plugin path, their descriptors checked and
@@ -707,7 +698,8 @@ static int load(sluice_sim *sim, const char *scene_path, const char *variant,
     errors += place_walls(sim);
     if (errors)
         return errors;
-    int (*const stages[])(sluice_sim *) = {publish_core, create_components, bind_components,
+    int (*const stages[])(sluice_sim *) = {publish_core,         create_components,
+                                           bind_components,      check_memory,
                                            initialise_particles, build_search};
     for (size_t k = 0; k < sizeof stages / sizeof stages[0]; k++)
         if ((errors = stages[k](sim)) != 0)

@@ -323,6 +323,16 @@ static int write_run_json(sluice_sim *sim, int status)
     fprintf(f, "  \"state_bytes_per_particle\": %.1f,\n",
             particles_final > 0 ? bytes / particles_final : 0.0);
     fprintf(f, "  \"peak_memory_bytes\": %.0f,\n", peak);
+    /* the estimate made before the set-up (docs/reliability.md, "Memory"):
+     * its particle count, bytes per particle and total */
+    const sluice_memory_estimate *m = &sim->memory;
+    fprintf(f,
+            "  \"memory_estimate\": {\"bytes\": %.0f, \"particles\": %.0f, "
+            "\"bytes_per_particle\": %.1f, \"fields\": %.1f, \"neighbour_list\": %.1f, "
+            "\"neighbours\": %.0f, \"grid_and_reordering\": %.1f, \"held_at_start\": %.0f, "
+            "\"available\": %.0f},\n",
+            m->total, m->particles, m->per_particle, m->store, m->list, m->neighbours,
+            m->grid + m->scratch, m->fixed, m->available);
     fprintf(f, "  \"threads\": %d,\n", sim->threads);
     fprintf(f, "  \"max_density_deviation\": %.6g,\n", max_deviation);
     fprintf(f, "  \"smoothing_length\": %.9g,\n", (double)sim->smoothing_length);

@@ -110,6 +110,22 @@ typedef struct sluice_state_store {
 } sluice_state_store;
 
 /* What the libraries above the engine lend it (core/sim/ fills them). */
+/* The memory a scene needs (memory.c; docs/reliability.md, "Memory"). */
+typedef struct sluice_memory_estimate {
+    double particles;    /* counted before the set-up */
+    double store;        /* bytes per particle: the declared fields' columns */
+    double scratch;      /* one scratch column per element size (reordering) */
+    double grid;         /* the cell grid's arrays */
+    double neighbours;   /* neighbour-list entries per particle */
+    double list;         /* their bytes */
+    double per_particle; /* the sum of the five */
+    double resident;     /* bytes the process holds at the estimate */
+    double fixed;        /* resident, the cell starts and the pair buffers */
+    double total;        /* fixed + particles * per_particle: the peak resident set */
+    double available;    /* bytes the process may still take; < 0 unknown */
+    const char *available_from;
+} sluice_memory_estimate;
+
 typedef struct sluice_sim_services {
     /* Writes a checkpoint of the state after the last whole step (path NULL:
      * DIR/checkpoint_<step>.h5); NULL: this program has no checkpoints. */
@@ -200,6 +216,8 @@ struct sluice_sim {
      * watchdog during the run (run.json max_density_deviation) */
     double max_density_deviation;
     sluice_index particles_initial;
+    /* the memory estimate made before the set-up (run.json) */
+    sluice_memory_estimate memory;
     char *resolved_scene;
     char failure[4096];
     sluice_table **tables;
@@ -268,7 +286,22 @@ int sluice_write_file_atomic(const char *path, const void *data, size_t size, ch
 int sluice_write_file_with(const char *path, sluice_file_writer write_file, void *context,
                            char *error, size_t error_size);
 
-/* The engine's files, lowest first: host.c, fields.c, evaluate.c, api.c,
+/* memory.c: the memory a scene needs (docs/reliability.md, "Memory") */
+/* The particles the scene's fluid regions (the lattice points of their
+ * bounding boxes) and walls (wall_layers layers along every wall) create. */
+void sluice_sim_count_particles(const sluice_sim *sim, double wall_layers, double *fluid,
+                                double *wall);
+/* After the components are created (fields declared, support known). */
+void sluice_sim_estimate_memory(const sluice_sim *sim, double particles,
+                                sluice_memory_estimate *out);
+/* This process's resident set now, in bytes (0 when unknown). */
+double sluice_memory_resident(void);
+/* The bytes this process may still take: the least of MemAvailable, the
+ * control group's memory.max less its use, and the address-space limit
+ * less the address space in use; -1 when none is known. *source names it. */
+double sluice_memory_available(const char **source);
+
+/* The engine's files, lowest first: host.c, memory.c, fields.c, evaluate.c, api.c,
  * schedule.c, fill.c, load.c; files.c, watchdog.c, run.c (the time loop);
  * accessors.c. Each calls only files before it (tools/core-graph.sh). */
 /* api.c */

@@ -511,8 +511,12 @@ int sluice_grid_build_with_halo(sluice_grid *grid, sluice_particles *particles,
 #pragma omp parallel for schedule(guided, 256)
     for (sluice_index i = 0; i < n; i++)
         begin[i + 1] = visit(grid, pos, i, cutoff2, NULL);
-    if (sluice_list_offsets(begin, n, &grid->list, &grid->list_capacity) != 0)
-        return -1;
+    int listed = sluice_list_offsets(begin, n, &grid->list, &grid->list_capacity,
+                                     grid->list_limit, &grid->list_needed);
+    if (listed != 0) {
+        grid->valid = 0;
+        return listed;
+    }
     sluice_index *list = grid->list;
 #pragma omp parallel for schedule(guided, 256)
     for (sluice_index i = 0; i < n; i++)
@@ -525,7 +529,7 @@ int sluice_grid_build_with_halo(sluice_grid *grid, sluice_particles *particles,
 }
 
 int sluice_list_offsets(sluice_index *begin, sluice_index n, sluice_index **list,
-                        size_t *capacity)
+                        size_t *capacity, size_t limit, size_t *needed)
 {
     begin[0] = 0;
     size_t total = 0;
@@ -537,6 +541,14 @@ int sluice_list_offsets(sluice_index *begin, sluice_index n, sluice_index **list
     }
     if (total > *capacity || !*list) {
         size_t cap = total + total / 4 + 64;
+        if (limit > 0 && cap > limit) {
+            cap = total + 64; /* without the margin */
+            if (cap > limit) {
+                if (needed)
+                    *needed = total;
+                return -4;
+            }
+        }
         sluice_index *grown = malloc(cap * sizeof *grown);
         if (!grown)
             return -1;

@@ -35,6 +35,10 @@ typedef struct sluice_grid {
     sluice_index *list_begin; /* capacity + 1 */
     sluice_index *list;
     size_t list_capacity;
+    /* the most entries a list may grow to (0: no limit), set by the engine
+     * from the memory left before each build; a build that needs more
+     * returns -4 with list_needed set, before allocating */
+    size_t list_limit, list_needed;
     int threads;
     size_t *thread_counts;    /* scratch */
 
@@ -105,10 +109,12 @@ void sluice_grid_wrap(const sluice_grid *grid, sluice_real *position[3], sluice_
 /* A list in CSR form, from its counts: turns the counts in begin[1 .. n]
  * into offsets (begin[0] = 0, begin[i + 1] the end of i's entries) and makes
  * *list (of *capacity entries, grown with a quarter's margin) hold them all.
- * Returns 0, or -1 on OOM or when the total exceeds the index type. Used by
- * the Verlet list and by the reach passes' own lists (pairs.c). */
+ * Returns 0, -1 on OOM or when the total exceeds the index type, or -4
+ * when growing would pass `limit` entries (> 0; *needed then holds the
+ * total, and nothing is allocated). Used by the Verlet list and by the
+ * reach passes' own lists (pairs.c). */
 int sluice_list_offsets(sluice_index *begin, sluice_index n, sluice_index **list,
-                        size_t *capacity);
+                        size_t *capacity, size_t limit, size_t *needed);
 
 /* Bytes held by the grid and the list (memory figures). */
 size_t sluice_grid_bytes(const sluice_grid *grid);

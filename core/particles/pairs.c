@@ -473,8 +473,11 @@ static int reach_list_build(const sluice_pair_pass *pass, const sluice_grid *gri
                                                                 pass->neighbour_mask[view->kind[i]],
                                                                 cutoff, NULL)
                                                    : 0;
-    if (sluice_list_offsets(begin, n, &L->list, &L->capacity) != 0)
-        return -1;
+    size_t needed = 0;
+    const int listed =
+        sluice_list_offsets(begin, n, &L->list, &L->capacity, grid->list_limit, &needed);
+    if (listed != 0)
+        return listed;
     sluice_index *list = L->list;
 #pragma omp parallel for num_threads(threads) schedule(guided, 256)
     for (sluice_index i = 0; i < n; i++)

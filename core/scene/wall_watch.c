@@ -140,6 +140,23 @@ static uint32_t class_cell(const sluice_wall_cells *grid, size_t cell, void *con
     return sluice_wall_cells_near_elements(grid, centre, dmin, NULL, NULL);
 }
 
+double sluice_wall_watch_bytes(uint32_t dimensions, const sluice_wall_geometry *const *walls,
+                               size_t wall_count, const double lo[3], const double hi[3],
+                               double cell_size)
+{
+    if (wall_count == 0)
+        return 0;
+    double elements = 0;
+    for (size_t w = 0; w < wall_count; w++)
+        elements += walls[w]->element_count;
+    sluice_wall_cells cells;
+    sluice_wall_cells_layout(&cells, dimensions, walls, wall_count, lo, hi, cell_size,
+                             elements * (double)((1u << dimensions) + 2), WATCH_MAX_CELLS,
+                             WATCH_MAX_WORK);
+    /* a class and a candidate range per cell */
+    return (double)cells.cell_count * (1.0 + sizeof *cells.candidate_begin);
+}
+
 int sluice_wall_watch_init(sluice_wall_watch *watch, uint32_t dimensions,
                            const sluice_wall_geometry *const *walls, size_t wall_count,
                            const double lo[3], const double hi[3], double cell_size,

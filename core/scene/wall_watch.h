@@ -39,6 +39,11 @@ int sluice_wall_watch_init(sluice_wall_watch *watch, uint32_t dimensions,
                            const double lo[3], const double hi[3], double cell_size,
                            double depth);
 void sluice_wall_watch_free(sluice_wall_watch *watch);
+/* The bytes sluice_wall_watch_init will take for its cells (their class
+ * and candidate range; the candidates near the walls are not counted). */
+double sluice_wall_watch_bytes(uint32_t dimensions, const sluice_wall_geometry *const *walls,
+                               size_t wall_count, const double lo[3], const double hi[3],
+                               double cell_size);
 
 /* The signed distance of p to the nearest wall, as api->walls->wall_nearest computes
  * it (exactly: the same value), when p is in a near or behind cell; +HUGE_VAL

@@ -268,6 +268,26 @@ START_TEST(outside_domain_reported)
 }
 END_TEST
 
+START_TEST(list_growth_limited)
+{
+    /* counts 3, 0, 5: 8 entries. Past a limit of 7 entries nothing is
+     * allocated and the total is reported; at 8 (no margin) it fits */
+    sluice_index begin[4] = {0, 3, 0, 5};
+    sluice_index *list = NULL;
+    size_t capacity = 0, needed = 0;
+    ck_assert_int_eq(sluice_list_offsets(begin, 3, &list, &capacity, 7, &needed), -4);
+    ck_assert_uint_eq(needed, 8);
+    ck_assert_ptr_null(list);
+    ck_assert_uint_eq(capacity, 0);
+    sluice_index again[4] = {0, 3, 0, 5};
+    ck_assert_int_eq(sluice_list_offsets(again, 3, &list, &capacity, 8 + 64, &needed), 0);
+    ck_assert_ptr_nonnull(list);
+    ck_assert_uint_ge(capacity, 8);
+    ck_assert_uint_eq(again[3], 8);
+    free(list);
+}
+END_TEST
+
 START_TEST(short_periodic_refused)
 {
     int periodic[3] = {1, 0, 0};
@@ -292,6 +312,7 @@ int main(void)
     tcase_add_test(tc, kind_masks);
     tcase_add_test(tc, outside_domain_reported);
     tcase_add_test(tc, short_periodic_refused);
+    tcase_add_test(tc, list_growth_limited);
     suite_add_tcase(s, tc);
     return test_run_suite(s);
 }
