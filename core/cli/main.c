@@ -42,7 +42,8 @@ static void usage(FILE *out)
             "written every checkpoint.interval s and when SIGINT or SIGTERM stops a run).\n"
             "A run refuses an --out that holds another run (--overwrite replaces it) or\n"
             "that another live run writes to (DIR/.sluice.lock).\n"
-            "Exit status: 0 success, 2 bad input, 3 the run went unstable, 4 other failure,\n"
+            "Exit status: 0 success, 2 bad input, 3 the run went unstable, 4 other failure (out\n"
+            "of memory, a failed write),\n"
             "5 stopped by SIGINT/SIGTERM after a whole step (a checkpoint was written).\n");
 }
 
