@@ -343,12 +343,12 @@ int main(void)
      * skips the tag (tools/run-tests.sh) */
     TCase *tc = tcase_create("validation");
     tcase_set_tags(tc, "validation");
-    tcase_set_timeout(tc, 1800);
+    tcase_set_timeout(tc, 900);
     tcase_add_test(tc, dam_break_2d_martin_moyce);
     tcase_add_test(tc, still_water_2d);
     suite_add_tcase(s, tc);
     TCase *runs = tcase_create("runs");
-    tcase_set_timeout(runs, 1800);
+    tcase_set_timeout(runs, 900);
     tcase_add_test(runs, dam_break_3d_runs);
     tcase_add_test(runs, unstable_run_stops_with_diagnostic);
     tcase_add_test(runs, particle_through_wall_stops_the_run);

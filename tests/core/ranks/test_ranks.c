@@ -936,9 +936,18 @@ int main(int argc, char **argv)
 {
     MPI_Init(&argc, &argv);
     Suite *s = suite_create("ranks");
-    TCase *t = tcase_create("same_as_one_rank");
-    tcase_set_timeout(t, 300);
-    tcase_add_loop_test(t, same_particles_as_one_rank, 0, CASES);
+    /* in cases of a minute or two each (tests/meson.build runs each case
+     * as a test of its own, CK_RUN_CASE) */
+    const int thirds[4] = {0, CASES / 3, 2 * CASES / 3, CASES};
+    static const char *const scene_cases[3] = {"scenes_1", "scenes_2", "scenes_3"};
+    for (int k = 0; k < 3; k++) {
+        TCase *t = tcase_create(scene_cases[k]);
+        tcase_set_timeout(t, 600);
+        tcase_add_loop_test(t, same_particles_as_one_rank, thirds[k], thirds[k + 1]);
+        suite_add_tcase(s, t);
+    }
+    TCase *t = tcase_create("outputs");
+    tcase_set_timeout(t, 600);
     tcase_add_test(t, output_as_one_rank);
     tcase_add_test(t, inlet_and_outlet_on_other_ranks);
     tcase_add_test(t, refused_across_ranks);
