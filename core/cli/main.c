@@ -12,6 +12,7 @@
 #include "build_config.h"
 #include "diag.h"
 #include "output_dir.h"
+#include "wait_policy.h"
 #include "sim.h"
 
 static void usage(FILE *out)
@@ -419,6 +420,7 @@ static int command_study(char **argv)
 
 int main(int argc, char **argv)
 {
+    sluice_cli_set_wait_policy(argc, argv);
     if (argc < 2) {
         usage(stderr);
         return 2;

@@ -334,6 +334,12 @@ static int write_run_json(sluice_sim *sim, int status)
             m->total, m->particles, m->per_particle, m->store, m->list, m->neighbours,
             m->grid + m->scratch, m->fixed, m->available);
     fprintf(f, "  \"threads\": %d,\n", sim->threads);
+    /* how the threads wait at barriers (sluice run sets passive on a busy
+     * machine; docs/performance.md) */
+    const char *policy = getenv("OMP_WAIT_POLICY"), *spin = getenv("GOMP_SPINCOUNT");
+    fprintf(f, "  \"openmp_wait_policy\": ");
+    json_string(f, policy ? policy : spin ? "GOMP_SPINCOUNT" : "default");
+    fprintf(f, ",\n");
     fprintf(f, "  \"max_density_deviation\": %.6g,\n", max_deviation);
     fprintf(f, "  \"smoothing_length\": %.9g,\n", (double)sim->smoothing_length);
     fprintf(f, "  \"spacing\": %.9g,\n", (double)sim->spacing);
