@@ -17,6 +17,21 @@
 
 /* ------------------------------------------------------------ counting -- */
 
+/* A wall element's length (2D) or area (3D) in spacings (dx, dx^2). */
+static double element_measure(const sluice_real *p, uint32_t dims, double dx)
+{
+    if (dims == 2)
+        return hypot((double)(p[3] - p[0]), (double)(p[4] - p[1])) / dx;
+    double a[3], b[3];
+    for (int d = 0; d < 3; d++) {
+        a[d] = (double)(p[3 + d] - p[d]);
+        b[d] = (double)(p[6 + d] - p[d]);
+    }
+    const double c0 = a[1] * b[2] - a[2] * b[1], c1 = a[2] * b[0] - a[0] * b[2],
+                 c2 = a[0] * b[1] - a[1] * b[0];
+    return 0.5 * sqrt(c0 * c0 + c1 * c1 + c2 * c2) / (dx * dx);
+}
+
 void sluice_sim_count_particles(const sluice_sim *sim, double wall_layers, double *fluid,
                                 double *wall)
 {
@@ -37,19 +52,7 @@ void sluice_sim_count_particles(const sluice_sim *sim, double wall_layers, doubl
         const sluice_wall_geometry *g = &scene->walls[w].geometry;
         for (uint32_t e = 0; e < g->element_count; e++) {
             const sluice_real *p = g->points + (size_t)e * dims * 3;
-            double measure;
-            if (dims == 2) {
-                measure = hypot((double)(p[3] - p[0]), (double)(p[4] - p[1])) / dx;
-            } else {
-                double a[3], b[3];
-                for (int d = 0; d < 3; d++) {
-                    a[d] = (double)(p[3 + d] - p[d]);
-                    b[d] = (double)(p[6 + d] - p[d]);
-                }
-                double c0 = a[1] * b[2] - a[2] * b[1], c1 = a[2] * b[0] - a[0] * b[2],
-                       c2 = a[0] * b[1] - a[1] * b[0];
-                measure = 0.5 * sqrt(c0 * c0 + c1 * c1 + c2 * c2) / (dx * dx);
-            }
+            const double measure = element_measure(p, dims, dx);
             *wall += wall_layers * measure;
         }
     }
@@ -136,19 +139,7 @@ static double free_face_deficit(const sluice_sim *sim, double q)
         const sluice_wall_geometry *g = &sim->scene.walls[w].geometry;
         for (uint32_t e = 0; e < g->element_count; e++) {
             const sluice_real *p = g->points + (size_t)e * dims * 3;
-            double measure;
-            if (dims == 2) {
-                measure = hypot((double)(p[3] - p[0]), (double)(p[4] - p[1])) / dx;
-            } else {
-                double a[3], b[3];
-                for (int d = 0; d < 3; d++) {
-                    a[d] = (double)(p[3 + d] - p[d]);
-                    b[d] = (double)(p[6 + d] - p[d]);
-                }
-                double c0 = a[1] * b[2] - a[2] * b[1], c1 = a[2] * b[0] - a[0] * b[2],
-                       c2 = a[0] * b[1] - a[1] * b[0];
-                measure = 0.5 * sqrt(c0 * c0 + c1 * c1 + c2 * c2) / (dx * dx);
-            }
+            const double measure = element_measure(p, dims, dx);
             deficit += measure * per_face * (2.0 - wetted_share(sim, p, dx));
         }
     }
