@@ -1387,11 +1387,33 @@ START_TEST(closest_candidate)
 }
 END_TEST
 
+/* Out of memory is a want of resources (sluice run and check exit 4), not
+ * bad input (2): any error that says so marks the diagnostics, as does an
+ * explicit mark (the memory estimate's refusal). */
+START_TEST(out_of_memory_marks_resources)
+{
+    sluice_diag *diag = sluice_diag_create();
+    ck_assert_ptr_nonnull(diag);
+    sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, "s.yaml", 3, 5, "unknown key 'x'");
+    sluice_diag_add(diag, SLUICE_SEVERITY_WARNING, "s.yaml", 4, 1, "out of memory (a warning)");
+    ck_assert_int_eq(sluice_diag_resources(diag), 0);
+    sluice_diag_add(diag, SLUICE_SEVERITY_ERROR, "s.yaml", 5, 1, "out of memory reading %s", "y");
+    ck_assert_int_eq(sluice_diag_resources(diag), 1);
+    sluice_diag_destroy(diag);
+    diag = sluice_diag_create();
+    ck_assert_ptr_nonnull(diag);
+    sluice_diag_mark_resources(diag);
+    ck_assert_int_eq(sluice_diag_resources(diag), 1);
+    sluice_diag_destroy(diag);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("yaml");
     TCase *load = tcase_create("load");
     tcase_add_test(load, positions_kinds_and_plain_flags);
+    tcase_add_test(load, out_of_memory_marks_resources);
     tcase_add_test(load, explicit_string_tag_is_not_plain);
     tcase_add_test(load, syntax_errors_have_libyaml_position_and_text);
     tcase_add_test(load, duplicate_keys);
