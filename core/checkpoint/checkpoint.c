@@ -783,40 +783,68 @@ static char *get_string(hid_t object, const char *name, ck_error *e)
     return copy;
 }
 
+/* rows_length of a dataset whose extent the file does not hold: declared
+ * without its data (never written, or chunks missing), which a restart
+ * must not allocate for. */
+#define CK_UNSTORED (-2)
+
 /* Length of the last dimension of dataset `name` of the given rank (its
- * first dimension `rows` for rank 2), or -1 when absent or of another
- * shape. */
+ * first dimension `rows` for rank 2), -1 when absent or of another shape,
+ * CK_UNSTORED when the file holds fewer bytes than its extent needs. */
 static int64_t rows_length(hid_t loc, const char *name, int rank, hsize_t rows)
 {
     if (H5Lexists(loc, name, H5P_DEFAULT) <= 0)
         return -1;
-    hid_t set = H5Dopen2(loc, name, H5P_DEFAULT), space = -1;
+    hid_t set = H5Dopen2(loc, name, H5P_DEFAULT), space = -1, type = -1;
     int64_t length = -1;
     hsize_t dims[2] = {0, 0};
-    if (set >= 0 && (space = H5Dget_space(set)) >= 0 &&
+    if (set >= 0 && (space = H5Dget_space(set)) >= 0 && (type = H5Dget_type(set)) >= 0 &&
         H5Sget_simple_extent_ndims(space) == rank && H5Sget_simple_extent_dims(space, dims, NULL) == rank &&
-        (rank == 1 || dims[0] == rows))
-        length = (int64_t)dims[rank - 1];
+        (rank == 1 || dims[0] == rows) && dims[rank - 1] <= (hsize_t)INT64_MAX) {
+        /* the checkpoint's datasets are contiguous and unfiltered: their
+         * storage is every value's bytes */
+        const hsize_t n = dims[rank - 1], width = rank == 2 ? dims[0] : 1;
+        const hsize_t size = H5Tget_size(type);
+        length = (int64_t)n;
+        if (size == 0)
+            length = -1;
+        else if (n > 0 && width > 0 &&
+                 (n > UINT64_MAX / width / size || H5Dget_storage_size(set) < n * width * size))
+            length = CK_UNSTORED;
+    }
+    close_id(&type, H5Tclose);
     close_id(&space, H5Sclose);
     close_id(&set, H5Dclose);
     return length;
+}
+
+/* Dataset `name` has the shape get_rows reads (and its values are in the
+ * file); otherwise a message. */
+static int check_rows(hid_t loc, const char *name, int rank, hsize_t rows, hsize_t length,
+                      ck_error *e)
+{
+    if (e->text[0])
+        return -1;
+    const int64_t have = rows_length(loc, name, rank, rows);
+    if (have == (int64_t)length)
+        return 0;
+    if (have == CK_UNSTORED)
+        fail(e, "dataset '%s' declares more values than the file holds", name);
+    else if (rank == 2)
+        fail(e, "dataset '%s' is missing or is not %llu x %llu", name, (unsigned long long)rows,
+             (unsigned long long)length);
+    else
+        fail(e, "dataset '%s' is missing or does not hold %llu values", name,
+             (unsigned long long)length);
+    return -1;
 }
 
 /* Reads a dataset written by put_rows, checking its type and shape. */
 static int get_rows(hid_t loc, const char *name, int type, int rank, hsize_t rows,
                     hsize_t length, void *const *data, ck_error *e)
 {
-    if (e->text[0])
+    if (check_rows(loc, name, rank, rows, length, e) != 0)
         return -1;
-    if (rows_length(loc, name, rank, rows) != (int64_t)length) {
-        if (rank == 2)
-            fail(e, "dataset '%s' is missing or is not %llu x %llu", name,
-                 (unsigned long long)rows, (unsigned long long)length);
-        else
-            fail(e, "dataset '%s' is missing or does not hold %llu values", name,
-                 (unsigned long long)length);
-        return -1;
-    }
     hid_t t = native_type(type);
     hid_t set = H5Dopen2(loc, name, H5P_DEFAULT), stored = -1, space = -1, memory = -1;
     if (set < 0 || (stored = H5Dget_type(set)) < 0 || (space = H5Dget_space(set)) < 0) {
@@ -846,21 +874,38 @@ static int get_rows(hid_t loc, const char *name, int type, int rank, hsize_t row
     return e->text[0] ? -1 : 0;
 }
 
+/* Text of the file in a message: the first `length` bytes (at most 64) of
+ * it, each control character a '?', so that the message stays one line and
+ * prints no terminal escapes. */
+static const char *shown(const char *text, size_t length, char *out, size_t size)
+{
+    size_t n = 0, i = 0;
+    for (; i < length && text[i] && i < 64 && n + 4 < size; i++)
+        out[n++] = (unsigned char)text[i] < 0x20 || text[i] == 0x7f ? '?' : text[i];
+    if (i < length && text[i] && n + 4 <= size)
+        for (int k = 0; k < 3; k++)
+            out[n++] = '.';
+    out[n] = '\0';
+    return out;
+}
+
 /* The first line in which two layouts differ, for the mismatch message. */
 static void first_difference(const char *have, const char *want, char *out, size_t size)
 {
+    char line[80];
     while (*have && *want) {
         size_t a = strcspn(have, "\n"), b = strcspn(want, "\n");
         if (a != b || memcmp(have, want, a) != 0) {
-            snprintf(out, size, "'%.*s' in the checkpoint, '%.*s' in the scene", (int)a, have,
-                     (int)b, want);
+            snprintf(out, size, "'%s' in the checkpoint, '%.*s' in the scene",
+                     shown(have, a, line, sizeof line), (int)b, want);
             return;
         }
         have += a + (have[a] == '\n');
         want += b + (want[b] == '\n');
     }
     if (*have)
-        snprintf(out, size, "'%.*s' only in the checkpoint", (int)strcspn(have, "\n"), have);
+        snprintf(out, size, "'%s' only in the checkpoint",
+                 shown(have, strcspn(have, "\n"), line, sizeof line));
     else
         snprintf(out, size, "'%.*s' only in the scene", (int)strcspn(want, "\n"), want);
 }
@@ -950,9 +995,10 @@ typedef struct restored_run {
  * the field layout and the spacing match the scene's. */
 static void check_matches_scene(sluice_sim *sim, hid_t file, ck_error *e)
 {
-    char *format = get_string(file, "format", e);
+    char *format = get_string(file, "format", e), text[80];
     if (format && strcmp(format, CHECKPOINT_FORMAT) != 0)
-        fail(e, "it is not a Sluice checkpoint (format '%s')", format);
+        fail(e, "it is not a Sluice checkpoint (format '%s')",
+             shown(format, strlen(format), text, sizeof text));
     free(format);
     int version = 0, real_size = 0, dimensions = 0;
     get_attr(file, "format_version", H5T_NATIVE_INT, &version, e);
@@ -1023,8 +1069,9 @@ static void read_particles(sluice_sim *sim, hid_t file, ck_error *e, restored_ru
     *run = (restored_run){count, rebuilds, grid_valid};
     if (e->text[0])
         return;
+    /* (a step count no run reaches, with room to count on) */
     if (count == 0 || count > UINT32_MAX - 1 || !isfinite(time) || step < 0 ||
-        next_id < count) {
+        step > INT64_MAX / 2 || next_id < count) {
         fail(e, "its run state is inconsistent (%llu particles, step %lld, t = %g s)",
              (unsigned long long)count, (long long)step, time);
         return;
@@ -1036,15 +1083,17 @@ static void read_particles(sluice_sim *sim, hid_t file, ck_error *e, restored_ru
         return;
     }
 
-    /* particles: every field, in the checkpoint's order */
-    sim->particles.count = 0;
-    if (sluice_particles_append(&sim->particles, (sluice_index)count, NULL) != 0) {
-        fail(e, "out of memory for %llu particles", (unsigned long long)count);
-        return;
-    }
+    /* particles: every field, in the checkpoint's order; each dataset's
+     * shape (and data in the file) checked before the store grows to
+     * `count` particles */
     hid_t group = H5Gopen2(file, "particles", H5P_DEFAULT);
     if (group < 0)
         fail(e, "group 'particles' is missing");
+    for (uint32_t f = 0; f < sim->field_count && !e->text[0]; f++)
+        check_rows(group, sim->fields[f].name, 2, sim->fields[f].components, count, e);
+    sim->particles.count = 0;
+    if (!e->text[0] && sluice_particles_append(&sim->particles, (sluice_index)count, NULL) != 0)
+        fail(e, "out of memory for %llu particles", (unsigned long long)count);
     for (uint32_t f = 0; f < sim->field_count && !e->text[0]; f++) {
         const sluice_field_entry *field = &sim->fields[f];
         void *rows[16];
@@ -1101,7 +1150,10 @@ static void read_core_group(sluice_sim *sim, hid_t file, ck_error *e, const rest
     }
     int64_t requests = rows_length(group, "requests", 1, 1);
     int64_t tables = rows_length(group, "table_bytes", 1, 1);
-    if (requests < 0 || tables < 0)
+    if (requests == CK_UNSTORED || tables == CK_UNSTORED)
+        fail(e, "dataset '%s' declares more values than the file holds",
+             requests == CK_UNSTORED ? "requests" : "table_bytes");
+    else if (requests < 0 || tables < 0)
         fail(e, "the requested times or the table lengths are missing");
     double *times = malloc(((size_t)(requests > 0 ? requests : 0) + 1) * sizeof *times);
     /* table_hashes (since the session-19 checkpoints) must match table_bytes */
@@ -1345,5 +1397,11 @@ static int64_t state_length(sluice_host *host, const char *name)
     sluice_sim *sim = host->sim;
     if (state_access(host, name, CK_DOUBLE, 0) != SLUICE_OK || sim->state_absent)
         return -1;
-    return rows_length((hid_t)sim->state_group, name, 1, 1);
+    const int64_t length = rows_length((hid_t)sim->state_group, name, 1, 1);
+    if (length == CK_UNSTORED) { /* the restart fails, whatever load_state decides */
+        sluice_sim_fail(sim, "state array '%s': it declares more values than the file holds",
+                        name);
+        return -1;
+    }
+    return length;
 }

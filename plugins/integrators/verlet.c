@@ -183,6 +183,11 @@ static int verlet_load(void *state, sluice_host *host)
     if (sluice_util_load_int(s->api, host, "steps", &s->steps) != SLUICE_OK ||
         sluice_util_load_double(s->api, host, "dt_previous", &s->dt_previous) != SLUICE_OK)
         return SLUICE_ERROR;
+    if (s->steps < 0 || s->steps > INT64_MAX / 2) { /* a damaged checkpoint: steps++ overflows */
+        s->api->messages->error(host, "state array 'steps' holds %lld steps taken",
+                                (long long)s->steps);
+        return SLUICE_ERROR;
+    }
     return SLUICE_OK;
 }
 

@@ -1414,9 +1414,9 @@ static int vent_load(void *state, sluice_host *host)
     s->water_total = values[3];
     s->row_time = values[4];
     s->air_pressure = values[5];
-    s->table_rows.count = counts[0];
     s->water_warned = (int)counts[1];
-    return SLUICE_OK;
+    return sluice_schedule_restore(&s->table_rows, s->api, host, "rows_written,water_warned",
+                                   counts[0]);
 }
 
 static int boundary_finish(void *state, sluice_host *host, int status)
@@ -1471,7 +1471,24 @@ static int boundary_load(void *state, sluice_host *host)
     s->momentum_interval = values[3];
     s->mass_total = values[4];
     s->row_time = values[5];
-    s->table_rows.count = counts[0];
+    /* a buffer inlet adds a column for every spacing its newest one has
+     * moved since last_time: a damaged checkpoint could ask for 10^11 of
+     * them. At a checkpoint last_time is its time (every step sets it) and
+     * the newest column lies in the domain. */
+    const double now = api->particles->view(host)->time;
+    if (s->form == INLET_BUFFER &&
+        (!(fabs(s->last_time - now) <= 1e-9 * fmax(1.0, fabs(now))) ||
+         !(s->newest_column >= s->domain_min[0] && s->newest_column <= s->domain_max[0]))) {
+        api->messages->error(host,
+                             "its state holds last_time = %g s (the checkpoint's time is %g s) "
+                             "and newest_column = %g m (the domain: x from %g to %g m)",
+                             s->last_time, now, s->newest_column, s->domain_min[0],
+                             s->domain_max[0]);
+        return SLUICE_ERROR;
+    }
+    if (sluice_schedule_restore(&s->table_rows, api, host, "rows_written,open_count",
+                                counts[0]) != SLUICE_OK)
+        return SLUICE_ERROR;
     s->open_count = (sluice_index)counts[1];
     double control[4];
     if (s->controlled) {

@@ -1064,9 +1064,10 @@ static int bubbles_load(void *state, sluice_host *host)
     s->removed_total = counts[0];
     s->removed_interval = counts[1];
     s->isolated = counts[2];
-    s->rows.count = counts[3];
     s->logged = counts[4];
-    return SLUICE_OK;
+    return sluice_schedule_restore(&s->rows, s->api, host,
+                                   "removed_total,removed_interval,isolated,rows_written,logged",
+                                   counts[3]);
 }
 
 static const sluice_component components[] = {

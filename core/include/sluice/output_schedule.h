@@ -68,17 +68,36 @@ static inline void sluice_schedule_advance(sluice_schedule *s, const sluice_api 
 }
 
 /* Checkpoints (save_state / load_state): the count, as an int64 named
- * `name` (the gauges of Sluice use "rows_written"). */
+ * `name` (the gauges of Sluice use "rows_written"); load refuses a negative
+ * count, and so does restore, for a count stored with other values. */
 static inline int sluice_schedule_save(const sluice_schedule *s, const sluice_api *api,
                                        sluice_host *host, const char *name)
 {
     return api->state->state_write(host, name, SLUICE_STATE_INT64, 1, &s->count);
 }
 
+/* The count read back with other state (in the array `name`): refused when
+ * negative (a damaged checkpoint: sluice_schedule_advance would count up to
+ * the current time one by one, 2^63 times). */
+static inline int sluice_schedule_restore(sluice_schedule *s, const sluice_api *api,
+                                          sluice_host *host, const char *name, int64_t count)
+{
+    if (count < 0) {
+        api->messages->error(host, "state array '%s' holds %lld outputs made", name,
+                             (long long)count);
+        return SLUICE_ERROR;
+    }
+    s->count = count;
+    return SLUICE_OK;
+}
+
 static inline int sluice_schedule_load(sluice_schedule *s, const sluice_api *api,
                                        sluice_host *host, const char *name)
 {
-    return api->state->state_read(host, name, SLUICE_STATE_INT64, 1, &s->count);
+    int64_t count = 0;
+    if (api->state->state_read(host, name, SLUICE_STATE_INT64, 1, &count) != SLUICE_OK)
+        return SLUICE_ERROR;
+    return sluice_schedule_restore(s, api, host, name, count);
 }
 
 /* Defines the save_state and load_state callbacks (named save_fn, load_fn)

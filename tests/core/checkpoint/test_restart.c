@@ -767,6 +767,218 @@ START_TEST(bad_checkpoints_refused)
 }
 END_TEST
 
+/* Edits of a checkpoint, made through HDF5 behind a valid checksum, that
+ * the checkpoint fuzzer found crashing, hanging or allocating for sizes it
+ * had not checked (tests/core/fuzz/fuzz_checkpoint.c, docs/reliability.md). */
+static void requests_declared_huge(hid_t file)
+{
+    /* 2^20 requested times declared, none stored (never written): the
+     * restart took the fill values (zeros) as times; with the fuzzer's 2^31
+     * it allocated 16 GB for them before reading */
+    hsize_t huge[1] = {1ull << 20};
+    hid_t space = H5Screate_simple(1, huge, NULL);
+    ck_assert_int_ge(H5Ldelete(file, "core/requests", H5P_DEFAULT), 0);
+    hid_t set = H5Dcreate2(file, "core/requests", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT,
+                           H5P_DEFAULT, H5P_DEFAULT);
+    ck_assert_int_ge(set, 0);
+    H5Dclose(set);
+    H5Sclose(space);
+}
+
+static void record_times_declared_huge(hid_t file)
+{
+    hsize_t huge[1] = {1ull << 20};
+    hid_t space = H5Screate_simple(1, huge, NULL);
+    ck_assert_int_ge(H5Ldelete(file, "plugins/hdf5/record_times", H5P_DEFAULT), 0);
+    hid_t set = H5Dcreate2(file, "plugins/hdf5/record_times", H5T_NATIVE_DOUBLE, space,
+                           H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    ck_assert_int_ge(set, 0);
+    H5Dclose(set);
+    H5Sclose(space);
+}
+
+static void set_root_count(hid_t file, const char *name, uint64_t value)
+{
+    hid_t attr = H5Aopen(file, name, H5P_DEFAULT);
+    ck_assert_int_ge(attr, 0);
+    ck_assert_int_ge(H5Awrite(attr, H5T_NATIVE_UINT64, &value), 0);
+    H5Aclose(attr);
+}
+
+static void particle_count_2e31(hid_t file)
+{
+    /* 2^31 - 1 particles (and as many ids): the restart grew the particle
+     * store to that count (hundreds of GB) before it read a dataset */
+    set_root_count(file, "particle_count", INT32_MAX);
+    set_root_count(file, "next_id", INT32_MAX);
+}
+
+static void step_int64_max(hid_t file)
+{
+    /* the step counter at 2^63 - 1: the first step overflowed it */
+    const int64_t step = INT64_MAX;
+    hid_t attr = H5Aopen(file, "step", H5P_DEFAULT);
+    ck_assert_int_ge(attr, 0);
+    ck_assert_int_ge(H5Awrite(attr, H5T_NATIVE_INT64, &step), 0);
+    H5Aclose(attr);
+}
+
+static void gauge_rows_negative(hid_t file)
+{
+    /* the point gauge's count of rows written: the first step counted it up
+     * to the current time one by one, 2^63 times */
+    const int64_t rows = INT64_MIN;
+    hid_t set = H5Dopen2(file, "plugins/point_gauge/rows_written", H5P_DEFAULT);
+    ck_assert_int_ge(set, 0);
+    ck_assert_int_ge(H5Dwrite(set, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &rows), 0);
+    H5Dclose(set);
+}
+
+static void inlet_rows_negative(hid_t file)
+{
+    /* the same count, stored beside the inlet's particle count */
+    const int64_t counts[2] = {INT64_MIN, 0};
+    hid_t set = H5Dopen2(file, "plugins/inlet/rows_written,open_count", H5P_DEFAULT);
+    ck_assert_int_ge(set, 0);
+    ck_assert_int_ge(H5Dwrite(set, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, counts), 0);
+    H5Dclose(set);
+}
+
+static void inlet_column_far(hid_t file)
+{
+    /* the buffer inlet's newest column 10^10 m upstream: the first step
+     * added a column for every spacing down to the buffer, until memory ran
+     * out */
+    double values[6];
+    hid_t set = H5Dopen2(file,
+                         "plugins/inlet/last_time,newest_column,mass_interval,momentum_interval,"
+                         "mass_total,row_time",
+                         H5P_DEFAULT);
+    ck_assert_int_ge(set, 0);
+    ck_assert_int_ge(H5Dread(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values), 0);
+    values[1] = 1e10;
+    ck_assert_int_ge(H5Dwrite(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values), 0);
+    H5Dclose(set);
+}
+
+static void format_of_two_lines(hid_t file)
+{
+    /* the message quoted the file's text as it was: two lines */
+    const char *text = "inlet.csv\noutlet.csv";
+    hid_t type = H5Tcopy(H5T_C_S1), space = H5Screate(H5S_SCALAR);
+    ck_assert_int_ge(H5Tset_size(type, H5T_VARIABLE), 0);
+    ck_assert_int_ge(H5Adelete(file, "format"), 0);
+    hid_t attr = H5Acreate2(file, "format", type, space, H5P_DEFAULT, H5P_DEFAULT);
+    ck_assert_int_ge(attr, 0);
+    ck_assert_int_ge(H5Awrite(attr, type, &text), 0);
+    H5Aclose(attr);
+    H5Sclose(space);
+    H5Tclose(type);
+}
+
+/* A copy of a checkpoint (its bytes) edited through HDF5, with its checksum
+ * added again. */
+static char *edited_copy(const char *bytes, long size, const char *dir, const char *name,
+                         void (*edit)(hid_t file))
+{
+    char *path = NULL;
+    ck_assert_int_ge(asprintf(&path, "%s/%s.h5", dir, name), 0);
+    FILE *f = fopen(path, "wb");
+    ck_assert_ptr_nonnull(f);
+    const size_t hdf5_size = (size_t)size - SLUICE_CHECKSUM_BYTES;
+    ck_assert_int_eq(fwrite(bytes, 1, hdf5_size, f), hdf5_size);
+    fclose(f);
+    hid_t file = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+    ck_assert_int_ge(file, 0);
+    edit(file);
+    ck_assert_int_ge(H5Fclose(file), 0);
+    char error[600];
+    ck_assert_msg(sluice_checksum_append(path, error, sizeof error) == 0, "%s", error);
+    return path;
+}
+
+static void verlet_steps_int64_max(hid_t file)
+{
+    /* Verlet's count of steps taken at 2^63 - 1: its first step overflowed
+     * it */
+    const int64_t steps = INT64_MAX;
+    hid_t set = H5Dopen2(file, "plugins/verlet/steps", H5P_DEFAULT);
+    ck_assert_int_ge(set, 0);
+    ck_assert_int_ge(H5Dwrite(set, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &steps), 0);
+    H5Dclose(set);
+}
+
+typedef struct fuzzed_edit {
+    const char *name;
+    void (*edit)(hid_t file);
+    const char *needle; /* in the one message */
+} fuzzed_edit;
+
+/* Runs a channel case to 0.02 s with a checkpoint at the end, then
+ * restarts from each edited copy of it. */
+static void refused_after_edits(const channel_case *c, const fuzzed_edit *edits, size_t count)
+{
+    char *yaml = channel_scene(c, 0.02, 0.02);
+    char *dir = test_scratch("restart-fuzzed");
+    char *scene = test_write_file(dir, "scene.yaml", yaml);
+    char *args = NULL, *out = NULL, *later = NULL;
+    ck_assert_int_ge(asprintf(&args, "run %s --out %s/out --quiet", scene, dir), 0);
+    ck_assert_int_eq(test_sluice(args, NULL), 0);
+    ck_assert_int_ge(asprintf(&out, "%s/out", dir), 0);
+    int checkpoints = 0;
+    char *good = first_checkpoint(out, &checkpoints);
+    ck_assert_int_eq(checkpoints, 1);
+    FILE *f = fopen(good, "rb");
+    ck_assert_ptr_nonnull(f);
+    fseek(f, 0, SEEK_END);
+    const long size = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *bytes = malloc((size_t)size);
+    ck_assert_int_eq(fread(bytes, 1, (size_t)size, f), (size_t)size);
+    fclose(f);
+    /* the checkpoint is the run's last, at its end */
+    ck_assert_int_ge(asprintf(&later, "%s --set time.end=0.03", scene), 0);
+    for (size_t k = 0; k < count; k++) {
+        char *edited = edited_copy(bytes, size, dir, edits[k].name, edits[k].edit);
+        refused(later, edited, edits[k].needle);
+        free(edited);
+    }
+    free(bytes);
+    free(good);
+    free(later);
+    free(out);
+    free(args);
+    free(scene);
+    free(dir);
+    free(yaml);
+}
+
+START_TEST(fuzzed_checkpoints_refused)
+{
+    static const fuzzed_edit channel[] = {
+        {"requests_declared_huge", requests_declared_huge,
+         "dataset 'requests' declares more values than the file holds"},
+        {"record_times_declared_huge", record_times_declared_huge,
+         "state array 'record_times': it declares more values than the file holds"},
+        {"particle_count_2e31", particle_count_2e31, " x 2147483647"},
+        {"step_int64_max", step_int64_max, "step 9223372036854775807"},
+        {"gauge_rows_negative", gauge_rows_negative,
+         "state array 'rows_written' holds -9223372036854775808 outputs made"},
+        {"inlet_rows_negative", inlet_rows_negative,
+         "state array 'rows_written,open_count' holds -9223372036854775808 outputs made"},
+        {"inlet_column_far", inlet_column_far, "and newest_column = 1e+10 m (the domain"},
+        {"format_of_two_lines", format_of_two_lines, "(format 'inlet.csv?outlet.csv')\n"},
+    };
+    refused_after_edits(&channel_cases[0], channel, sizeof channel / sizeof channel[0]);
+    /* the channel with Verlet */
+    static const fuzzed_edit verlet[] = {
+        {"verlet_steps_int64_max", verlet_steps_int64_max,
+         "state array 'steps' holds 9223372036854775807 steps taken"},
+    };
+    refused_after_edits(&channel_cases[2], verlet, sizeof verlet / sizeof verlet[0]);
+}
+END_TEST
+
 /* Single bits flipped at places drawn over the whole checkpoint (a fixed
  * generator): every restart is refused by the checksum with exit 2, none
  * crashes, none goes on from a changed state. SLUICE_FLIP_COUNT sets a
@@ -849,6 +1061,7 @@ int main(void)
     TCase *bad = tcase_create("refused");
     tcase_set_timeout(bad, 120);
     tcase_add_test(bad, bad_checkpoints_refused);
+    tcase_add_test(bad, fuzzed_checkpoints_refused);
     suite_add_tcase(s, bad);
     /* a dozen runs that stop at the checksum: not worth the sanitizer's time */
     TCase *flips = tcase_create("flips");
