@@ -4,7 +4,7 @@
 # and 4 ranks in the same with MPI (-Dmpi=enabled: parallel HDF5,
 # docs/scaling.md); the suite without its long runs in a build with
 # AddressSanitizer and UndefinedBehaviorSanitizer (any report fails the run);
-# then fuzzes the scene loader for 60 s
+# then fuzzes the scene loader for 60 s and the checkpoint reader for 30 s
 # (tools/fuzz.sh; any crash fails the run). Every pass runs even when an
 # earlier one failed; the summary names the failed passes and the script
 # then exits 1. Installs the Debian 12 build dependencies first
@@ -18,7 +18,7 @@ for tool in gcc clang make meson ninja pkg-config mpicc mpiexec gnuplot; do
 done
 if [ -z "$missing" ]; then
     pkg-config --exists yaml-0.1 hdf5 hdf5-openmpi check 2>/dev/null || missing=yes
-    # libFuzzer's runtime (the short fuzz run at the end)
+    # libFuzzer's runtime (the short fuzz runs at the end)
     [ -f "$(clang -print-file-name=libclang_rt.fuzzer-x86_64.a 2>/dev/null)" ] || missing=yes
 fi
 if [ -n "$missing" ]; then
@@ -93,6 +93,8 @@ echo "== AddressSanitizer + UndefinedBehaviorSanitizer build (build-asan/)"
 sanitizer_pass || note_failure "sanitizers"
 echo "== fuzzing the scene loader for 60 s (clang, libFuzzer + ASan/UBSan; build-fuzz/)"
 tools/fuzz.sh 60 || note_failure "fuzzing"
+echo "== fuzzing the checkpoint reader for 30 s (edits behind a valid checksum; build-fuzz/)"
+tools/fuzz.sh 30 1 checkpoint || note_failure "checkpoint fuzzing"
 if [ -n "$failed" ]; then
     echo "== failed:$failed (the other passes passed)" >&2
     exit 1

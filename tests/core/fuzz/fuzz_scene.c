@@ -6,8 +6,6 @@
  * or a hang is a bug. Built by `tools/fuzz.sh` (clang, -fsanitize=fuzzer,
  * address, undefined); docs/reliability.md. */
 #define _GNU_SOURCE
-#include <dirent.h>
-#include <dlfcn.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -15,6 +13,7 @@
 #include <unistd.h>
 
 #include "diag.h"
+#include "fuzz_plugins.h"
 #include "sim.h"
 
 /* Scenes past this many particles are refused by the core before any
@@ -25,31 +24,12 @@
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 int LLVMFuzzerInitialize(int *argc, char ***argv);
 
-/* The plugins are instrumented too; libFuzzer reads their coverage counters
- * after every input, so they must stay mapped when the core closes them.
- * Opening each once here with RTLD_NODELETE keeps them loaded (the core's
- * dlopen of the same file then only counts a reference). */
+/* The plugins are instrumented too and must stay mapped (fuzz_plugins.h). */
 int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
     (void)argc;
     (void)argv;
-    const char *directory = getenv("SLUICE_PLUGIN_PATH");
-    DIR *d = directory ? opendir(directory) : NULL;
-    if (!d) {
-        fprintf(stderr, "fuzz_scene: set SLUICE_PLUGIN_PATH to the build's plugin directory\n");
-        exit(2);
-    }
-    struct dirent *e;
-    while ((e = readdir(d)) != NULL) {
-        size_t n = strlen(e->d_name);
-        if (n < 4 || strcmp(e->d_name + n - 3, ".so") != 0)
-            continue;
-        char path[4096];
-        snprintf(path, sizeof path, "%s/%s", directory, e->d_name);
-        if (!dlopen(path, RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE))
-            fprintf(stderr, "fuzz_scene: %s\n", dlerror());
-    }
-    closedir(d);
+    fuzz_keep_plugins_mapped("fuzz_scene");
     return 0;
 }
 
