@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -144,9 +145,14 @@ int sluice_write_file_with(const char *path, sluice_file_writer write_file, void
     }
     snprintf(temporary, n, "%s.tmp.%ld", path, (long)getpid());
     int pipe_ends[2] = {-1, -1};
+    const pid_t run = getpid();
     pid_t child = pipe2(pipe_ends, O_CLOEXEC) == 0 ? fork() : -1;
     int rc;
     if (child == 0) {
+        /* the writer dies with the run (a killed run leaves no process
+         * behind that would rename a file into its directory later) */
+        if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != run)
+            _exit(1);
         close(pipe_ends[0]);
         write_file_child(temporary, write_file, context, pipe_ends[1]);
     }
