@@ -4,7 +4,7 @@
 # and 4 ranks in the same with MPI (-Dmpi=enabled: parallel HDF5,
 # docs/scaling.md); the suite without its long runs in a build with
 # AddressSanitizer and UndefinedBehaviorSanitizer (any report fails the run);
-# then fuzzes the scene loader for 60 s and the checkpoint reader for 30 s
+# then fuzzes the scene loader for 40 s and the checkpoint reader for 20 s
 # (tools/fuzz.sh; any crash fails the run). Every pass runs even when an
 # earlier one failed; the summary names the failed passes and the script
 # then exits 1. Installs the Debian 12 build dependencies first
@@ -39,6 +39,12 @@ export OMP_NUM_THREADS="${OMP_NUM_THREADS:-$jobs}"
 # Each pass runs even when an earlier one failed; the summary at the end
 # names the passes that failed, and the script then exits 1.
 failed=""
+started=$(date +%s)
+pass_time() {
+    now=$(date +%s)
+    echo "== $1: $((now - started)) s"
+    started=$now
+}
 note_failure() {
     failed="$failed $1"
     echo "== $1: FAILED" >&2
@@ -87,14 +93,18 @@ sanitizer_pass() {
 
 echo "== release build (build/)"
 release_pass || note_failure "release"
+pass_time "release pass"
 echo "== MPI build (build-mpi/, -Dmpi=enabled): runs across 1, 2 and 4 ranks, and the core's suites"
 mpi_pass || note_failure "MPI"
+pass_time "MPI pass"
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build (build-asan/)"
 sanitizer_pass || note_failure "sanitizers"
-echo "== fuzzing the scene loader for 60 s (clang, libFuzzer + ASan/UBSan; build-fuzz/)"
-tools/fuzz.sh 60 || note_failure "fuzzing"
-echo "== fuzzing the checkpoint reader for 30 s (edits behind a valid checksum; build-fuzz/)"
-tools/fuzz.sh 30 1 checkpoint || note_failure "checkpoint fuzzing"
+pass_time "sanitizer pass"
+echo "== fuzzing the scene loader for 40 s (clang, libFuzzer + ASan/UBSan; build-fuzz/)"
+tools/fuzz.sh 40 || note_failure "fuzzing"
+echo "== fuzzing the checkpoint reader for 20 s (edits behind a valid checksum; build-fuzz/)"
+tools/fuzz.sh 20 1 checkpoint || note_failure "checkpoint fuzzing"
+pass_time "fuzzing"
 if [ -n "$failed" ]; then
     echo "== failed:$failed (the other passes passed)" >&2
     exit 1
