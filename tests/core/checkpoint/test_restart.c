@@ -823,25 +823,28 @@ static void step_int64_max(hid_t file)
     H5Aclose(attr);
 }
 
+/* Overwrites the int64 dataset at `path` of the file with `values`. */
+static void put_int64(hid_t file, const char *path, const int64_t *values)
+{
+    hid_t set = H5Dopen2(file, path, H5P_DEFAULT);
+    ck_assert_int_ge(set, 0);
+    ck_assert_int_ge(H5Dwrite(set, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, values), 0);
+    H5Dclose(set);
+}
+
 static void gauge_rows_negative(hid_t file)
 {
     /* the point gauge's count of rows written: the first step counted it up
      * to the current time one by one, 2^63 times */
     const int64_t rows = INT64_MIN;
-    hid_t set = H5Dopen2(file, "plugins/point_gauge/rows_written", H5P_DEFAULT);
-    ck_assert_int_ge(set, 0);
-    ck_assert_int_ge(H5Dwrite(set, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &rows), 0);
-    H5Dclose(set);
+    put_int64(file, "plugins/point_gauge/rows_written", &rows);
 }
 
 static void inlet_rows_negative(hid_t file)
 {
     /* the same count, stored beside the inlet's particle count */
     const int64_t counts[2] = {INT64_MIN, 0};
-    hid_t set = H5Dopen2(file, "plugins/inlet/rows_written,open_count", H5P_DEFAULT);
-    ck_assert_int_ge(set, 0);
-    ck_assert_int_ge(H5Dwrite(set, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, counts), 0);
-    H5Dclose(set);
+    put_int64(file, "plugins/inlet/rows_written,open_count", counts);
 }
 
 static void inlet_column_far(hid_t file)
@@ -902,10 +905,7 @@ static void verlet_steps_int64_max(hid_t file)
     /* Verlet's count of steps taken at 2^63 - 1: its first step overflowed
      * it */
     const int64_t steps = INT64_MAX;
-    hid_t set = H5Dopen2(file, "plugins/verlet/steps", H5P_DEFAULT);
-    ck_assert_int_ge(set, 0);
-    ck_assert_int_ge(H5Dwrite(set, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &steps), 0);
-    H5Dclose(set);
+    put_int64(file, "plugins/verlet/steps", &steps);
 }
 
 typedef struct fuzzed_edit {
