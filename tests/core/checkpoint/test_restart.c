@@ -159,6 +159,22 @@ static void run_to_end(sluice_sim *sim, const char *dir)
     ck_assert_int_eq(sluice_sim_end(sim, SLUICE_RUN_COMPLETE), SLUICE_RUN_COMPLETE);
 }
 
+/* The whole file at `path` (malloc'd) and its size. */
+static void *read_bytes(const char *path, long *size)
+{
+    FILE *f = fopen(path, "rb");
+    ck_assert_ptr_nonnull(f);
+    ck_assert_int_eq(fseek(f, 0, SEEK_END), 0);
+    *size = ftell(f);
+    ck_assert_int_ge(*size, 0);
+    ck_assert_int_eq(fseek(f, 0, SEEK_SET), 0);
+    void *bytes = malloc((size_t)*size + 1);
+    ck_assert_ptr_nonnull(bytes);
+    ck_assert_int_eq(fread(bytes, 1, (size_t)*size, f), (size_t)*size);
+    fclose(f);
+    return bytes;
+}
+
 /* The checkpoint of `dir` with the lowest step (the one at half time). */
 static char *first_checkpoint(const char *dir, int *count)
 {
@@ -680,17 +696,11 @@ START_TEST(bad_checkpoints_refused)
     ck_assert_int_eq(checkpoints, 1); /* at 0.01 s and 0.02 s, keep: 1 */
 
     /* truncated: the first half of it */
-    FILE *f = fopen(good, "rb");
-    ck_assert_ptr_nonnull(f);
-    fseek(f, 0, SEEK_END);
-    long size = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *bytes = malloc((size_t)size);
-    ck_assert_int_eq(fread(bytes, 1, (size_t)size, f), (size_t)size);
-    fclose(f);
+    long size = 0;
+    char *bytes = read_bytes(good, &size);
     char *truncated = NULL, *text = NULL, *missing = NULL;
     ck_assert_int_ge(asprintf(&truncated, "%s/truncated_checkpoint.h5", dir), 0);
-    f = fopen(truncated, "wb");
+    FILE *f = fopen(truncated, "wb");
     fwrite(bytes, 1, (size_t)size / 2, f);
     fclose(f);
     refused(scene, truncated, "it does not end in a sluice checksum");
@@ -928,14 +938,8 @@ static void refused_after_edits(const channel_case *c, const fuzzed_edit *edits,
     int checkpoints = 0;
     char *good = first_checkpoint(out, &checkpoints);
     ck_assert_int_eq(checkpoints, 1);
-    FILE *f = fopen(good, "rb");
-    ck_assert_ptr_nonnull(f);
-    fseek(f, 0, SEEK_END);
-    const long size = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *bytes = malloc((size_t)size);
-    ck_assert_int_eq(fread(bytes, 1, (size_t)size, f), (size_t)size);
-    fclose(f);
+    long size = 0;
+    char *bytes = read_bytes(good, &size);
     /* the checkpoint is the run's last, at its end */
     ck_assert_int_ge(asprintf(&later, "%s --set time.end=0.03", scene), 0);
     for (size_t k = 0; k < count; k++) {
@@ -999,14 +1003,8 @@ START_TEST(bit_flips_never_accepted)
     int count = 0;
     char *good = first_checkpoint(out, &count);
     ck_assert_int_ge(count, 1);
-    FILE *f = fopen(good, "rb");
-    ck_assert_ptr_nonnull(f);
-    fseek(f, 0, SEEK_END);
-    const long size = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *bytes = malloc((size_t)size);
-    ck_assert_int_eq(fread(bytes, 1, (size_t)size, f), (size_t)size);
-    fclose(f);
+    long size = 0;
+    unsigned char *bytes = read_bytes(good, &size);
     const char *requested = getenv("SLUICE_FLIP_COUNT");
     const int flips = requested && atoi(requested) > 0 ? atoi(requested) : 12;
     char *flipped = NULL;
@@ -1018,7 +1016,7 @@ START_TEST(bit_flips_never_accepted)
         const long at = (long)(state % (unsigned long long)size);
         const int bit = (int)((state >> 40) % 8);
         bytes[at] ^= (unsigned char)(1u << bit);
-        f = fopen(flipped, "wb");
+        FILE *f = fopen(flipped, "wb");
         ck_assert_int_eq(fwrite(bytes, 1, (size_t)size, f), (size_t)size);
         fclose(f);
         bytes[at] ^= (unsigned char)(1u << bit);
