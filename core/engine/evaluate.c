@@ -83,13 +83,19 @@ int sluice_sim_update_neighbours(sluice_sim *sim)
         sluice_index bad = 0;
         int rc;
         /* the list may grow into the memory this process may still take,
-         * not past it (docs/reliability.md, "Memory") */
-        const char *room_from = NULL;
-        const double room = sluice_memory_available(&room_from);
-        sim->grid.list_limit = room < 0 ? 0
-                               : room / sizeof(sluice_index) < 1e18
-                                   ? (size_t)(room / sizeof(sluice_index)) + 1
-                                   : 0;
+         * not past it (docs/reliability.md, "Memory"); the figure is read
+         * again only when the list may grow: first, and once it fills more
+         * than 85 % of what it holds (it is allocated 80 % full) */
+        const sluice_grid *g = &sim->grid;
+        if (!g->list || !g->valid ||
+            (double)g->list_begin[g->count] > 0.85 * (double)g->list_capacity) {
+            sim->list_room = sluice_memory_available(&sim->list_room_from);
+            const double entries = sim->list_room / sizeof(sluice_index);
+            sim->grid.list_limit =
+                sim->list_room < 0 ? 0 : entries < 1e18 ? (size_t)entries + 1 : 0;
+        }
+        const double room = sim->list_room;
+        const char *room_from = sim->list_room_from;
 #ifdef SLUICE_MPI
         if (sim->comm.size > 1) {
             const int migrated = sluice_ranks_migrate(&sim->ranks_run);

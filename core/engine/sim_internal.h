@@ -218,6 +218,10 @@ struct sluice_sim {
     sluice_index particles_initial;
     /* the memory estimate made before the set-up (run.json) */
     sluice_memory_estimate memory;
+    /* the memory left when the neighbour list's limit was last set
+     * (evaluate.c), and where the figure came from */
+    double list_room;
+    const char *list_room_from;
     char *resolved_scene;
     char failure[4096];
     sluice_table **tables;
