@@ -371,6 +371,27 @@ START_TEST(refusals)
                                     "  riemann_continuity: {}\n"
                                     "  riemann_pressure: {eta: -1}\n"),
                       "eta");
+    /* two phases: a closed box, water below y = 0.1 m and air above */
+    test_load_refused("riemann-two-phase",
+                      "dimensions: 2\n"
+                      "particles: {spacing: 0.02, smoothing_length_ratio: 1.225}\n"
+                      "time: {end: 0.1}\n"
+                      "domain: {min: [-0.1, -0.1], max: [0.3, 0.3]}\n"
+                      "geometry:\n"
+                      "  fluid:\n"
+                      "    - {shape: box, min: [0, 0], max: [0.2, 0.1]}\n"
+                      "    - {shape: box, min: [0, 0.1], max: [0.2, 0.2]}\n"
+                      "initial: {density: hydrostatic}\n"
+                      "plugins:\n"
+                      "  wendland_c2: {}\n"
+                      "  two_phase: {speed_of_sound: 28, background_pressure: 350, air_above: "
+                      "[[0, 0.1]]}\n"
+                      "  riemann_continuity: {}\n"
+                      "  riemann_pressure: {}\n"
+                      "  gravity: {}\n"
+                      "  time_step: {}\n"
+                      "  symplectic: {}\n",
+                      "single-phase");
 }
 END_TEST
 
