@@ -43,7 +43,7 @@ static double kernel_w(sluice_sim *sim, double r, double *f)
 static double integral(sluice_sim *sim, int dims, int n)
 {
     double h = (double)sim->smoothing_length, d = h / n, sum = 0;
-    int m = 2 * n;
+    int m = (int)ceil((double)sim->support / h) * n;
     for (int i = -m; i < m; i++)
         for (int j = -m; j < m; j++) {
             if (dims == 2) {
@@ -59,7 +59,7 @@ static double integral(sluice_sim *sim, int dims, int n)
     return sum;
 }
 
-static void check_kernel(const char *name, int dims)
+static void check_kernel(const char *name, int dims, double support_ratio)
 {
     sluice_sim *sim = kernel_sim(name, dims);
     /* normalisation: midpoint rule converges at second order to 1 */
@@ -73,9 +73,10 @@ static void check_kernel(const char *name, int dims)
     ck_assert_msg(e2 < 1e-6, "%s %dD: integral of W differs from 1 by %g", name, dims, e2);
     ck_assert_msg(e2 < 0.5 * e1 || e2 < 1e-10, "%s %dD: quadrature does not converge (%g, %g)",
                   name, dims, e1, e2);
-    /* F r = dW/dr (central differences, error O(eps^2)), W = 0 beyond 2h */
-    double h = (double)sim->smoothing_length;
-    for (double q = 0.05; q < 2.0; q += 0.0625) {
+    /* F r = dW/dr (central differences, error O(eps^2)), W = 0 beyond the
+     * support (kappa h: 2h, the quintic spline's 3h) */
+    double h = (double)sim->smoothing_length, kappa = support_ratio;
+    for (double q = 0.05; q < kappa; q += 0.0625) {
         double r = q * h, eps = 1e-5 * h, f;
         kernel_w(sim, r, &f);
         double dw = (kernel_w(sim, r + eps, NULL) - kernel_w(sim, r - eps, NULL)) / (2 * eps);
@@ -88,19 +89,76 @@ static void check_kernel(const char *name, int dims)
     kernel_w(sim, 0, &f0);
     ck_assert_msg(isfinite(f0), "%s: F(0) must be finite", name);
     double f2;
-    ck_assert(kernel_w(sim, 2.0 * h, &f2) == 0 && f2 == 0);
-    ck_assert(kernel_w(sim, 2.5 * h, &f2) == 0 && f2 == 0);
-    ck_assert_msg(fabs((double)sim->support - 2 * h) < 1e-15, "support must be 2h");
+    ck_assert(kernel_w(sim, kappa * h, &f2) == 0 && f2 == 0);
+    ck_assert(kernel_w(sim, (kappa + 0.5) * h, &f2) == 0 && f2 == 0);
+    ck_assert_msg(fabs((double)sim->support - kappa * h) < 1e-15, "support must be %gh", kappa);
     sluice_sim_free(sim);
 }
 
-START_TEST(wendland_2d) { check_kernel("wendland_c2", 2); }
+/* Largest error of the Shepard-normalised SPH interpolation
+ * sum_j V_j f_j W_ij / sum_j V_j W_ij of f = sin(2 pi x) sin(2 pi y) at the
+ * points of an n x n periodic lattice of the unit square, h = 1.3 dx (the
+ * loaded kernel rescaled from its own h). For a symmetric kernel the first
+ * moments vanish on the lattice and the error is the second moment's,
+ * O(h^2). */
+static double interpolation_error(sluice_sim *sim, int n)
+{
+    const double h0 = (double)sim->smoothing_length, kappa = (double)sim->support / h0;
+    const double dx = 1.0 / n, h = 1.3 * dx, scale = h0 / h;
+    const int reach = (int)ceil(kappa * h / dx);
+    double worst = 0;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            const double xi = (i + 0.5) * dx, yi = (j + 0.5) * dx;
+            double num = 0, den = 0;
+            for (int a = -reach; a <= reach; a++)
+                for (int b = -reach; b <= reach; b++) {
+                    const double r = sqrt((double)(a * a + b * b)) * dx;
+                    const double w = kernel_w(sim, r * scale, NULL) * scale * scale;
+                    const double xj = xi + a * dx, yj = yi + b * dx;
+                    num += w * sin(2 * M_PI * xj) * sin(2 * M_PI * yj);
+                    den += w;
+                }
+            worst = fmax(worst, fabs(num / den - sin(2 * M_PI * xi) * sin(2 * M_PI * yi)));
+        }
+    return worst;
+}
+
+static void check_interpolation_order(const char *name)
+{
+    sluice_sim *sim = kernel_sim(name, 2);
+    const double e20 = interpolation_error(sim, 20), e40 = interpolation_error(sim, 40),
+                 e80 = interpolation_error(sim, 80);
+    const double p1 = log2(e20 / e40), p2 = log2(e40 / e80);
+    fprintf(stderr,
+            "%s 2D: Shepard interpolation of sin(2 pi x) sin(2 pi y), h = 1.3 dx: largest error "
+            "%.3e / %.3e / %.3e at 20 / 40 / 80 per unit, observed order %.3f, %.3f\n",
+            name, e20, e40, e80, p1, p2);
+    /* second order, as the second moment of the kernel predicts */
+    ck_assert_msg(fabs(p1 - 2) < 0.1 && fabs(p2 - 2) < 0.1, "%s: orders %g, %g", name, p1, p2);
+    sluice_sim_free(sim);
+}
+
+START_TEST(wendland_2d) { check_kernel("wendland_c2", 2, 2); }
 END_TEST
-START_TEST(wendland_3d) { check_kernel("wendland_c2", 3); }
+START_TEST(wendland_3d) { check_kernel("wendland_c2", 3, 2); }
 END_TEST
-START_TEST(cubic_2d) { check_kernel("cubic_spline", 2); }
+START_TEST(cubic_2d) { check_kernel("cubic_spline", 2, 2); }
 END_TEST
-START_TEST(cubic_3d) { check_kernel("cubic_spline", 3); }
+START_TEST(cubic_3d) { check_kernel("cubic_spline", 3, 2); }
+END_TEST
+START_TEST(quintic_spline_2d) { check_kernel("quintic_spline", 2, 3); }
+END_TEST
+START_TEST(quintic_spline_3d) { check_kernel("quintic_spline", 3, 3); }
+END_TEST
+START_TEST(quintic_wendland_2d) { check_kernel("quintic_wendland", 2, 2); }
+END_TEST
+START_TEST(quintic_wendland_3d) { check_kernel("quintic_wendland", 3, 2); }
+END_TEST
+
+static const char *const interpolated_kernels[] = {"wendland_c2", "cubic_spline",
+                                                   "quintic_spline"};
+START_TEST(interpolation_order) { check_interpolation_order(interpolated_kernels[_i]); }
 END_TEST
 
 /* The kernel gradient the core hands to pair terms is antisymmetric:
@@ -473,6 +531,11 @@ int main(void)
     tcase_add_test(k, wendland_3d);
     tcase_add_test(k, cubic_2d);
     tcase_add_test(k, cubic_3d);
+    tcase_add_test(k, quintic_spline_2d);
+    tcase_add_test(k, quintic_spline_3d);
+    tcase_add_test(k, quintic_wendland_2d);
+    tcase_add_test(k, quintic_wendland_3d);
+    tcase_add_loop_test(k, interpolation_order, 0, 3);
     tcase_add_test(k, gradient_antisymmetry);
     suite_add_tcase(s, k);
     TCase *e = tcase_create("equation of state");
