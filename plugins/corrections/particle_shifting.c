@@ -1,10 +1,19 @@
 /* Particle shifting in its Fickian form (Lind, Xu, Stansby & Rogers 2012,
- * J. Comput. Phys. 231:1499-1523; the velocity-scaled diffusion coefficient
- * of Skillen, Lind, Stansby & Rogers 2013, Comput. Methods Appl. Mech. Engrg.
- * 265:163-173, as DualSPHysics has it): particles are moved down the
- * gradient of their own concentration,
+ * J. Comput. Phys. 231:1499-1523): particles are moved down the gradient of
+ * their own concentration,
  *     dr_i = -D_i grad C_i,   grad C_i = sum_j V_j grad_i W_ij,
- *     D_i = A h |v_i| dt      (A = `coefficient`, 2 by default),
+ * with the diffusion coefficient
+ *   form skillen (default; Skillen, Lind, Stansby & Rogers 2013, Comput.
+ *                Methods Appl. Mech. Engrg. 265:163-173, as DualSPHysics has
+ *                it): D_i = A h |v_i| dt, A = `coefficient` (default 2): the
+ *                shift follows how far a particle travels in the step; it
+ *                vanishes at stagnation points;
+ *   form lind    (Lind et al. 2012): D = A h^2 per step, A default 0.5,
+ *                whatever the velocity: it also orders the particles at
+ *                stagnation points, where a straining flow (a vortex array,
+ *                the Taylor-Green vortex) lines them up; dt is the last
+ *                step's (recorded before each step; the first step is not
+ *                shifted),
  * over every neighbour (fluid, wall and open-boundary particles: a wall's
  * particles keep the fluid's lattice up to it). The shift is written as a
  * velocity, du_i = dr_i / dt = -A h |v_i| grad C_i, into
@@ -30,21 +39,29 @@
 
 #include <sluice/plugin_util.h>
 
+enum { FORM_SKILLEN = 0, FORM_LIND = 1 };
+
 typedef struct shifting_config {
+    int form;
     sluice_real coefficient, surface_divergence;
 } shifting_config;
 
 typedef struct shifting_state {
     const sluice_api *api;
+    int form;
     sluice_real coefficient, surface_divergence, h;
+    double dt; /* form lind: the last step's size, recorded before each step */
     sluice_field density, mass, velocity, correction;
 } shifting_state;
 
 static const sluice_param_spec params[] = {
-    {"coefficient", SLUICE_PARAM_REAL, offsetof(shifting_config, coefficient), "2", 0, 0,
-     SLUICE_PARAM_HAS_MIN, "1",
-     "A of the diffusion coefficient D = A h |v| dt (Skillen et al. 2013; DualSPHysics: 2)", NULL,
-     0},
+    {"form", SLUICE_PARAM_ENUM, offsetof(shifting_config, form), "skillen", 0, 0, 0, NULL,
+     "skillen: D = A h |v| dt (Skillen et al. 2013, DualSPHysics); lind: D = A h^2 per step "
+     "(Lind et al. 2012)",
+     "skillen|lind", 0},
+    {"coefficient", SLUICE_PARAM_REAL, offsetof(shifting_config, coefficient), NULL, 0, 0,
+     SLUICE_PARAM_OPTIONAL | SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "1",
+     "A of the diffusion coefficient; absent: 2 (skillen), 0.5 (lind)", NULL, 0},
     {"surface_divergence", SLUICE_PARAM_REAL, offsetof(shifting_config, surface_divergence),
      NULL, 0, 0, SLUICE_PARAM_OPTIONAL | SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "1",
      "div r below which a particle is at a free surface and not shifted (d inside the fluid, "
@@ -75,7 +92,9 @@ static int shifting_create(const sluice_api *api, sluice_host *host, const void 
         return SLUICE_ERROR;
     }
     s->api = api;
-    s->coefficient = c->coefficient;
+    s->form = c->form;
+    s->coefficient = c->coefficient > 0 ? c->coefficient
+                                        : (c->form == FORM_LIND ? (sluice_real)0.5 : 2);
     /* an absent optional parameter reads as 0 */
     s->surface_divergence =
         c->surface_divergence > 0 ? c->surface_divergence : (sluice_real)dims - (sluice_real)0.5;
@@ -96,6 +115,15 @@ static int shifting_bind(void *state, sluice_host *host)
 static void shifting_destroy(void *state)
 {
     free(state);
+}
+
+/* Before a step the view still holds the last step's size (after a
+ * restart, the checkpoint's). */
+static int shifting_before_step(void *state, sluice_host *host)
+{
+    shifting_state *s = state;
+    s->dt = s->api->particles->view(host)->dt;
+    return SLUICE_OK;
 }
 
 static inline void shifting_pairs(const shifting_state *s, const sluice_view *v,
@@ -130,10 +158,15 @@ static inline void shifting_pairs(const shifting_state *s, const sluice_view *v,
         }
         if (divergence < s->surface_divergence)
             continue; /* at a free surface */
-        sluice_real speed2 = 0;
-        for (uint32_t d = 0; d < dims; d++)
-            speed2 += vel[d][i] * vel[d][i];
-        const sluice_real factor = -s->coefficient * s->h * sqrt(speed2);
+        sluice_real factor;
+        if (s->form == FORM_LIND) {
+            factor = -s->coefficient * s->h * s->h / (sluice_real)s->dt;
+        } else {
+            sluice_real speed2 = 0;
+            for (uint32_t d = 0; d < dims; d++)
+                speed2 += vel[d][i] * vel[d][i];
+            factor = -s->coefficient * s->h * sqrt(speed2);
+        }
         const sluice_real shift[3] = {factor * grad[0], factor * grad[1], factor * grad[2]};
         for (uint32_t d = 0; d < dims; d++)
             du[d][i] += shift[d];
@@ -143,6 +176,8 @@ static inline void shifting_pairs(const shifting_state *s, const sluice_view *v,
 static void shifting_pair(void *state, const sluice_view *v, const sluice_pair_batch *b)
 {
     const shifting_state *s = state;
+    if (s->form == FORM_LIND && !(s->dt > 0))
+        return; /* the first step: no step size yet */
     if (v->dimensions == 3)
         shifting_pairs(s, v, b, 3);
     else
@@ -167,6 +202,7 @@ static const sluice_component components[] = {{
     .destroy = shifting_destroy,
     .bind = shifting_bind,
     .pair = shifting_pair,
+    .before_step = shifting_before_step,
 }};
 
 SLUICE_DEFINE_LIBRARY("particle_shifting", "1.0.0",
