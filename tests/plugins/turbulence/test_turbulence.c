@@ -307,6 +307,65 @@ static double decay_error(double max_step, double *k_end)
     return worst;
 }
 
+/* Smagorinsky: nu_T = (C_s dx)^2 |S| from the field velocity_gradient, for
+ * every fluid particle of a sheared layer (the formula to round-off), and
+ * |S| = gamma in the interior (the SPH gradient of a linear field). */
+START_TEST(smagorinsky_values)
+{
+    const double H = 0.4, gamma = 2.0, c_s = 0.15, dx = 0.02;
+    const char *yaml = "dimensions: 2\n"
+                       "particles: {spacing: 0.02, smoothing_length_ratio: 1.5}\n"
+                       "time: {end: 1.0}\n"
+                       "domain: {min: [0, -0.1], max: [0.4, 0.6], periodic: x}\n"
+                       "geometry:\n"
+                       "  fluid: [{shape: box, min: [0, 0], max: [0.4, 0.4]}]\n"
+                       "  walls: [{shape: polyline, points: [[0, 0], [0.4, 0]]}]\n"
+                       "initial: {density: rest}\n"
+                       "plugins:\n"
+                       "  wendland_c2: {}\n"
+                       "  tait: {speed_of_sound: 20}\n"
+                       "  continuity: {}\n"
+                       "  dbc: {}\n"
+                       "  velocity_gradient: {}\n"
+                       "  smagorinsky: {c_s: 0.15}\n"
+                       "  turbulent_stress: {}\n"
+                       "  time_step: {}\n"
+                       "  symplectic: {}\n";
+    sluice_sim *sim = test_load("smagorinsky", yaml, NULL, 0);
+    const sluice_view *v = sluice_sim_view(sim);
+    for (sluice_index i = 0; i < v->count; i++)
+        if (v->kind[i] == SLUICE_KIND_FLUID)
+            test_column(sim, "velocity", 0)[i] = (sluice_real)(gamma * v->position[1][i]);
+    ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
+    v = sluice_sim_view(sim);
+    const sluice_real *nu = test_column(sim, "eddy_viscosity", 0);
+    const double support = 2 * (double)sim->smoothing_length, scale = c_s * dx * c_s * dx * gamma;
+    double worst = 0;
+    int interior = 0;
+    for (sluice_index i = 0; i < v->count; i++) {
+        if (v->kind[i] != SLUICE_KIND_FLUID)
+            continue;
+        double G[4];
+        for (int c = 0; c < 4; c++)
+            G[c] = test_column(sim, "velocity_gradient", (uint32_t)c)[i];
+        const double S = sqrt(2 * (G[0] * G[0] + G[3] * G[3]) + (G[1] + G[2]) * (G[1] + G[2]));
+        worst = fmax(worst, fabs(nu[i] - c_s * dx * c_s * dx * S) / scale);
+        const double y = v->position[1][i];
+        if (y > support && y < H - support) {
+            ck_assert_msg(fabs(nu[i] / scale - 1) < 0.05, "nu_T = %g (C_s dx)^2 gamma at y = %g",
+                          nu[i] / scale, y);
+            interior++;
+        }
+    }
+    fprintf(stderr, "smagorinsky: max |nu_T - (C_s dx)^2 |S|| / ((C_s dx)^2 gamma) = %.1e; "
+                    "%d interior particles at (C_s dx)^2 gamma within 5 %%\n",
+            worst, interior);
+    ck_assert_msg(worst < 1e-12, "nu_T off the formula by %g", worst);
+    ck_assert_int_gt(interior, 100);
+    sluice_sim_free(sim);
+}
+END_TEST
+
 START_TEST(k_epsilon_decay)
 {
     double k1, k2, k3;
@@ -830,6 +889,8 @@ static oc_result run_open_channel(const oc_case *oc)
     char model[256], yaml[4096];
     if (ke)
         snprintf(model, sizeof model, "k_epsilon: {initial_k: 1e-4, initial_epsilon: 1e-4}");
+    else if (strcmp(oc->model, "smagorinsky") == 0)
+        snprintf(model, sizeof model, "smagorinsky: {}");
     else
         snprintf(model, sizeof model, "mixing_length: {c_mu: 1, kappa: %g, l_max: 1.0}", kappa);
     snprintf(yaml, sizeof yaml,
@@ -1130,6 +1191,7 @@ int main(void)
     suite_add_tcase(s, g);
     TCase *ml = tcase_create("mixing length");
     tcase_add_test(ml, mixing_length_values);
+    tcase_add_test(ml, smagorinsky_values);
     suite_add_tcase(s, ml);
     TCase *ke = tcase_create("k-epsilon");
     tcase_set_timeout(ke, 120);
