@@ -141,26 +141,24 @@ static const sluice_field_spec continuity_fields[] = {
 
 /* ------------------------------------------------------------ lifecycle -- */
 
-static int riemann_create(const sluice_api *api, sluice_host *host, int term, int walls,
-                          void **state, riemann_state **out)
+static riemann_state *riemann_create(const sluice_api *api, sluice_host *host, int term,
+                                     int walls)
 {
     riemann_state *s = sluice_util_state(api, host, sizeof *s);
     if (!s)
-        return SLUICE_ERROR;
+        return NULL;
     s->api = api;
     s->term = term;
     s->walls = walls;
-    *state = s;
-    *out = s;
-    return SLUICE_OK;
+    return s;
 }
 
 static int pressure_create(const sluice_api *api, sluice_host *host, const void *config,
                            void **state)
 {
     const pressure_config *c = config;
-    riemann_state *s;
-    if (riemann_create(api, host, TERM_PRESSURE, c->walls, state, &s) != SLUICE_OK)
+    riemann_state *s = riemann_create(api, host, TERM_PRESSURE, c->walls);
+    if (!s)
         return SLUICE_ERROR;
     s->limiter = c->limiter;
     s->eta = c->eta;
@@ -174,6 +172,7 @@ static int pressure_create(const sluice_api *api, sluice_host *host, const void 
             return SLUICE_ERROR;
         }
     }
+    *state = s;
     return SLUICE_OK;
 }
 
@@ -181,10 +180,11 @@ static int continuity_create(const sluice_api *api, sluice_host *host, const voi
                              void **state)
 {
     const continuity_config *c = config;
-    riemann_state *s;
-    if (riemann_create(api, host, TERM_CONTINUITY, c->walls, state, &s) != SLUICE_OK)
+    riemann_state *s = riemann_create(api, host, TERM_CONTINUITY, c->walls);
+    if (!s)
         return SLUICE_ERROR;
     s->hydrostatic = c->hydrostatic;
+    *state = s;
     return SLUICE_OK;
 }
 

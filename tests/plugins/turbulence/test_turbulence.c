@@ -173,28 +173,39 @@ END_TEST
  * fluid particle: l = min(1, s^3) min(kappa y, l_max) with the Shepard sum s
  * (fluid and wall neighbours and the particle itself) and y computed here,
  * and nu_T = c_mu l^2 sqrt(2 S:S) from the velocity_gradient field. */
+/* A layer 0.4 m deep on a dbc bed, periodic in x, dx = 0.02 m, with the
+ * eddy-viscosity model `model` (a plugins entry) and turbulent_stress. */
+static sluice_sim *sheared_layer(const char *tag, const char *model)
+{
+    char yaml[1024];
+    snprintf(yaml, sizeof yaml,
+             "dimensions: 2\n"
+             "particles: {spacing: 0.02, smoothing_length_ratio: 1.5}\n"
+             "time: {end: 1.0}\n"
+             "domain: {min: [0, -0.1], max: [0.4, 0.6], periodic: x}\n"
+             "geometry:\n"
+             "  fluid: [{shape: box, min: [0, 0], max: [0.4, 0.4]}]\n"
+             "  walls: [{shape: polyline, points: [[0, 0], [0.4, 0]]}]\n"
+             "initial: {density: rest}\n"
+             "plugins:\n"
+             "  wendland_c2: {}\n"
+             "  tait: {speed_of_sound: 20}\n"
+             "  continuity: {}\n"
+             "  dbc: {}\n"
+             "  velocity_gradient: {}\n"
+             "  %s\n"
+             "  turbulent_stress: {}\n"
+             "  time_step: {}\n"
+             "  symplectic: {}\n",
+             model);
+    return test_load(tag, yaml, NULL, 0);
+}
+
 START_TEST(mixing_length_values)
 {
     const double H = 0.4, gamma = 2.0, kappa = 0.41, c_mu = 0.7, l_max = 0.1;
-    const char *yaml = "dimensions: 2\n"
-                       "particles: {spacing: 0.02, smoothing_length_ratio: 1.5}\n"
-                       "time: {end: 1.0}\n"
-                       "domain: {min: [0, -0.1], max: [0.4, 0.6], periodic: x}\n"
-                       "geometry:\n"
-                       "  fluid: [{shape: box, min: [0, 0], max: [0.4, 0.4]}]\n"
-                       "  walls: [{shape: polyline, points: [[0, 0], [0.4, 0]]}]\n"
-                       "initial: {density: rest}\n"
-                       "plugins:\n"
-                       "  wendland_c2: {}\n"
-                       "  tait: {speed_of_sound: 20}\n"
-                       "  continuity: {}\n"
-                       "  dbc: {}\n"
-                       "  velocity_gradient: {}\n"
-                       "  mixing_length: {c_mu: 0.7, kappa: 0.41, l_max: 0.1}\n"
-                       "  turbulent_stress: {}\n"
-                       "  time_step: {}\n"
-                       "  symplectic: {}\n";
-    sluice_sim *sim = test_load("mixing-length", yaml, NULL, 0);
+    sluice_sim *sim =
+        sheared_layer("mixing-length", "mixing_length: {c_mu: 0.7, kappa: 0.41, l_max: 0.1}");
     const sluice_view *v = sluice_sim_view(sim);
     /* a non-uniform density makes V_j differ from dx^2 */
     for (sluice_index i = 0; i < v->count; i++) {
@@ -313,25 +324,7 @@ static double decay_error(double max_step, double *k_end)
 START_TEST(smagorinsky_values)
 {
     const double H = 0.4, gamma = 2.0, c_s = 0.15, dx = 0.02;
-    const char *yaml = "dimensions: 2\n"
-                       "particles: {spacing: 0.02, smoothing_length_ratio: 1.5}\n"
-                       "time: {end: 1.0}\n"
-                       "domain: {min: [0, -0.1], max: [0.4, 0.6], periodic: x}\n"
-                       "geometry:\n"
-                       "  fluid: [{shape: box, min: [0, 0], max: [0.4, 0.4]}]\n"
-                       "  walls: [{shape: polyline, points: [[0, 0], [0.4, 0]]}]\n"
-                       "initial: {density: rest}\n"
-                       "plugins:\n"
-                       "  wendland_c2: {}\n"
-                       "  tait: {speed_of_sound: 20}\n"
-                       "  continuity: {}\n"
-                       "  dbc: {}\n"
-                       "  velocity_gradient: {}\n"
-                       "  smagorinsky: {c_s: 0.15}\n"
-                       "  turbulent_stress: {}\n"
-                       "  time_step: {}\n"
-                       "  symplectic: {}\n";
-    sluice_sim *sim = test_load("smagorinsky", yaml, NULL, 0);
+    sluice_sim *sim = sheared_layer("smagorinsky", "smagorinsky: {c_s: 0.15}");
     const sluice_view *v = sluice_sim_view(sim);
     for (sluice_index i = 0; i < v->count; i++)
         if (v->kind[i] == SLUICE_KIND_FLUID)
