@@ -124,18 +124,8 @@ static inline void ml_pairs(const ml_state *s, const sluice_view *v, const sluic
         sluice_real l = kappa * y < l_max ? kappa * y : l_max;
         const sluice_real s3 = shepard * shepard * shepard;
         l *= s3 < 1 ? s3 : 1;
-        /* 2 S:S with S = (G + G^T)/2: sum_a G_aa^2 * 2 + sum_{a<b} (G_ab + G_ba)^2 */
-        sluice_real two_ss = 0;
-        for (uint32_t a = 0; a < dims; a++) {
-            const sluice_real gaa = G[a * dims + a][i];
-            two_ss += 2 * gaa * gaa;
-            for (uint32_t c = a + 1; c < dims; c++) {
-                const sluice_real sum = G[a * dims + c][i] + G[c * dims + a][i];
-                two_ss += sum * sum;
-            }
-        }
         length[i] = l;
-        nu[i] = c_mu * l * l * sqrt(two_ss);
+        nu[i] = c_mu * l * l * sqrt(sluice_util_strain_rate_squared(G, i, dims));
     }
 }
 

@@ -100,17 +100,7 @@ static void smagorinsky_particles(void *state, const sluice_view *v, sluice_inde
             nu[i] = 0;
             continue;
         }
-        /* 2 S:S with S = (G + G^T)/2: sum_a 2 G_aa^2 + sum_{a<b} (G_ab + G_ba)^2 */
-        sluice_real two_ss = 0;
-        for (uint32_t a = 0; a < dims; a++) {
-            const sluice_real gaa = G[a * dims + a][i];
-            two_ss += 2 * gaa * gaa;
-            for (uint32_t c = a + 1; c < dims; c++) {
-                const sluice_real sum = G[a * dims + c][i] + G[c * dims + a][i];
-                two_ss += sum * sum;
-            }
-        }
-        nu[i] = s->length2 * sqrt(two_ss);
+        nu[i] = s->length2 * sqrt(sluice_util_strain_rate_squared(G, i, dims));
     }
 }
 

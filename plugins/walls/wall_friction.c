@@ -155,6 +155,11 @@ static void friction_particles(void *state, const sluice_view *v, sluice_index b
             continue;
         const sluice_real x[3] = {v->position[0][i], v->position[1][i],
                                   dims == 3 ? v->position[2][i] : 0};
+        /* the cell-indexed distance first: most particles are far from every
+         * wall, and the nearest point (with its normal) scans each wall's
+         * elements */
+        if (s->api->walls->wall_distance(s->host, x) >= s->thickness)
+            continue;
         sluice_wall_point at;
         if (s->api->walls->wall_nearest(s->host, x, -1, &at) != SLUICE_OK || !(at.distance > 0) ||
             at.distance >= s->thickness)

@@ -180,6 +180,14 @@ static inline int test_run_suite(Suite *suite)
     return failed == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
 }
 
+/* A uniform deviate in [0, 1) from a 64-bit linear congruential state:
+ * reproducible random fields for tests. */
+static inline double test_uniform(uint64_t *state)
+{
+    *state = *state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (double)(*state >> 11) * (1.0 / 9007199254740992.0);
+}
+
 /* The number after "key": in a run.json text; NaN when the key is absent
  * (so that any comparison with it fails). */
 static inline double test_json_number(const char *json, const char *key)

@@ -159,6 +159,25 @@ static inline sluice_real sluice_util_from_bits(int64_t bits)
     return value;
 }
 
+/* |S|^2 = 2 S:S of particle i, S = (G + G^T)/2 the strain rate of the
+ * field velocity_gradient (G[a * dims + b] the column of dv_a/dx_b):
+ * sum_a 2 G_aa^2 + sum_{a<b} (G_ab + G_ba)^2. The eddy-viscosity models'
+ * |S| is its square root. */
+static inline sluice_real sluice_util_strain_rate_squared(const sluice_real *const *G,
+                                                          sluice_index i, uint32_t dims)
+{
+    sluice_real two_ss = 0;
+    for (uint32_t a = 0; a < dims; a++) {
+        const sluice_real gaa = G[a * dims + a][i];
+        two_ss += 2 * gaa * gaa;
+        for (uint32_t c = a + 1; c < dims; c++) {
+            const sluice_real sum = G[a * dims + c][i] + G[c * dims + a][i];
+            two_ss += sum * sum;
+        }
+    }
+    return two_ss;
+}
+
 /* 1.5: named scalars of a component's state in a checkpoint, from its
  * save_state / load_state callbacks (api->state->state_write / state_read). */
 static inline int sluice_util_save_double(const sluice_api *api, sluice_host *host,

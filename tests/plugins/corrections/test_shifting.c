@@ -20,12 +20,6 @@
 /* Internal: calls the loaded kernel on its state; smoothing length and support (not in sim.h) */
 #include "sim_internal.h"
 
-static double uniform(uint64_t *state)
-{
-    *state = *state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return (double)(*state >> 11) * (1.0 / 9007199254740992.0);
-}
-
 static double kernel_gradient_factor(sluice_sim *sim, double r2)
 {
     const sluice_instance *k = &sim->instances[sim->kernel];
@@ -70,8 +64,8 @@ START_TEST(formula)
     /* jitter the lattice by up to 0.2 dx and give random velocities */
     for (sluice_index i = 0; i < n; i++)
         for (int d = 0; d < 2; d++) {
-            ((sluice_real *)v->position[d])[i] += (sluice_real)(0.008 * (uniform(&seed) - 0.5));
-            test_column(sim, "velocity", (uint32_t)d)[i] = (sluice_real)(uniform(&seed) - 0.5);
+            ((sluice_real *)v->position[d])[i] += (sluice_real)(0.008 * (test_uniform(&seed) - 0.5));
+            test_column(sim, "velocity", (uint32_t)d)[i] = (sluice_real)(test_uniform(&seed) - 0.5);
         }
     ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
     v = sluice_sim_view(sim);
@@ -136,7 +130,7 @@ START_TEST(regular_or_at_rest)
     uint64_t seed = 9;
     for (sluice_index i = 0; i < v->count; i++) {
         test_column(sim, "velocity", 0)[i] = 0;
-        ((sluice_real *)v->position[0])[i] += (sluice_real)(0.008 * (uniform(&seed) - 0.5));
+        ((sluice_real *)v->position[0])[i] += (sluice_real)(0.008 * (test_uniform(&seed) - 0.5));
     }
     ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
     for (sluice_index i = 0; i < v->count; i++)
@@ -174,8 +168,8 @@ START_TEST(surface)
     uint64_t seed = 3;
     for (sluice_index i = 0; i < v->count; i++) {
         test_column(sim, "velocity", 0)[i] = 1;
-        ((sluice_real *)v->position[0])[i] += (sluice_real)(0.008 * (uniform(&seed) - 0.5));
-        ((sluice_real *)v->position[1])[i] += (sluice_real)(0.004 * (uniform(&seed) - 0.5));
+        ((sluice_real *)v->position[0])[i] += (sluice_real)(0.008 * (test_uniform(&seed) - 0.5));
+        ((sluice_real *)v->position[1])[i] += (sluice_real)(0.004 * (test_uniform(&seed) - 0.5));
     }
     ck_assert_int_eq(sluice_sim_evaluate(sim), SLUICE_OK);
     v = sluice_sim_view(sim);

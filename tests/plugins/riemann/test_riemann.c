@@ -21,12 +21,6 @@
 
 static const char *const limiters[] = {"low_dissipation", "acoustic"};
 
-static double uniform(uint64_t *state)
-{
-    *state = *state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return (double)(*state >> 11) * (1.0 / 9007199254740992.0);
-}
-
 static double kernel_gradient_factor(sluice_sim *sim, double r2)
 {
     const sluice_instance *k = &sim->instances[sim->kernel];
@@ -62,9 +56,9 @@ static sluice_sim *periodic_box(int dims, const char *limiter, uint64_t seed)
     const sluice_view *v = sluice_sim_view(sim);
     sluice_real *rho = test_column(sim, "density", 0);
     for (sluice_index i = 0; i < v->count; i++) {
-        rho[i] = (sluice_real)(1000 * (1 + 0.02 * (uniform(&seed) - 0.5)));
+        rho[i] = (sluice_real)(1000 * (1 + 0.02 * (test_uniform(&seed) - 0.5)));
         for (int d = 0; d < dims; d++)
-            test_column(sim, "velocity", (uint32_t)d)[i] = (sluice_real)(uniform(&seed) - 0.3);
+            test_column(sim, "velocity", (uint32_t)d)[i] = (sluice_real)(test_uniform(&seed) - 0.3);
     }
     return sim;
 }
