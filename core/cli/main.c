@@ -27,6 +27,7 @@ static void usage(FILE *out)
             "               [--set key=value ...] [--schedule]\n"
             "  sluice inspect [PLUGIN] [--markdown]\n"
             "  sluice study STUDY.yaml [--out DIR] [--jobs N] [--dry-run] [--summary]\n"
+            "  sluice probe RUN --fields NAME[,...] (--points P | --line A;B --count N | ...)\n"
             "  sluice version\n"
             "\n"
             "--set overrides any scene key by its dotted path, e.g. --set time.end=0.2 or\n"
@@ -207,13 +208,43 @@ static sluice_sim *load(const arguments *a, int check_only, const void *communic
                                    .removals = a->removals,
                                    .removal_count = a->removal_count,
                                    .swaps = a->swaps,
-                                   .swap_count = a->swap_count};
+                                   .swap_count = a->swap_count,
+                                   .quiet = a->quiet};
     sluice_sim *sim = sluice_sim_load_variant(a->scene, a->variant, &options, diag);
     if (world_rank() == 0)
         sluice_diag_print(diag, stderr);
     *resources = !sim && sluice_diag_resources(diag);
     sluice_diag_destroy(diag);
     return sim;
+}
+
+/* The command line as a shell would take it back: arguments with anything
+ * but letters, digits and -_./=,:+@% in single quotes. NULL out of memory. */
+static char *command_line_text(int argc, char **argv)
+{
+    size_t size = 1;
+    for (int i = 0; i < argc; i++)
+        size += 4 * strlen(argv[i]) + 3;
+    char *text = malloc(size), *out = text;
+    if (!text)
+        return NULL;
+    for (int i = 0; i < argc; i++) {
+        const char *arg = argv[i];
+        const int plain = arg[0] && strspn(arg, "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                                "0123456789-_./=,:+@%") == strlen(arg);
+        if (i > 0)
+            *out++ = ' ';
+        if (plain) {
+            out = stpcpy(out, arg);
+            continue;
+        }
+        *out++ = '\'';
+        for (; *arg; arg++)
+            out = *arg == '\'' ? stpcpy(out, "'\\''") : (*out = *arg, out + 1);
+        *out++ = '\'';
+    }
+    *out = '\0';
+    return text;
 }
 
 static int command_run(int argc, char **argv, int across_ranks)
@@ -249,6 +280,14 @@ static int command_run(int argc, char **argv, int across_ranks)
     free_arguments(&a);
     if (!sim)
         return resources ? 4 : 2;
+    char *command_line = command_line_text(argc, argv);
+    if (!command_line || sluice_sim_set_command_line(sim, command_line) != 0) {
+        free(command_line);
+        fprintf(stderr, "sluice: error: out of memory\n");
+        sluice_sim_free(sim);
+        return 4;
+    }
+    free(command_line);
     if (a.restart) {
         char error[2048];
         if (sluice_sim_restart(sim, a.restart, error, sizeof error) != 0) {
@@ -388,10 +427,11 @@ static int command_inspect(int argc, char **argv)
     return sluice_inspect(stdout, plugin, markdown) == 0 ? 0 : 2;
 }
 
-/* `sluice study ...` runs the study tool (tools/study, docs/studies.md), found
- * next to this program (the build tree's tools/, or an install's bindir),
- * with SLUICE naming this program so that the study runs it. */
-static int command_study(char **argv)
+/* `sluice study ...` and `sluice probe ...` run the tools sluice-study
+ * (tools/study, docs/studies.md) and sluice-probe (tools/probe,
+ * docs/probe.md), found next to this program (the build tree's tools/, or an
+ * install's bindir), with SLUICE naming this program (the study runs it). */
+static int command_tool(char **argv, const char *tool)
 {
     char self[4096];
     ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
@@ -403,18 +443,18 @@ static int command_study(char **argv)
     setenv("SLUICE", self, 0);
     char *slash = strrchr(self, '/');
     *slash = '\0';
-    static const char *const places[] = {"tools/sluice-study", "sluice-study"};
+    static const char *const places[] = {"tools/sluice-", "sluice-"};
     for (size_t i = 0; i < 2; i++) {
         char path[4200];
-        snprintf(path, sizeof path, "%s/%s", self, places[i]);
+        snprintf(path, sizeof path, "%s/%s%s", self, places[i], tool);
         if (access(path, X_OK) == 0) {
             argv[1] = path;
             execv(path, argv + 1);
         }
     }
-    fprintf(stderr, "sluice: error: the study tool sluice-study is not next to this program "
+    fprintf(stderr, "sluice: error: the tool sluice-%s is not next to this program "
                     "(%s/tools or %s)\n",
-            self, self);
+            tool, self, self);
     return 4;
 }
 
@@ -448,8 +488,8 @@ int main(int argc, char **argv)
         return command_check(argc, argv);
     if (strcmp(command, "inspect") == 0)
         return command_inspect(argc, argv);
-    if (strcmp(command, "study") == 0)
-        return command_study(argv);
+    if (strcmp(command, "study") == 0 || strcmp(command, "probe") == 0)
+        return command_tool(argv, command);
     if (strcmp(command, "version") == 0 || strcmp(command, "--version") == 0) {
         printf("sluice %s (plugin ABI %d.%d)\n", SLUICE_VERSION, SLUICE_ABI_MAJOR,
                SLUICE_ABI_MINOR);

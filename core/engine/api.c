@@ -612,6 +612,11 @@ static int api_write_file_with(sluice_host *host, const char *path, sluice_file_
     return SLUICE_OK;
 }
 
+static const char *api_describe_run(sluice_host *host, const char *name)
+{
+    return name ? sluice_sim_describe(host->sim, name) : NULL;
+}
+
 /* api->walls->wall_distance's cells over the domain, about a kernel support (2h)
  * wide, built at the first call: from a component's init, or from within a
  * pass, where the first thread to arrive builds them (with the threads of a
@@ -975,6 +980,7 @@ static const sluice_api_evaluation evaluation_table = {
 static const sluice_api_output output_table = {
     sizeof(sluice_api_output), api_output_path, api_resolved_scene, api_plugin_count,
     api_plugin, api_table_open, api_table_row, api_write_file_atomic, api_write_file_with,
+    api_describe_run,
 };
 
 static const sluice_api_state state_table = {

@@ -148,6 +148,42 @@ int sluice_sim_update_neighbours(sluice_sim *sim)
     return SLUICE_OK;
 }
 
+int sluice_sim_replace_particles(sluice_sim *sim, sluice_index count)
+{
+    if (sim->comm.size > 1) {
+        sluice_sim_fail(sim, "particles can be replaced on one rank only");
+        return SLUICE_ERROR;
+    }
+    sim->particles.count = 0;
+    if (count > 0 && sluice_particles_append(&sim->particles, count, NULL) != 0) {
+        sluice_sim_fail(sim, "out of memory for %u particles", count);
+        return SLUICE_ERROR;
+    }
+    for (uint32_t c = 0; c < sim->particles.column_count; c++)
+        memset(sim->particles.columns[c], 0,
+               (size_t)count * sim->particles.element_size[c]);
+    sim->grid.valid = 0;
+    sluice_sim_refresh_view(sim);
+    return SLUICE_OK;
+}
+
+int sluice_sim_point_pass(sluice_sim *sim, const sluice_real *points, sluice_index count,
+                          uint32_t kinds, sluice_point_fn fn, void *context)
+{
+    if (sluice_sim_update_neighbours(sim) != SLUICE_OK)
+        return SLUICE_ERROR;
+    sim->evaluating++;
+    const int failed =
+        sluice_point_pass_run(&sim->engine, &sim->grid, &sim->view, points, count,
+                              sluice_neighbour_kinds(kinds), 0, fn, context) != 0;
+    sim->evaluating--;
+    if (failed) {
+        sluice_sim_fail(sim, "out of memory in a point pass");
+        return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
 static int evaluate(sluice_sim *sim);
 
 int sluice_sim_evaluate(sluice_sim *sim)

@@ -731,6 +731,7 @@ sluice_sim *sluice_engine_load(const char *scene_path, const char *variant,
     sim->position.column = sim->kind.column = sim->id.column = -1;
     sim->mass.column = sim->velocity.column = sim->density.column = -1;
     sim->check_only = options ? options->check_only : 0;
+    sim->quiet = options ? options->quiet : 0;
     sim->comm = sluice_comm_self();
     if (options && options->communicator) {
 #ifdef SLUICE_MPI
@@ -819,6 +820,7 @@ void sluice_sim_free(sluice_sim *sim)
     free(sim->instances);
     free(sim->resolved_scene);
     free(sim->output_directory);
+    free(sim->command_line);
     sluice_registry_close(&sim->registry);
     sluice_scene_free(&sim->scene);
     omp_destroy_lock(&sim->message_lock);

@@ -92,8 +92,9 @@ int sluice_registry_default_path(char ***directories, size_t *count, const char 
         if (slash) {
             *slash = '\0';
             const char *relative[] = {SLUICE_BUILD_RELATIVE_PLUGIN_DIR,
+                                      SLUICE_BUILD_TOOLS_RELATIVE_PLUGIN_DIR,
                                       SLUICE_INSTALL_RELATIVE_PLUGIN_DIR};
-            for (size_t i = 0; i < 2; i++) {
+            for (size_t i = 0; i < 3; i++) {
                 char candidate[PATH_MAX];
                 int w = snprintf(candidate, sizeof candidate, "%s/%s", exe, relative[i]);
                 char resolved[PATH_MAX];

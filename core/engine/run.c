@@ -114,6 +114,7 @@ int sluice_sim_begin(sluice_sim *sim, const char *output_directory)
             return SLUICE_RUN_FAILED;
     }
     sim->wall_start = sluice_wall_clock();
+    (void)sluice_sim_describe(sim, "date"); /* the start date and host, now */
     sim->step_at_start = sim->step;
     sim->time_at_start = sim->time;
     sim->particle_steps_at_start = sim->particle_steps;
@@ -290,6 +291,17 @@ static int write_run_json(sluice_sim *sim, int status)
     fprintf(f, "  \"scene\": ");
     json_string(f, sim->scene.path);
     fprintf(f, ",\n  \"sluice_version\": \"%s\",\n", SLUICE_VERSION);
+    /* provenance: what produced the run, where and when */
+    static const char *const provenance[] = {"git_revision", "build", "command_line", "date",
+                                             "host"};
+    for (size_t k = 0; k < sizeof provenance / sizeof *provenance; k++) {
+        fprintf(f, "  \"%s\": ", provenance[k]);
+        json_string(f, sluice_sim_describe(sim, provenance[k]));
+        fprintf(f, ",\n");
+    }
+    fprintf(f, "  \"kernel\": ");
+    json_string(f, sluice_sim_describe(sim, "kernel"));
+    fprintf(f, ",\n");
     fprintf(f, "  \"dimensions\": %u,\n", sim->scene.dimensions);
     fprintf(f, "  \"ranks\": %d,\n", sim->comm.size);
     if (sim->comm.size > 1)

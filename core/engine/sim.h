@@ -26,6 +26,8 @@ typedef struct sluice_load_options {
     size_t removal_count;
     const char *const *swaps;     /* "OLD=NEW" (--swap), applied before the overrides */
     size_t swap_count;
+    int quiet;                    /* no informational messages from the plugins while
+                                     loading (warnings and errors still go to diag) */
 } sluice_load_options;
 
 typedef struct sluice_run_options {
@@ -70,6 +72,17 @@ int sluice_sim_end(sluice_sim *sim, int status);
  * and read what the terms compute from them. */
 int sluice_sim_evaluate(sluice_sim *sim);
 
+/* Probing a saved state (tools/probe, `sluice probe`), on one rank:
+ * replace_particles puts `count` particles, every field zero, in place of
+ * the scene's (fill them through the view's columns; the neighbour search
+ * is rebuilt at the next pass); point_pass runs the point pass of
+ * api->evaluation->point_pass at `points` (3 reals each) over the particles
+ * of `kinds` (SLUICE_KIND_MASK bits), with the scene's kernel. Both return
+ * SLUICE_OK, or SLUICE_ERROR with the reason in sluice_sim_failure. */
+int sluice_sim_replace_particles(sluice_sim *sim, sluice_index count);
+int sluice_sim_point_pass(sluice_sim *sim, const sluice_real *points, sluice_index count,
+                          uint32_t kinds, sluice_point_fn fn, void *context);
+
 /* Checkpoints and restart: core/checkpoint/checkpoint.h (included at the
  * end: the embedding API is this header). */
 
@@ -78,6 +91,10 @@ int sluice_sim_evaluate(sluice_sim *sim);
  * returns SLUICE_RUN_INTERRUPTED. Installed by the sluice program. */
 int sluice_install_stop_handlers(void);
 int sluice_stop_requested(void);
+
+/* The program's command line, recorded in run.json and the snapshots
+ * (api->output->describe_run "command_line"). Copied; 0 or -1 out of memory. */
+int sluice_sim_set_command_line(sluice_sim *sim, const char *command_line);
 
 /* Introspection. */
 const sluice_view *sluice_sim_view(sluice_sim *sim);

@@ -227,6 +227,11 @@ struct sluice_sim {
     sluice_table **tables;
     size_t table_count;
     int progress, quiet;
+    /* provenance (run.json, api->output->describe_run): the program's command line
+     * (sluice_sim_set_command_line), the start date (UTC, ISO 8601) and host */
+    char *command_line;
+    char start_date[40];
+    char host_name[256];
     double last_progress;
     int evaluating;   /* inside an evaluation or a pass: particles may not come or go */
     uint64_t removed; /* particles removed since the start (api->particles->remove_particles) */
@@ -329,6 +334,9 @@ int sluice_sim_run_point_pass(sluice_sim *sim, const sluice_host *host, const sl
 int sluice_sim_refresh_halo(sluice_sim *sim);
 double sluice_sim_next_request(const sluice_sim *sim);
 int sluice_sim_update_neighbours(sluice_sim *sim);
+/* What the core knows about the run, by name (api->output->describe_run;
+ * engine/provenance.c); NULL for an unknown name. */
+const char *sluice_sim_describe(sluice_sim *sim, const char *name);
 
 /* schedule.c */
 int sluice_sim_build_schedule(sluice_sim *sim);

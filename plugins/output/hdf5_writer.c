@@ -18,9 +18,12 @@
  *    `units` and `description`;
  *  - attributes time (double, s), step (int64), dimensions (int),
  *    particle_count (uint64), smoothing_length and spacing (double, m),
- *    scene (the fully resolved scene, YAML text), plugins (one line per loaded
- *    plugin: "component library version path"), status ("ok" or "failed").
- *    Strings are variable-length UTF-8.
+ *    kernel (the scene's kernel component, e.g. "cubic_spline") and
+ *    kernel_support (its support radius over h), scene (the fully resolved
+ *    scene, YAML text), plugins (one line per loaded plugin: "component
+ *    library version path"), provenance (sluice_version, git_revision,
+ *    build, command_line, date, host: api->output->describe_run), status
+ *    ("ok" or "failed"). Strings are variable-length UTF-8.
  *
  * DIR/<prefix>.xdmf is rewritten atomically after every snapshot: a temporal
  * collection of every snapshot so far, each a Uniform grid with Polyvertex
@@ -39,7 +42,10 @@
  *
  * Fields written: `fields: ""` (the default) writes every field flagged
  * SLUICE_FIELD_OUTPUT; otherwise `fields` is a comma-separated list of field
- * names, and position, kind and id are always written in addition. */
+ * names, and position, kind and id are always written in addition. Mass and
+ * density are always written when the scene declares them: with the kernel
+ * and h they are what a reader needs to interpolate (V = m / rho; `sluice
+ * probe`). */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <stdarg.h>
@@ -99,6 +105,8 @@ typedef struct h5w_state {
     h5w_field *fields;
     uint32_t field_count;
     char *plugins; /* the `plugins` attribute text */
+    sluice_host *host;     /* for api->output->describe_run */
+    double kernel_support; /* the kernel's support radius over h */
     sluice_schedule schedule; /* the next regular snapshot */
     uint64_t snapshots; /* files written; the next file's index */
     int have_last;
@@ -476,6 +484,11 @@ static int h5w_initialise(void *state, sluice_host *host)
 {
     h5w_state *s = state;
     const sluice_api *api = s->api;
+    s->host = host;
+    sluice_real support = 0;
+    if (sluice_util_constant(api, host, "kernel_support", &support) != SLUICE_OK)
+        return SLUICE_ERROR;
+    s->kernel_support = (double)support;
     uint32_t count = api->fields->field_count(host);
     if (s->name_count == 0) {
         for (uint32_t f = 0; f < count; f++) {
@@ -486,10 +499,14 @@ static int h5w_initialise(void *state, sluice_host *host)
                 return SLUICE_ERROR;
         }
     }
-    static const char *const always[] = {"position", "kind", "id"};
+    /* always: what a reader needs to interpolate (the volume m / rho of each
+     * particle; mass and density when the scene declares them) */
+    static const char *const always[] = {"position", "kind", "id", "mass", "density"};
     for (uint32_t k = 0; k < SLUICE_COUNT(always) + s->name_count; k++) {
         const char *name = k < SLUICE_COUNT(always) ? always[k] : s->names[k - SLUICE_COUNT(always)];
         int64_t index = find_field(api, host, name);
+        if (index < 0 && k >= 3 && k < SLUICE_COUNT(always))
+            continue;
         if (index < 0) {
             api->messages->error(host, "fields: unknown field '%s'", name);
             return SLUICE_ERROR;
@@ -801,6 +818,16 @@ static void write_attributes(h5w_state *s, hid_t file, const sluice_view *v, uin
         rc = attr_string(file, "scene", scene, f);
     if (rc == 0)
         rc = attr_string(file, "plugins", s->plugins, f);
+    if (rc == 0)
+        rc = attr_scalar(file, "kernel_support", H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE,
+                         &s->kernel_support, f);
+    /* the kernel and the run's provenance (api->output->describe_run) */
+    static const char *const described[] = {"kernel",       "version", "git_revision", "build",
+                                            "command_line", "date",    "host"};
+    for (size_t k = 0; k < SLUICE_COUNT(described) && rc == 0; k++) {
+        const char *value = s->api->output->describe_run(s->host, described[k]);
+        rc = attr_string(file, k == 1 ? "sluice_version" : described[k], value ? value : "", f);
+    }
     if (rc == 0)
         attr_string(file, "status", status, f);
 }
@@ -1291,5 +1318,5 @@ static const sluice_component components[] = {{
     .load_state = h5w_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("hdf5_writer", "1.1.0", "HDF5 particle snapshots with an XDMF index",
+SLUICE_DEFINE_LIBRARY("hdf5_writer", "1.2.0", "HDF5 particle snapshots with an XDMF index",
                       SLUICE_DIMS_ALL, components)

@@ -8,7 +8,7 @@
  * Plugins never link against the core: every service of the core is reached
  * through the sluice_api table handed to each component's create().
  *
- * ABI 2.1, frozen (docs/plugin-abi.md; its history: docs/abi-changelog.md):
+ * ABI 2.2, frozen (docs/plugin-abi.md; its history: docs/abi-changelog.md):
  *  - SLUICE_ABI_MAJOR changes when anything existing changes; the core refuses
  *    a plugin with another major version.
  *  - SLUICE_ABI_MINOR grows when members are appended at the end of a host
@@ -42,7 +42,7 @@ extern "C" {
 #endif
 
 #define SLUICE_ABI_MAJOR 2
-#define SLUICE_ABI_MINOR 1
+#define SLUICE_ABI_MINOR 2
 #define SLUICE_PLUGIN_MAGIC 0x534c4349u /* "SLCI" */
 
 #if defined(__GNUC__)
@@ -516,6 +516,13 @@ typedef struct sluice_api_output {
      * thread. Across ranks, rank 0 writes the file. */
     int (*write_file_with)(sluice_host *host, const char *path, sluice_file_writer writer,
                            void *context);
+    /* Since ABI 2.2. What the core knows about the run, by name, as text
+     * (NULL for a name it does not know): "version" (Sluice's), "git_revision"
+     * (of the source the program was built from, "unknown" outside git),
+     * "build" (compiler, build type, instruction set, MPI), "command_line",
+     * "date" (the run's start, UTC, ISO 8601), "host", "kernel" (the scene's
+     * kernel component, e.g. "cubic_spline"). Valid for the whole run. */
+    const char *(*describe_run)(sluice_host *host, const char *name);
 } sluice_api_output;
 
 /* Plugin state in checkpoints (docs/reliability.md, "Checkpoints and
