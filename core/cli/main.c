@@ -22,7 +22,7 @@ static void usage(FILE *out)
             "  sluice run SCENE.yaml --out DIR [--variant NAME] [--remove PATH ...]\n"
             "             [--swap OLD=NEW ...] [--set key=value ...]\n"
             "             [--threads N] [--restart CHECKPOINT.h5 | --overwrite]\n"
-            "             [--progress | --no-progress] [--quiet]\n"
+            "             [--progress | --no-progress] [--log-every S] [--quiet | --verbose]\n"
             "  sluice check SCENE.yaml [--variant NAME] [--remove PATH ...] [--swap OLD=NEW ...]\n"
             "               [--set key=value ...] [--schedule]\n"
             "  sluice inspect [PLUGIN] [--markdown]\n"
@@ -44,6 +44,11 @@ static void usage(FILE *out)
             "written every checkpoint.interval s and when SIGINT or SIGTERM stops a run).\n"
             "A run refuses an --out that holds another run (--overwrite replaces it) or\n"
             "that another live run writes to (DIR/.sluice.lock).\n"
+            "Progress on stderr: on a terminal one line rewritten in place; otherwise (a\n"
+            "batch log) a line with a UTC timestamp every --log-every S s of wall time\n"
+            "(default 10), at the start and at the end. --progress forces the terminal\n"
+            "line, --no-progress drops both. --quiet (-q): only warnings and failures;\n"
+            "--verbose (-v): also the run's provenance and every plugin loaded.\n"
             "Exit status: 0 success, 2 bad input, 3 the run went unstable, 4 other failure (out\n"
             "of memory, a failed write),\n"
             "5 stopped by SIGINT/SIGTERM after a whole step (a checkpoint was written).\n");
@@ -53,7 +58,8 @@ typedef struct arguments {
     const char *scene, *out, *plugin, *restart, *variant;
     const char **sets, **removals, **swaps;
     size_t set_count, removal_count, swap_count;
-    int threads, progress, quiet, markdown, schedule, overwrite;
+    int threads, progress, quiet, verbose, markdown, schedule, overwrite;
+    double log_every;
 } arguments;
 
 static void free_arguments(arguments *a)
@@ -154,8 +160,18 @@ static int parse(int argc, char **argv, int first, arguments *a, int allow_out)
             a->progress = 1;
         } else if (allow_out && strcmp(arg, "--no-progress") == 0) {
             a->progress = 0;
+        } else if (allow_out && strcmp(arg, "--log-every") == 0) {
+            char *end = NULL;
+            if (i + 1 >= argc || (a->log_every = strtod(argv[i + 1], &end), *end) ||
+                !(a->log_every > 0 && a->log_every < 1e9)) {
+                fprintf(stderr, "sluice: error: --log-every needs a positive number of seconds\n");
+                return -1;
+            }
+            i++;
         } else if (strcmp(arg, "--quiet") == 0 || strcmp(arg, "-q") == 0) {
             a->quiet = 1;
+        } else if (strcmp(arg, "--verbose") == 0 || strcmp(arg, "-v") == 0) {
+            a->verbose = 1;
         } else if (!allow_out && strcmp(arg, "--schedule") == 0) {
             a->schedule = 1;
         } else if (arg[0] == '-' && arg[1]) {
@@ -170,6 +186,10 @@ static int parse(int argc, char **argv, int first, arguments *a, int allow_out)
     }
     if (!a->scene) {
         fprintf(stderr, "sluice: error: no scene file given\n");
+        return -1;
+    }
+    if (a->quiet && a->verbose) {
+        fprintf(stderr, "sluice: error: give either --quiet or --verbose\n");
         return -1;
     }
     return 0;
@@ -247,6 +267,30 @@ static char *command_line_text(int argc, char **argv)
     return text;
 }
 
+/* Before the first step: in a batch log (and with --verbose) a timestamped
+ * line saying what runs where; with --verbose the provenance and every
+ * plugin loaded. */
+static void report_start(sluice_sim *sim, const arguments *a, int progress)
+{
+    if (a->quiet || (progress != SLUICE_PROGRESS_LOG && !a->verbose))
+        return;
+    char stamp[40];
+    sluice_utc_timestamp(stamp, sizeof stamp);
+    fprintf(stderr, "%s sluice: run of %s%s%s on %s, %d threads, output in %s\n", stamp, a->scene,
+            a->variant ? " --variant " : "", a->variant ? a->variant : "",
+            sluice_sim_describe(sim, "host"), sluice_sim_threads(sim), a->out);
+    if (!a->verbose)
+        return;
+    static const char *const described[] = {"version", "git_revision", "build", "command_line",
+                                            "kernel"};
+    for (size_t k = 0; k < sizeof described / sizeof *described; k++)
+        fprintf(stderr, "sluice: %s: %s\n", described[k], sluice_sim_describe(sim, described[k]));
+    const char *component = NULL, *instance;
+    for (uint32_t k = 0; (instance = sluice_sim_instance(sim, k, &component)); k++)
+        fprintf(stderr, "sluice: plugin %s (%s)\n", instance, component);
+    fflush(stderr);
+}
+
 static int command_run(int argc, char **argv, int across_ranks)
 {
     arguments a;
@@ -320,27 +364,38 @@ static int command_run(int argc, char **argv, int across_ranks)
     if (sluice_install_stop_handlers() != 0 && !quiet_rank)
         fprintf(stderr, "sluice: warning: cannot catch SIGINT/SIGTERM; an interrupted run "
                         "writes no checkpoint\n");
-    sluice_run_options options = {a.out,
-                                  !quiet_rank &&
-                                      (a.progress >= 0 ? a.progress : isatty(STDERR_FILENO)),
-                                  a.quiet || quiet_rank};
+    /* --progress: the terminal line; otherwise the line on a terminal and
+     * timestamped lines in a batch log, none with --quiet */
+    const int progress = quiet_rank || a.progress == 0 ? SLUICE_PROGRESS_NONE
+                         : a.progress == 1             ? SLUICE_PROGRESS_LINE
+                         : a.quiet                     ? SLUICE_PROGRESS_NONE
+                         : isatty(STDERR_FILENO)       ? SLUICE_PROGRESS_LINE
+                                                       : SLUICE_PROGRESS_LOG;
+    sluice_run_options options = {a.out, progress, a.quiet || quiet_rank, a.log_every};
+    if (!quiet_rank)
+        report_start(sim, &a, progress);
     int status = sluice_sim_run(sim, &options);
+    char stamp[40] = "";
+    if (progress == SLUICE_PROGRESS_LOG) {
+        sluice_utc_timestamp(stamp, sizeof stamp - 1);
+        strcat(stamp, " ");
+    }
     const unsigned long long particles = sluice_sim_particle_total(sim);
     if (quiet_rank) {
         /* a failing step ended every rank with its own message (MPI_Abort) */
     } else if (status == SLUICE_RUN_COMPLETE) {
         if (!a.quiet)
-            fprintf(stderr, "sluice: completed %lld steps, %.6g s simulated, %llu particles; output "
+            fprintf(stderr, "%ssluice: completed %lld steps, %.6g s simulated, %llu particles; output "
                             "in %s\n",
-                    (long long)sluice_sim_steps(sim), sluice_sim_time(sim), particles, a.out);
+                    stamp, (long long)sluice_sim_steps(sim), sluice_sim_time(sim), particles, a.out);
     } else if (status == SLUICE_RUN_INTERRUPTED) {
-        fprintf(stderr, "sluice: stopped by a signal after step %lld, t = %.9g s; continue with "
+        fprintf(stderr, "%ssluice: stopped by a signal after step %lld, t = %.9g s; continue with "
                         "--restart %s/checkpoint_%09lld.h5%s%s\n",
-                (long long)sluice_sim_steps(sim), sluice_sim_time(sim), a.out,
+                stamp, (long long)sluice_sim_steps(sim), sluice_sim_time(sim), a.out,
                 (long long)sluice_sim_steps(sim), a.variant ? " --variant " : "",
                 a.variant ? a.variant : "");
     } else {
-        fprintf(stderr, "sluice: error: %s\n", sluice_sim_failure(sim));
+        fprintf(stderr, "%ssluice: error: %s\n", stamp, sluice_sim_failure(sim));
         if (status == SLUICE_RUN_UNSTABLE)
             fprintf(stderr,
                     "sluice: the run was stopped; every output written before step %lld is kept "

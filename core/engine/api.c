@@ -53,13 +53,19 @@ static void host_message(sluice_host *host, sluice_severity severity, const char
             /* the first error of a run is its failure, printed once by the caller */
             sluice_sim_fail(sim, "plugin '%s': %s", name, text);
         } else if (sim->comm.size == 1) {
-            fprintf(stderr, "%ssluice: %s: plugin '%s': %s\n", sim->progress ? "\n" : "",
+            char stamp[40] = "";
+            if (sim->progress == SLUICE_PROGRESS_LOG) {
+                sluice_utc_timestamp(stamp, sizeof stamp - 1);
+                strcat(stamp, " ");
+            }
+            fprintf(stderr, "%s%ssluice: %s: plugin '%s': %s\n",
+                    sim->progress == SLUICE_PROGRESS_LINE ? "\n" : "", stamp,
                     severity == SLUICE_SEVERITY_ERROR ? "error" : "warning", name, text);
         } else if (sim->comm.rank == 0 || !across_ranks_component(sim, host->instance)) {
             /* across ranks a component written for it warns alike on every
              * rank: rank 0 speaks for it; any other says which rank it is */
             fprintf(stderr, "%ssluice: rank %d: %s: plugin '%s': %s\n",
-                    sim->progress ? "\n" : "", sim->comm.rank,
+                    sim->progress == SLUICE_PROGRESS_LINE ? "\n" : "", sim->comm.rank,
                     severity == SLUICE_SEVERITY_ERROR ? "error" : "warning", name, text);
         }
     }

@@ -2,6 +2,7 @@
  * command line, date, host) and its kernel, by name, for run.json and for
  * writers through api->output->describe_run. */
 #define _GNU_SOURCE
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -21,16 +22,21 @@ int sluice_sim_set_command_line(sluice_sim *sim, const char *command_line)
     return 0;
 }
 
+void sluice_utc_timestamp(char *buffer, size_t size)
+{
+    time_t now = time(NULL);
+    struct tm utc;
+    if (now == (time_t)-1 || !gmtime_r(&now, &utc) ||
+        strftime(buffer, size, "%Y-%m-%dT%H:%M:%SZ", &utc) == 0)
+        snprintf(buffer, size, "unknown");
+}
+
 /* The start date and host, taken once, at the first question. */
 static void take_date_and_host(sluice_sim *sim)
 {
     if (sim->start_date[0])
         return;
-    time_t now = time(NULL);
-    struct tm utc;
-    if (now == (time_t)-1 || !gmtime_r(&now, &utc) ||
-        strftime(sim->start_date, sizeof sim->start_date, "%Y-%m-%dT%H:%M:%SZ", &utc) == 0)
-        strcpy(sim->start_date, "unknown");
+    sluice_utc_timestamp(sim->start_date, sizeof sim->start_date);
     if (gethostname(sim->host_name, sizeof sim->host_name) != 0 || !sim->host_name[0])
         strcpy(sim->host_name, "unknown");
     sim->host_name[sizeof sim->host_name - 1] = '\0';

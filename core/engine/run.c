@@ -413,10 +413,16 @@ int sluice_sim_end(sluice_sim *sim, int status)
     return status;
 }
 
+/* The progress report: on a terminal one line rewritten every 0.5 s; in a
+ * batch log a plain line with a UTC timestamp every log_every s of wall
+ * time, the first at the start and the last at the end (time, share done,
+ * step, dt, particles, steps per second and ETA of this invocation). */
 static void progress_line(sluice_sim *sim, int final)
 {
+    const int log = sim->progress == SLUICE_PROGRESS_LOG;
     double now = sluice_wall_clock();
-    if (!final && now - sim->last_progress < 0.5)
+    if (!final && now - sim->last_progress < (log ? sim->log_every : 0.5) &&
+        !(log && sim->last_progress == 0))
         return;
     sim->last_progress = now;
     double elapsed = now - sim->wall_start;
@@ -425,6 +431,17 @@ static void progress_line(sluice_sim *sim, int final)
     double done = sim->time - sim->time_at_start;
     double eta = done > 0 ? elapsed * (sim->end - sim->time) / done : 0;
     int h = (int)(eta / 3600), m = (int)(fmod(eta, 3600) / 60), s = (int)fmod(eta, 60);
+    if (log) {
+        char stamp[40];
+        sluice_utc_timestamp(stamp, sizeof stamp);
+        fprintf(stderr,
+                "%s sluice: t %.4f / %.4f s (%.1f %%)   step %lld   dt %.2e s   %u particles   "
+                "%.0f steps/s   ETA %d:%02d:%02d\n",
+                stamp, sim->time, sim->end, sim->end > 0 ? 100 * sim->time / sim->end : 100.0,
+                (long long)sim->step, sim->dt, sim->particles.count, rate, h, m, s);
+        fflush(stderr);
+        return;
+    }
     fprintf(stderr,
             "\r  t %.4f / %.4f s   step %lld   dt %.2e s   %u particles   %.0f steps/s   ETA "
             "%d:%02d:%02d  ",
@@ -438,6 +455,8 @@ int sluice_sim_run(sluice_sim *sim, const sluice_run_options *options)
 {
     sim->progress = options->progress;
     sim->quiet = options->quiet;
+    sim->log_every = options->log_every > 0 ? options->log_every : 10;
+    sim->last_progress = 0;
     int status = sluice_sim_begin(sim, options->output_directory);
     if (status != SLUICE_RUN_COMPLETE) {
         if (!sim->output_directory)

@@ -30,10 +30,19 @@ typedef struct sluice_load_options {
                                      loading (warnings and errors still go to diag) */
 } sluice_load_options;
 
+/* How a run reports its progress on stderr. */
+typedef enum sluice_progress {
+    SLUICE_PROGRESS_NONE = 0,
+    SLUICE_PROGRESS_LINE = 1, /* one line rewritten in place (a terminal) */
+    SLUICE_PROGRESS_LOG = 2   /* a plain line with a UTC timestamp every log_every s of
+                                 wall time, and at the start and the end (a batch log) */
+} sluice_progress;
+
 typedef struct sluice_run_options {
     const char *output_directory;
-    int progress;  /* one progress line on stderr */
-    int quiet;     /* no informational messages */
+    int progress;     /* a sluice_progress */
+    int quiet;        /* no informational messages */
+    double log_every; /* s of wall time between SLUICE_PROGRESS_LOG lines (<= 0: 10 s) */
 } sluice_run_options;
 
 typedef enum sluice_run_status {
@@ -95,6 +104,12 @@ int sluice_stop_requested(void);
 /* The program's command line, recorded in run.json and the snapshots
  * (api->output->describe_run "command_line"). Copied; 0 or -1 out of memory. */
 int sluice_sim_set_command_line(sluice_sim *sim, const char *command_line);
+/* What the core knows about the run, by name (api->output->describe_run):
+ * version, git_revision, build, command_line, date, host, kernel; NULL for
+ * a name it does not know. */
+const char *sluice_sim_describe(sluice_sim *sim, const char *name);
+/* Writes the current UTC time as "YYYY-MM-DDTHH:MM:SSZ" (at least 21 bytes). */
+void sluice_utc_timestamp(char *buffer, size_t size);
 
 /* Introspection. */
 const sluice_view *sluice_sim_view(sluice_sim *sim);

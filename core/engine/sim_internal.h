@@ -232,7 +232,7 @@ struct sluice_sim {
     char *command_line;
     char start_date[40];
     char host_name[256];
-    double last_progress;
+    double last_progress, log_every;
     int evaluating;   /* inside an evaluation or a pass: particles may not come or go */
     uint64_t removed; /* particles removed since the start (api->particles->remove_particles) */
 
@@ -334,9 +334,6 @@ int sluice_sim_run_point_pass(sluice_sim *sim, const sluice_host *host, const sl
 int sluice_sim_refresh_halo(sluice_sim *sim);
 double sluice_sim_next_request(const sluice_sim *sim);
 int sluice_sim_update_neighbours(sluice_sim *sim);
-/* What the core knows about the run, by name (api->output->describe_run;
- * engine/provenance.c); NULL for an unknown name. */
-const char *sluice_sim_describe(sluice_sim *sim, const char *name);
 
 /* schedule.c */
 int sluice_sim_build_schedule(sluice_sim *sim);

@@ -470,7 +470,7 @@ static int run_scene(const char *text, const MPI_Comm *comm, const char *dir, co
         ck_assert_msg(sluice_sim_restart(sim, restart, error, sizeof error) == SLUICE_OK, "%s",
                       error);
     }
-    sluice_run_options options = {dir, 0, 1};
+    sluice_run_options options = {dir, 0, 1, 0};
     int status = sluice_sim_run(sim, &options);
     sluice_sim_free(sim);
     return status;

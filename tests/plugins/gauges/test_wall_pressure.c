@@ -122,7 +122,7 @@ static char *run_scene(const char *tag, const char *yaml)
     ck_assert_ptr_nonnull(dir);
     char *out = NULL;
     ck_assert_int_ge(asprintf(&out, "%s/out", dir), 0);
-    sluice_run_options options = {out, 0, 1};
+    sluice_run_options options = {out, 0, 1, 0};
     ck_assert_int_eq(sluice_sim_run(sim, &options), SLUICE_RUN_COMPLETE);
     sluice_sim_free(sim);
     free(dir);
