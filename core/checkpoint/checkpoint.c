@@ -368,6 +368,11 @@ static void write_state(sluice_sim *sim, hid_t file, ck_error *e)
     put_string(file, "format", CHECKPOINT_FORMAT, e);
     put_attr(file, "format_version", H5T_NATIVE_INT, &version, e);
     put_string(file, "sluice_version", SLUICE_VERSION, e);
+    /* provenance, as in run.json and the snapshots */
+    static const char *const provenance[] = {"git_revision", "build", "command_line", "date",
+                                             "host"};
+    for (size_t k = 0; k < sizeof provenance / sizeof *provenance; k++)
+        put_string(file, provenance[k], sluice_sim_describe(sim, provenance[k]), e);
     put_attr(file, "abi_major", H5T_NATIVE_INT, &major, e);
     put_attr(file, "abi_minor", H5T_NATIVE_INT, &minor, e);
     put_attr(file, "real_size", H5T_NATIVE_INT, &real_size, e);

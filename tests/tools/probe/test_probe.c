@@ -396,7 +396,10 @@ START_TEST(provenance_and_interpolation_data)
     char *dir = test_scratch("probe-provenance");
     char *path = test_write_file(dir, "scene.yaml", scene);
     char *args = NULL, *output = NULL;
-    ck_assert_int_ge(asprintf(&args, "run %s --out %s/run --quiet --set 'title=a b'", path, dir),
+    ck_assert_int_ge(asprintf(&args,
+                              "run %s --out %s/run --quiet --set 'title=a b' --set "
+                              "checkpoint.interval=5e-7",
+                              path, dir),
                      0);
     ck_assert_int_eq(test_sluice(args, &output), 0);
     free(output);
@@ -462,6 +465,24 @@ START_TEST(provenance_and_interpolation_data)
     H5Dclose(mass);
     H5Dclose(density);
     H5Fclose(file);
+    /* a checkpoint records the same provenance */
+    char *command = NULL, *checkpoint = NULL;
+    ck_assert_int_ge(asprintf(&command, "ls %s/run/checkpoint_*.h5 | head -1 | tr -d '\\n'", dir),
+                     0);
+    ck_assert_int_eq(test_popen(command, &checkpoint), 0);
+    file = H5Fopen(checkpoint, H5F_ACC_RDONLY, H5P_DEFAULT);
+    ck_assert_msg(file >= 0, "no checkpoint '%s'", checkpoint);
+    for (size_t k = 0; k < 5; k++) {
+        char *value = string_attribute(file, same[k]), *quoted = NULL;
+        ck_assert_int_ge(asprintf(&quoted, "\"%s\": \"%s\"", same[k], value), 0);
+        if (k != 2)
+            ck_assert_msg(strstr(json, quoted), "checkpoint %s differs from run.json", quoted);
+        free(quoted);
+        free(value);
+    }
+    H5Fclose(file);
+    free(command);
+    free(checkpoint);
     free(json);
     free(path);
     free(args);
