@@ -29,11 +29,14 @@ static inline const char *test_source_dir(void)
     return d ? d : "..";
 }
 
-/* A fresh scratch directory under /tmp (left for inspection on failure). */
+/* A fresh scratch directory: under the suite's scratch root when
+ * test_run_suite made one (removed when every test passed, kept for
+ * inspection otherwise), else under /tmp. */
 static inline char *test_scratch(const char *tag)
 {
     char *path = NULL;
-    if (asprintf(&path, "/tmp/sluice-test-%s-XXXXXX", tag) < 0)
+    const char *root = getenv("SLUICE_TEST_SCRATCH_ROOT");
+    if (asprintf(&path, "%s/sluice-test-%s-XXXXXX", root && *root ? root : "/tmp", tag) < 0)
         return NULL;
     if (!mkdtemp(path)) {
         free(path);
@@ -171,12 +174,33 @@ static inline char *test_config(const char *name)
     return path;
 }
 
+/* Runs the suite with its scratch directories (test_scratch) under one
+ * root in $TMPDIR or /tmp: removed when every test passed, kept (and named)
+ * when one failed, so that a passing suite leaves nothing behind. */
 static inline int test_run_suite(Suite *suite)
 {
+    const char *tmp = getenv("TMPDIR");
+    char *root = NULL;
+    if (asprintf(&root, "%s/sluice-tests-XXXXXX", tmp && *tmp ? tmp : "/tmp") < 0 ||
+        !mkdtemp(root)) {
+        free(root);
+        root = NULL;
+    } else
+        setenv("SLUICE_TEST_SCRATCH_ROOT", root, 1);
     SRunner *runner = srunner_create(suite);
     srunner_run_all(runner, CK_NORMAL);
     int failed = srunner_ntests_failed(runner);
     srunner_free(runner);
+    if (root) {
+        char *command = NULL;
+        if (failed)
+            fprintf(stderr, "the tests' scratch directories are kept in %s\n", root);
+        else if (asprintf(&command, "rm -rf '%s'", root) >= 0 && system(command) != 0)
+            fprintf(stderr, "could not remove %s\n", root);
+        free(command);
+        unsetenv("SLUICE_TEST_SCRATCH_ROOT");
+        free(root);
+    }
     return failed == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
 }
 
