@@ -545,12 +545,23 @@ static const char **spec_names(const binder *b, size_t *count)
     return names;
 }
 
-/* The valid name an unknown key is a plausible typo of, or NULL. */
+/* The valid name an unknown key is a plausible typo of, or else the one
+ * valid name that is the key with a suffix `_...` (a key renamed with its
+ * unit, as dbc's `phase` became `phase_deg`), or NULL. */
 static const char *suggestion(const binder *b, const sluice_node *key)
 {
     size_t n;
     const char **names = spec_names(b, &n);
     const char *close = names ? sluice_closest(key->value, names, n) : NULL;
+    size_t length = strlen(key->value), extended = 0;
+    const char *longer = NULL;
+    for (size_t i = 0; names && !close && i < n; i++)
+        if (strncmp(names[i], key->value, length) == 0 && names[i][length] == '_') {
+            longer = names[i];
+            extended++;
+        }
+    if (!close && extended == 1)
+        close = longer;
     free(names);
     return close;
 }

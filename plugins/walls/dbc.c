@@ -14,7 +14,8 @@
  *     x(t) = x_rest + U tau + A (sin(2 pi f tau + phi) - sin(phi)),
  *     v(t) = U + 2 pi f A cos(2 pi f tau + phi)        for t >= start,
  *     x = x_rest, v = 0                                  before,
- * with x_rest the particle's position from the scene's wall geometry. This is
+ * with x_rest the particle's position from the scene's wall geometry and phi
+ * the parameter phase_deg (degrees, as every angle in a scene). This is
  * the law x0 + U tau + A sin(2 pi f tau + phi) with x0 = x_rest - A sin(phi),
  * so that the wall does not jump at t = start. Positions and velocities are
  * set from the law in before_step (right at the step's start whatever the
@@ -33,7 +34,7 @@ typedef struct dbc_config {
     int clamp_density;
     const char *moving_wall;
     sluice_real velocity[3], amplitude[3];
-    sluice_real frequency, phase, start;
+    sluice_real frequency, phase_deg, start;
 } dbc_config;
 
 typedef struct dbc_state {
@@ -65,7 +66,8 @@ static const sluice_param_spec params[] = {
     {"moving_wall", SLUICE_PARAM_STRING, offsetof(dbc_config, moving_wall), NULL, 0, 0,
      SLUICE_PARAM_OPTIONAL, NULL,
      "name of the one wall (geometry.walls[k].name, scheme dbc) that moves with the prescribed "
-     "law x_rest + U tau + A (sin(2 pi f tau + phase) - sin(phase)), tau = t - start; absent: "
+     "law x_rest + U tau + A (sin(2 pi f tau + phase) - sin(phase)), tau = t - start, phase = "
+     "phase_deg; absent: "
      "no wall moves",
      NULL, 0},
     {"velocity", SLUICE_PARAM_VECTOR, offsetof(dbc_config, velocity), "[0, 0] | [0, 0, 0]", 0, 0, 0,
@@ -74,8 +76,10 @@ static const sluice_param_spec params[] = {
      0, "m", "A: displacement amplitude of the moving wall's oscillation", NULL, SLUICE_LENGTH_DIM},
     {"frequency", SLUICE_PARAM_REAL, offsetof(dbc_config, frequency), "0", 0, 0,
      SLUICE_PARAM_HAS_MIN, "Hz", "f: frequency of the oscillation", NULL, 0},
-    {"phase", SLUICE_PARAM_REAL, offsetof(dbc_config, phase), "0", 0, 0, 0, "rad",
-     "phase of the oscillation at t = start", NULL, 0},
+    {"phase_deg", SLUICE_PARAM_REAL, offsetof(dbc_config, phase_deg), "0", 0, 0, 0, "deg",
+     "phase of the oscillation at t = start, in degrees like every angle in a scene (formerly "
+     "'phase', in radians)",
+     NULL, 0},
     {"start", SLUICE_PARAM_REAL, offsetof(dbc_config, start), "0", 0, 0, 0, "s",
      "time the motion starts; the wall is at rest before", NULL, 0},
 };
@@ -109,7 +113,7 @@ static int dbc_create(const sluice_api *api, sluice_host *host, const void *conf
         moves |= c->velocity[d] != 0 || c->amplitude[d] != 0;
     }
     s->frequency = (double)c->frequency;
-    s->phase = (double)c->phase;
+    s->phase = (double)c->phase_deg * (SLUICE_PI / 180); /* radians from here on */
     s->start = (double)c->start;
     s->moving_wall = c->moving_wall && c->moving_wall[0] ? c->moving_wall : NULL;
     if (moves && !s->moving_wall) {
@@ -304,4 +308,4 @@ static const sluice_component components[] = {{
     .after_step = dbc_after_step,
 }};
 
-SLUICE_DEFINE_LIBRARY("dbc", "1.2.0", "dynamic boundary particles", SLUICE_DIMS_ALL, components)
+SLUICE_DEFINE_LIBRARY("dbc", "2.0.0", "dynamic boundary particles", SLUICE_DIMS_ALL, components)

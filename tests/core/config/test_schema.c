@@ -430,6 +430,42 @@ START_TEST(unknown_keys)
 }
 END_TEST
 
+/* A key renamed with its unit as a suffix (dbc's phase, in radians, became
+ * phase_deg): the old name is refused with the new one suggested, unless two
+ * keys extend it. */
+START_TEST(renamed_keys_are_suggested)
+{
+    typedef struct {
+        sluice_real phase_deg, turn_deg, turn_rad;
+    } angles;
+    static const sluice_param_spec angle_specs[] = {
+        {"phase_deg", SLUICE_PARAM_REAL, offsetof(angles, phase_deg), "0", 0, 0, 0, "deg",
+         "phase", NULL, 0},
+        {"turn_deg", SLUICE_PARAM_REAL, offsetof(angles, turn_deg), "0", 0, 0, 0, "deg", "turn",
+         NULL, 0},
+        {"turn_rad", SLUICE_PARAM_REAL, offsetof(angles, turn_rad), "0", 0, 0, 0, "rad", "turn",
+         NULL, 0},
+    };
+    sluice_diag *diag = sluice_diag_create();
+    sluice_arena *arena = sluice_arena_create();
+    sluice_node *root = parse_ok("phase: 0.3\nturn: 1\n", diag);
+    angles a;
+    memset(&a, 0, sizeof a);
+    ck_assert_int_eq(sluice_schema_bind(angle_specs, 3, &root, root, "plugins.dbc", 2, &a, arena,
+                                        diag),
+                     2);
+    ck_assert_str_eq(sluice_diag_message(diag, 0),
+                     "scene.yaml:1:1: error: unknown key 'phase' in plugins.dbc; did you mean "
+                     "'phase_deg'?");
+    ck_assert_str_eq(sluice_diag_message(diag, 1),
+                     "scene.yaml:2:1: error: unknown key 'turn' in plugins.dbc (valid keys: "
+                     "phase_deg, turn_deg, turn_rad)");
+    sluice_node_free(root);
+    sluice_arena_destroy(arena);
+    sluice_diag_destroy(diag);
+}
+END_TEST
+
 START_TEST(wrong_types)
 {
     static const struct {
@@ -731,6 +767,7 @@ int main(void)
     suite_add_tcase(s, values);
     TCase *errors = tcase_create("errors");
     tcase_add_test(errors, unknown_keys);
+    tcase_add_test(errors, renamed_keys_are_suggested);
     tcase_add_test(errors, wrong_types);
     tcase_add_test(errors, out_of_range);
     tcase_add_test(errors, vector_lengths);

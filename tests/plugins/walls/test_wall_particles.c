@@ -1105,16 +1105,20 @@ END_TEST
 START_TEST(dbc_paddle_oscillates)
 {
     const double U[2] = {0, 0}, A[2] = {0.03, 0.01};
-    check_motion("amplitude: [0.03, 0.01], frequency: 2, phase: 0.3, start: 0.05", U, A, 2, 0.3,
-                 0.05);
+    /* the phase in degrees in the scene, 30 deg = pi/6 rad in the law */
+    check_motion("amplitude: [0.03, 0.01], frequency: 2, phase_deg: 30, start: 0.05", U, A, 2,
+                 M_PI / 6, 0.05);
 }
 END_TEST
 
 /* a motion law without a wall to move, and a name no wall has, are refused */
 START_TEST(dbc_motion_errors)
 {
-    const char *bad[2] = {"velocity: [0.2, 0]", "moving_wall: gate"};
-    for (int k = 0; k < 2; k++) {
+    /* ... and the key of the phase in radians, renamed phase_deg with its unit: the message
+     * names the new key */
+    const char *bad[3] = {"velocity: [0.2, 0]", "moving_wall: gate", "phase: 0.3"};
+    const char *named_in_message[3] = {"moving_wall", "gate", "did you mean 'phase_deg'?"};
+    for (int k = 0; k < 3; k++) {
         char yaml[2048];
         snprintf(yaml, sizeof yaml,
                  "dimensions: 2\n"
@@ -1142,7 +1146,7 @@ START_TEST(dbc_motion_errors)
         int named = 0;
         for (size_t i = 0; i < sluice_diag_count(diag); i++) {
             fprintf(stderr, "refused as expected: %s\n", sluice_diag_message(diag, i));
-            named |= strstr(sluice_diag_message(diag, i), k ? "gate" : "moving_wall") != NULL;
+            named |= strstr(sluice_diag_message(diag, i), named_in_message[k]) != NULL;
         }
         ck_assert_msg(named, "the message does not name the problem");
         sluice_diag_destroy(diag);
