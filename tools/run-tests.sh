@@ -18,6 +18,8 @@ for tool in gcc clang make meson ninja pkg-config mpicc mpiexec gnuplot; do
 done
 if [ -z "$missing" ]; then
     pkg-config --exists yaml-0.1 hdf5 hdf5-openmpi check 2>/dev/null || missing=yes
+    # the scene schema's test (suite scene_schema)
+    python3 -c 'import jsonschema, yaml' 2>/dev/null || missing=yes
     # libFuzzer's runtime (the short fuzz runs at the end)
     [ -f "$(clang -print-file-name=libclang_rt.fuzzer-x86_64.a 2>/dev/null)" ] || missing=yes
 fi
@@ -30,7 +32,7 @@ if [ -n "$missing" ]; then
     apt-get update -qq
     apt-get install -y -qq --no-install-recommends build-essential meson ninja-build \
         pkg-config libyaml-dev libhdf5-dev check clang libclang-rt-14-dev libopenmpi-dev \
-        openmpi-bin libhdf5-openmpi-dev gnuplot-nox >/dev/null
+        openmpi-bin libhdf5-openmpi-dev gnuplot-nox python3-jsonschema python3-yaml >/dev/null
 fi
 
 jobs=$(nproc 2>/dev/null || echo 2)

@@ -12,6 +12,7 @@
 #include "build_config.h"
 #include "diag.h"
 #include "output_dir.h"
+#include "scene_schema.h"
 #include "wait_policy.h"
 #include "sim.h"
 
@@ -26,6 +27,7 @@ static void usage(FILE *out)
             "  sluice check SCENE.yaml [--variant NAME] [--remove PATH ...] [--swap OLD=NEW ...]\n"
             "               [--set key=value ...] [--schedule]\n"
             "  sluice inspect [PLUGIN] [--markdown]\n"
+            "  sluice inspect --schema > sluice-scene.schema.json\n"
             "  sluice study STUDY.yaml [--out DIR] [--jobs N] [--dry-run] [--summary]\n"
             "  sluice probe RUN --fields NAME[,...] (--points P | --line A;B --count N | ...)\n"
             "  sluice version\n"
@@ -40,6 +42,8 @@ static void usage(FILE *out)
             "--swap dbc=mdbc). After the variant: the removals, the swaps, then the --set.\n"
             "--schedule prints the evaluation schedule: prepare, passes in order, on-demand\n"
             "terms, integrated fields (run.json holds it too).\n"
+            "inspect --schema prints a JSON Schema (draft-07) of scene files, with the\n"
+            "plugins on the plugin path, for editors (docs/scene-format.md).\n"
             "--restart continues the run of SCENE from a checkpoint (DIR/checkpoint_*.h5,\n"
             "written every checkpoint.interval s and when SIGINT or SIGTERM stops a run).\n"
             "A run refuses an --out that holds another run (--overwrite replaces it) or\n"
@@ -465,10 +469,12 @@ static int command_check(int argc, char **argv)
 static int command_inspect(int argc, char **argv)
 {
     const char *plugin = NULL;
-    int markdown = 0;
+    int markdown = 0, schema = 0;
     for (int i = 2; i < argc; i++) {
         if (strcmp(argv[i], "--markdown") == 0)
             markdown = 1;
+        else if (strcmp(argv[i], "--schema") == 0)
+            schema = 1;
         else if (argv[i][0] == '-') {
             fprintf(stderr, "sluice: error: unknown option '%s'\n", argv[i]);
             return 2;
@@ -479,6 +485,13 @@ static int command_inspect(int argc, char **argv)
             return 2;
         }
     }
+    if (schema && (plugin || markdown)) {
+        fprintf(stderr, "sluice: error: --schema describes the whole scene format: it takes no "
+                        "PLUGIN and no --markdown\n");
+        return 2;
+    }
+    if (schema)
+        return sluice_scene_schema(stdout) == 0 ? 0 : 4;
     return sluice_inspect(stdout, plugin, markdown) == 0 ? 0 : 2;
 }
 

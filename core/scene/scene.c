@@ -226,8 +226,8 @@ static const sluice_param_spec fluid_polygon_specs[] = {
     {"start", SLUICE_PARAM_VECTOR, OFF(type, start), NULL, 0, 0, 0, "m",                        \
      "first vertex of the profile (2D)", NULL, 2},                                              \
     {"heading", SLUICE_PARAM_REAL, OFF(type, heading), NULL, 0, 0, SLUICE_PARAM_OPTIONAL, "deg", \
-     "direction of travel before the first piece, counter-clockwise from +x (needed when the "  \
-     "first piece continues a direction: an arc, a line by length)",                           \
+     "direction of travel before the first piece, in degrees counter-clockwise from +x "       \
+     "(needed when the first piece continues a direction: an arc, a line by length)",          \
      NULL, 0},                                                                                  \
     {                                                                                           \
         "max_segment", SLUICE_PARAM_REAL, OFF(type, max_segment), NULL, 0, 0,                   \
@@ -367,9 +367,12 @@ static const sluice_param_spec piece_line_specs[] = {
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_OPTIONAL, "m",
      "length along the direction (heading, slope, or the previous piece's)", NULL, 0},
     {"heading", SLUICE_PARAM_REAL, OFF(piece_config, heading), NULL, 0, 0, SLUICE_PARAM_OPTIONAL,
-     "deg", "direction, counter-clockwise from +x (default: the previous piece's)", NULL, 0},
+     "deg", "direction, in degrees counter-clockwise from +x (default: the previous piece's)",
+     NULL, 0},
     {"slope", SLUICE_PARAM_REAL, OFF(piece_config, slope), NULL, 0, 0, SLUICE_PARAM_OPTIONAL, "1",
-     "direction as dy/dx (with length: towards +x); -1.333 for a 1:0.75 chute", NULL, 0},
+     "direction as the gradient dy/dx, not an angle (with length: towards +x); -1.333 for a "
+     "1:0.75 chute",
+     NULL, 0},
 };
 
 static const sluice_param_spec piece_arc_specs[] = {
@@ -378,8 +381,8 @@ static const sluice_param_spec piece_arc_specs[] = {
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "m", "radius of the arc", NULL, 0},
     {"turn", SLUICE_PARAM_REAL, OFF(piece_config, turn), NULL, -360, 360,
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_HAS_MAX, "deg",
-     "change of direction along the arc: > 0 counter-clockwise (towards the fluid side), < 0 "
-     "clockwise",
+     "change of direction along the arc, in degrees: > 0 counter-clockwise (towards the fluid "
+     "side), < 0 clockwise",
      NULL, 0},
 };
 
@@ -396,8 +399,8 @@ static const sluice_param_spec piece_crest_specs[] = {
      "length of one unit of x and y in the crest's equation (0.01: centimetres)", NULL, 0},
     {"end_slope", SLUICE_PARAM_REAL, OFF(piece_config, end_slope), NULL, 0, 0,
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_OPTIONAL, "1",
-     "the crest ends where its slope dy/dx reaches this (1.3333 for 1:0.75), the tangent "
-     "point",
+     "the crest ends where its slope, the gradient dy/dx (not an angle), reaches this (1.3333 "
+     "for 1:0.75), the tangent point",
      NULL, 0},
     {"end_x", SLUICE_PARAM_REAL, OFF(piece_config, end_x), NULL, 0, 0,
      SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE | SLUICE_PARAM_OPTIONAL, "units",
@@ -425,6 +428,59 @@ static const char *const top_level_keys[] = {
     "geometry", "initial",     "neighbour_search", "watchdog", "plugins", "plugin_path",
     "checkpoint", "ranks", "variants", "variant",
 };
+
+static const char *const variant_keys[] = {"description", "remove", "swap", "set"};
+
+#define TABLE(name, specs, dims) {name, specs, SLUICE_COUNT(specs), NULL, 0, dims}
+#define TABLE_3D(name, specs, specs_3d)                                                         \
+    {name, specs, SLUICE_COUNT(specs), specs_3d, SLUICE_COUNT(specs_3d), SLUICE_DIMS_ALL}
+
+static const sluice_scene_table section_tables[] = {
+    TABLE("particles", particles_specs, SLUICE_DIMS_ALL),
+    TABLE("time", time_specs, SLUICE_DIMS_ALL),
+    TABLE("domain", domain_specs, SLUICE_DIMS_ALL),
+    TABLE("initial", initial_specs, SLUICE_DIMS_ALL),
+    TABLE("neighbour_search", neighbour_specs, SLUICE_DIMS_ALL),
+    TABLE("watchdog", watchdog_specs, SLUICE_DIMS_ALL),
+    TABLE("checkpoint", checkpoint_specs, SLUICE_DIMS_ALL),
+    TABLE("ranks", ranks_specs, SLUICE_DIMS_ALL),
+};
+
+/* in the order of FLUID_SHAPES */
+static const sluice_scene_table fluid_tables[] = {
+    TABLE("box", fluid_box_specs, SLUICE_DIMS_ALL),
+    TABLE("polygon", fluid_polygon_specs, SLUICE_DIMS_2),
+    TABLE("profile", fluid_profile_specs, SLUICE_DIMS_2),
+};
+
+/* in the order of WALL_SHAPES */
+static const sluice_scene_table wall_tables[] = {
+    TABLE("tank", wall_box_specs, SLUICE_DIMS_ALL),
+    TABLE("box", wall_box_specs, SLUICE_DIMS_ALL),
+    TABLE_3D("polyline", wall_line_specs, wall_line_specs_3d),
+    TABLE_3D("polygon", wall_line_specs, wall_line_specs_3d),
+    TABLE_3D("profile", wall_profile_specs, wall_profile_specs_3d),
+    TABLE("channel", wall_box_specs, SLUICE_DIMS_ALL),
+};
+
+/* in the order of PIECE_KINDS */
+static const sluice_scene_table piece_tables[] = {
+    TABLE("line", piece_line_specs, SLUICE_DIMS_ALL),
+    TABLE("arc", piece_arc_specs, SLUICE_DIMS_ALL),
+    TABLE("crest", piece_crest_specs, SLUICE_DIMS_ALL),
+    TABLE("steps", piece_steps_specs, SLUICE_DIMS_ALL),
+};
+
+const sluice_scene_format *sluice_scene_format_tables(void)
+{
+    static const sluice_scene_format format = {
+        top_level_keys, SLUICE_COUNT(top_level_keys), section_tables,
+        SLUICE_COUNT(section_tables), fluid_tables, SLUICE_COUNT(fluid_tables),
+        wall_tables, SLUICE_COUNT(wall_tables), piece_tables,
+        SLUICE_COUNT(piece_tables), variant_keys, SLUICE_COUNT(variant_keys),
+    };
+    return &format;
+}
 
 const char *sluice_node_file(const sluice_node *node, const sluice_scene *scene)
 {
@@ -1353,7 +1409,7 @@ static int check_variants(sluice_scene *scene, const sluice_node *variants, slui
         error_at(diag, scene, variants, "out of memory");
         return 1;
     }
-    static const char *const keys[] = {"description", "remove", "swap", "set"};
+    const char *const *keys = variant_keys;
     int errors = 0;
     for (size_t i = 0; i < variants->count; i++) {
         const char *name = variants->keys[i]->value;
@@ -1436,7 +1492,7 @@ static int check_variants(sluice_scene *scene, const sluice_node *variants, slui
                     errors++;
                 }
             } else {
-                const char *close = sluice_closest(key, keys, SLUICE_COUNT(keys));
+                const char *close = sluice_closest(key, keys, SLUICE_COUNT(variant_keys));
                 if (close)
                     error_at(diag, scene, variant->keys[k],
                              "unknown key '%s' in variants.%s; did you mean '%s'?", key, name,

@@ -134,6 +134,38 @@ void sluice_scene_free(sluice_scene *scene);
 /* Position helpers for messages about a node. */
 const char *sluice_node_file(const sluice_node *node, const sluice_scene *scene);
 
+/* The scene format's key tables, as the loader validates against them, for
+ * describing the format (sluice inspect --schema). An entry is a section,
+ * a shape of a fluid region or wall, or a piece of a profile; its specs hold
+ * every key the loader accepts there (the `shape` or `piece` key among them,
+ * an enumeration of all the list's shapes). A profile's `pieces` appears as
+ * a placeholder spec: the loader reads it as a list of pieces. */
+typedef struct sluice_scene_table {
+    const char *name;
+    const sluice_param_spec *specs; /* 2D, and 3D unless specs_3d */
+    uint32_t count;
+    const sluice_param_spec *specs_3d; /* NULL: as in 2D */
+    uint32_t count_3d;
+    uint32_t dimensions; /* SLUICE_DIMS_* where the loader accepts it */
+} sluice_scene_table;
+
+typedef struct sluice_scene_format {
+    const char *const *top_level_keys; /* every key the loader accepts at the top */
+    size_t top_level_count;
+    const sluice_scene_table *sections; /* particles, time, domain, ... */
+    size_t section_count;
+    const sluice_scene_table *fluid_shapes;
+    size_t fluid_shape_count;
+    const sluice_scene_table *wall_shapes;
+    size_t wall_shape_count;
+    const sluice_scene_table *pieces;
+    size_t piece_count;
+    const char *const *variant_keys; /* the keys of one variant */
+    size_t variant_key_count;
+} sluice_scene_format;
+
+const sluice_scene_format *sluice_scene_format_tables(void);
+
 enum { SLUICE_BALANCE_TIME = 0, SLUICE_BALANCE_COUNT = 1, SLUICE_BALANCE_NONE = 2 };
 
 #endif
