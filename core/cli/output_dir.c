@@ -22,8 +22,8 @@
 
 /* What a run writes at the top of its directory: removed by --overwrite,
  * and the marks of an earlier run. */
-static const char *const run_outputs[] = {"run.json", "scene.resolved.yaml", "*.h5", "*.xdmf",
-                                          "*.xmf", "*.csv", "*.tmp"};
+static const char *const run_outputs[] = {"run.json", "scene.resolved.yaml", "tables.json", "*.h5",
+                                          "*.xdmf", "*.xmf", "*.csv", "*.tmp"};
 static const char *const run_marks[] = {"run.json", "scene.resolved.yaml", "checkpoint_*.h5",
                                         "particles_*.h5"};
 

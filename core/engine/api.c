@@ -543,15 +543,57 @@ static sluice_table *api_table_open(sluice_host *host, const char *file_name, co
      * after the components are initialised */
     t->header = sluice_sim_copy_string(header);
     t->path = sluice_sim_copy_string(file_name);
-    if (!t->header || !t->path) {
-        free(t->header);
-        free(t->path);
-        free(t);
+    t->name = sluice_sim_copy_string(file_name);
+    if (!t->header || !t->path || !t->name || sluice_sim_table_split_header(t) != 0) {
+        sluice_sim_table_free(t);
         api_error(host, "out of memory opening table '%s'", file_name);
         return NULL;
     }
     sim->tables[sim->table_count++] = t;
     return t;
+}
+
+static int api_table_column(sluice_table *table, uint32_t column, const char *unit,
+                            const char *description, const sluice_real *position)
+{
+    if (!table)
+        return SLUICE_ERROR;
+    sluice_host *host = &table->sim->instances[table->instance].host;
+    if (column >= table->column_count) {
+        api_error(host, "table '%s': column %u described, and its header has %u columns (0 to %u)",
+                  table->name, column, table->column_count, table->column_count - 1);
+        return SLUICE_ERROR;
+    }
+    sluice_table_column_info *c = &table->columns[column];
+    if (!unit || !*unit || !description || !*description) {
+        api_error(host, "table '%s': column '%s' needs a unit and a description ('1' for a "
+                        "dimensionless number)",
+                  table->name, c->name);
+        return SLUICE_ERROR;
+    }
+    if (position)
+        for (int d = 0; d < 3; d++)
+            if (!isfinite((double)position[d])) {
+                api_error(host, "table '%s': column '%s' has a position that is not finite",
+                          table->name, c->name);
+                return SLUICE_ERROR;
+            }
+    char *unit_copy = sluice_sim_copy_string(unit);
+    char *description_copy = sluice_sim_copy_string(description);
+    if (!unit_copy || !description_copy) {
+        free(unit_copy);
+        free(description_copy);
+        api_error(host, "out of memory describing table '%s'", table->name);
+        return SLUICE_ERROR;
+    }
+    free(c->unit);
+    free(c->description);
+    c->unit = unit_copy;
+    c->description = description_copy;
+    c->has_position = position != NULL;
+    for (int d = 0; d < 3; d++)
+        c->position[d] = position ? (double)position[d] : 0.0;
+    return SLUICE_OK;
 }
 
 static int api_table_row(sluice_table *table, const double *values, uint32_t count)
@@ -987,6 +1029,7 @@ static const sluice_api_output output_table = {
     sizeof(sluice_api_output), api_output_path, api_resolved_scene, api_plugin_count,
     api_plugin, api_table_open, api_table_row, api_write_file_atomic, api_write_file_with,
     api_describe_run,
+    api_table_column,
 };
 
 static const sluice_api_state state_table = {

@@ -310,6 +310,135 @@ int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t len
     return SLUICE_OK;
 }
 
+int sluice_sim_table_split_header(sluice_table *table)
+{
+    uint32_t count = 1;
+    for (const char *c = table->header; *c; c++)
+        count += *c == ',';
+    table->columns = calloc(count, sizeof *table->columns);
+    if (!table->columns)
+        return -1;
+    table->column_count = count;
+    const char *start = table->header;
+    for (uint32_t k = 0; k < count; k++) {
+        const char *end = strchr(start, ',');
+        size_t length = end ? (size_t)(end - start) : strlen(start);
+        table->columns[k].name = strndup(start, length);
+        if (!table->columns[k].name)
+            return -1;
+        start += length + (end ? 1 : 0);
+    }
+    return 0;
+}
+
+void sluice_sim_table_free(sluice_table *table)
+{
+    if (!table)
+        return;
+    if (table->fd >= 0)
+        close(table->fd);
+    for (uint32_t k = 0; table->columns && k < table->column_count; k++) {
+        free(table->columns[k].name);
+        free(table->columns[k].unit);
+        free(table->columns[k].description);
+    }
+    free(table->columns);
+    free(table->name);
+    free(table->path);
+    free(table->header);
+    free(table);
+}
+
+static void index_json_string(FILE *f, const char *s)
+{
+    if (!s) {
+        fputs("null", f);
+        return;
+    }
+    fputc('"', f);
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\')
+            fprintf(f, "\\%c", c);
+        else if (c < 0x20)
+            fprintf(f, "\\u%04x", c);
+        else
+            fputc(c, f);
+    }
+    fputc('"', f);
+}
+
+static void index_table(FILE *f, const sluice_sim *sim, const sluice_table *table)
+{
+    const sluice_instance *in = &sim->instances[table->instance];
+    fprintf(f, "    {\n      \"file\": ");
+    index_json_string(f, table->name);
+    fprintf(f, ",\n      \"instance\": ");
+    index_json_string(f, in->name);
+    fprintf(f, ",\n      \"component\": ");
+    index_json_string(f, in->component->name);
+    fprintf(f, ",\n      \"library\": ");
+    index_json_string(f, in->library->name);
+    fprintf(f, ",\n      \"columns\": [");
+    for (uint32_t k = 0; k < table->column_count; k++) {
+        const sluice_table_column_info *c = &table->columns[k];
+        fprintf(f, "%s\n        {\"name\": ", k ? "," : "");
+        index_json_string(f, c->name);
+        fprintf(f, ", \"unit\": ");
+        index_json_string(f, c->unit);
+        fprintf(f, ", \"description\": ");
+        index_json_string(f, c->description);
+        if (c->has_position) {
+            fprintf(f, ", \"position\": [");
+            for (uint32_t d = 0; d < sim->scene.dimensions; d++)
+                fprintf(f, "%s%.10g", d ? ", " : "", c->position[d]);
+            fprintf(f, "]");
+        }
+        fprintf(f, "}");
+    }
+    fprintf(f, "\n      ]\n    }");
+}
+
+int sluice_sim_write_table_index(sluice_sim *sim)
+{
+    if (!sim->output_directory || sim->comm.rank != 0)
+        return 0;
+    char *text = NULL;
+    size_t size = 0;
+    FILE *f = open_memstream(&text, &size);
+    if (!f) {
+        fprintf(stderr, "sluice: error: out of memory writing the index of the tables\n");
+        return -1;
+    }
+    fprintf(f, "{\n  \"format\": \"sluice-tables\",\n  \"version\": 1,\n");
+    fprintf(f, "  \"dimensions\": %u,\n  \"tables\": [", sim->scene.dimensions);
+    for (size_t t = 0; t < sim->table_count; t++) {
+        fprintf(f, "%s\n", t ? "," : "");
+        index_table(f, sim, sim->tables[t]);
+    }
+    fprintf(f, "%s]\n}\n", sim->table_count ? "\n  " : "");
+    if (fclose(f) != 0) {
+        free(text);
+        fprintf(stderr, "sluice: error: out of memory writing the index of the tables\n");
+        return -1;
+    }
+    char error[1024];
+    size_t n = strlen(sim->output_directory) + sizeof "/tables.json";
+    char *path = malloc(n);
+    int rc = -1;
+    if (!path)
+        snprintf(error, sizeof error, "out of memory writing the index of the tables");
+    else {
+        snprintf(path, n, "%s/tables.json", sim->output_directory);
+        rc = sluice_write_file_atomic(path, text, size, error, sizeof error);
+    }
+    if (rc != 0)
+        fprintf(stderr, "sluice: error: %s\n", error);
+    free(path);
+    free(text);
+    return rc;
+}
+
 int sluice_sim_make_directory(const char *path, char *error, size_t size)
 {
     char *copy = strdup(path);

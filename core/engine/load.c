@@ -771,13 +771,8 @@ void sluice_sim_free(sluice_sim *sim)
     for (uint32_t k = sim->instance_count; k-- > 0;)
         if (sim->instances[k].created && sim->instances[k].component->destroy)
             sim->instances[k].component->destroy(sim->instances[k].state);
-    for (size_t t = 0; t < sim->table_count; t++) {
-        if (sim->tables[t]->fd >= 0)
-            close(sim->tables[t]->fd);
-        free(sim->tables[t]->path);
-        free(sim->tables[t]->header);
-        free(sim->tables[t]);
-    }
+    for (size_t t = 0; t < sim->table_count; t++)
+        sluice_sim_table_free(sim->tables[t]);
     free(sim->tables);
     for (size_t c = 0; c < sim->checkpoint_file_count; c++)
         free(sim->checkpoint_files[c]);

@@ -112,6 +112,13 @@ int sluice_sim_begin(sluice_sim *sim, const char *output_directory)
         sim->output_directory = strdup(output_directory);
         if (!sim->output_directory)
             return SLUICE_RUN_FAILED;
+        /* the index of the tables the components opened (rewritten at the
+         * end of the run) */
+        if (sluice_comm_any(&sim->comm, sluice_sim_write_table_index(sim) != 0)) {
+            sluice_sim_fail(sim, "cannot write the index of the tables, %s/tables.json",
+                            output_directory);
+            return SLUICE_RUN_FAILED;
+        }
     }
     sim->wall_start = sluice_wall_clock();
     (void)sluice_sim_describe(sim, "date"); /* the start date and host, now */
@@ -407,6 +414,9 @@ int sluice_sim_end(sluice_sim *sim, int status)
             close(sim->tables[t]->fd);
             sim->tables[t]->fd = -1;
         }
+    if (sim->output_directory && sluice_sim_write_table_index(sim) != 0 &&
+        (status == SLUICE_RUN_COMPLETE || status == SLUICE_RUN_INTERRUPTED))
+        status = SLUICE_RUN_FAILED;
     if (sim->output_directory && write_run_json(sim, status) != 0 &&
         (status == SLUICE_RUN_COMPLETE || status == SLUICE_RUN_INTERRUPTED))
         status = SLUICE_RUN_FAILED;

@@ -72,11 +72,24 @@ typedef struct sluice_pass {
     sluice_pair_pass pair;
 } sluice_pass;
 
+/* One column of a table: its name (from the header) and what the component
+ * said of it (api->output->table_column; unit NULL: not described). */
+typedef struct sluice_table_column_info {
+    char *name;
+    char *unit;
+    char *description;
+    int has_position;
+    double position[3]; /* m */
+} sluice_table_column_info;
+
 struct sluice_table {
     sluice_sim *sim;
     uint32_t instance; /* the component instance that writes it */
+    char *name;        /* the file's name in the output directory */
     char *path;
     char *header;
+    uint32_t column_count; /* the header's columns */
+    sluice_table_column_info *columns;
     int fd;
     int failed;
     uint64_t bytes;         /* written so far, header included (checkpoints record it) */
@@ -351,6 +364,15 @@ extern const sluice_api sluice_sim_api_table;
 /* files.c */
 /* Appends one row to a table's file (api->output->table_row). */
 int sluice_sim_table_flush_row(sluice_table *table, const char *line, size_t length);
+/* Splits a table's header into its columns (table->columns); -1 when out of
+ * memory. */
+int sluice_sim_table_split_header(sluice_table *table);
+/* Frees a table and what it holds (its file descriptor is closed). */
+void sluice_sim_table_free(sluice_table *table);
+/* Writes the index of the run's tables, OUTPUT/tables.json, atomically (rank 0;
+ * nothing without an output directory); prints the error and returns -1 when
+ * it cannot. */
+int sluice_sim_write_table_index(sluice_sim *sim);
 
 /* watchdog.c */
 int sluice_sim_watchdog(sluice_sim *sim);

@@ -161,7 +161,20 @@ static int energy_initialise(void *state, sluice_host *host)
     energy_state *s = state;
     s->table = s->api->output->table_open(host, s->file,
                                   "time,kinetic,potential,elastic,total,drift,fluid_mass");
-    return s->table ? SLUICE_OK : SLUICE_ERROR;
+    if (!s->table)
+        return SLUICE_ERROR;
+    /* per metre of span in 2D */
+    const char *energy = s->dims == 2 ? "J m^-1" : "J", *mass = s->dims == 2 ? "kg m^-1" : "kg";
+    const sluice_column_doc columns[] = {
+        {"s", "simulated time"},
+        {energy, "kinetic energy of the fluid"},
+        {energy, "potential energy of the fluid relative to the start"},
+        {energy, "elastic (compression) energy of the fluid"},
+        {energy, "total mechanical energy, kinetic + potential + elastic"},
+        {"1", "change of the total energy over the releasable potential energy"},
+        {mass, "mass of the fluid"},
+    };
+    return sluice_util_describe_columns(s->api, s->table, 0, columns, SLUICE_COUNT(columns));
 }
 
 static int grow(energy_state *s, sluice_host *host, sluice_index n)

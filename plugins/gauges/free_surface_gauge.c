@@ -247,7 +247,18 @@ static int fs_initialise(void *state, sluice_host *host)
         used += (size_t)snprintf(header + used, size - used, ",eta_x%u", k);
     s->table = s->api->output->table_open(host, s->file, header);
     free(header);
-    return s->table ? SLUICE_OK : SLUICE_ERROR;
+    if (!s->table)
+        return SLUICE_ERROR;
+    /* each column at the foot of its vertical line of samples */
+    const sluice_api_output *out = s->api->output;
+    if (out->table_column(s->table, 0, "s", "simulated time", NULL) != SLUICE_OK)
+        return SLUICE_ERROR;
+    for (sluice_index k = 0; k < s->columns; k++)
+        if (out->table_column(s->table, 1 + k, "m",
+                              "free-surface elevation (vertical coordinate) above the position",
+                              s->points + 3 * (size_t)s->first[k]) != SLUICE_OK)
+            return SLUICE_ERROR;
+    return SLUICE_OK;
 }
 
 /* S = sum_j V_j W at each sample of the batch (fluid neighbours only). */

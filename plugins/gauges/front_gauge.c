@@ -50,7 +50,13 @@ static int front_initialise(void *state, sluice_host *host)
 {
     front_state *s = state;
     s->table = s->api->output->table_open(host, s->file, "time,x_front");
-    return s->table ? SLUICE_OK : SLUICE_ERROR;
+    if (!s->table)
+        return SLUICE_ERROR;
+    const sluice_column_doc columns[] = {
+        {"s", "simulated time"},
+        {"m", "surge front: largest x of any fluid particle, from the origin"},
+    };
+    return sluice_util_describe_columns(s->api, s->table, 0, columns, SLUICE_COUNT(columns));
 }
 
 static void front_destroy(void *state)

@@ -254,6 +254,56 @@ static int gauge_bind(void *state, sluice_host *host)
     return SLUICE_OK;
 }
 
+/* The declaration of the field `name` (its unit and description); the
+ * pseudo-field air_fraction is a volume fraction. */
+static void field_declaration(const sluice_api *api, sluice_host *host, const char *name,
+                              const char **unit, const char **doc)
+{
+    *unit = "1";
+    *doc = "kernel-weighted volume fraction of air";
+    if (strcmp(name, air_fraction_name) == 0)
+        return;
+    const uint32_t count = api->fields->field_count(host);
+    for (uint32_t i = 0; i < count; i++) {
+        sluice_field_spec spec;
+        if (api->fields->field_info(host, i, &spec, NULL) == SLUICE_OK &&
+            strcmp(spec.name, name) == 0) {
+            *unit = spec.units && *spec.units ? spec.units : "1";
+            *doc = spec.doc && *spec.doc ? spec.doc : name;
+            return;
+        }
+    }
+}
+
+/* Units and descriptions of the table's columns: each field's declared unit
+ * and description (Shepard-interpolated), at its point. */
+static int describe_columns(const gauge_state *s, sluice_host *host)
+{
+    static const char axes[] = "xyz";
+    const sluice_api_output *out = s->api->output;
+    if (out->table_column(s->table, 0, "s", "simulated time", NULL) != SLUICE_OK)
+        return SLUICE_ERROR;
+    uint32_t column = 1;
+    for (sluice_index k = 0; k < s->count; k++)
+        for (uint32_t f = 0, r = 0; f < s->field_count; f++) {
+            const uint32_t components = s->is_air[f] ? 1 : s->real[r++].components;
+            const char *unit, *doc;
+            field_declaration(s->api, host, s->names[f], &unit, &doc);
+            for (uint32_t c = 0; c < components; c++) {
+                char description[320];
+                if (components > 1)
+                    snprintf(description, sizeof description, "%s, %c component, interpolated",
+                             doc, c < 3 ? axes[c] : '?');
+                else
+                    snprintf(description, sizeof description, "%s, interpolated", doc);
+                if (out->table_column(s->table, column++, unit, description,
+                                      s->points + 3 * (size_t)k) != SLUICE_OK)
+                    return SLUICE_ERROR;
+            }
+        }
+    return SLUICE_OK;
+}
+
 static int gauge_initialise(void *state, sluice_host *host)
 {
     gauge_state *s = state;
@@ -292,7 +342,9 @@ static int gauge_initialise(void *state, sluice_host *host)
         }
     s->table = s->api->output->table_open(host, s->file, header);
     free(header);
-    return s->table ? SLUICE_OK : SLUICE_ERROR;
+    if (!s->table)
+        return SLUICE_ERROR;
+    return describe_columns(s, host);
 }
 
 /* The sums of the listed real fields over the neighbours of one batch. */

@@ -292,6 +292,32 @@ static int sg_bind(void *state, sluice_host *host)
     return SLUICE_OK;
 }
 
+/* Units and descriptions of the table's columns, each section's at the
+ * foot of its vertical line of samples (the bed). */
+static int describe_columns(const sg_state *s)
+{
+    static const struct {
+        const char *unit, *description;
+    } section[] = {
+        {"m", "flow depth d = eta - bed elevation"},
+        {"m^2 s^-1", "discharge per unit width q"},
+        {"m s^-1", "depth-averaged velocity U = q / d"},
+        {"1", "Froude number |U| / sqrt(g d)"},
+        {"N m^-1", "momentum flux per unit width, integral of rho u_x^2 dy"},
+        {"N m^-1", "pressure force per unit width, integral of (p - p_ref) dy"},
+    };
+    const sluice_api_output *out = s->api->output;
+    if (out->table_column(s->table, 0, "s", "simulated time", NULL) != SLUICE_OK)
+        return SLUICE_ERROR;
+    for (sluice_index k = 0; k < s->sections; k++)
+        for (sluice_index c = 0; c < s->columns; c++)
+            if (out->table_column(s->table, 1 + k * s->columns + c, section[c].unit,
+                                  section[c].description,
+                                  s->points + 3 * (size_t)s->first[k]) != SLUICE_OK)
+                return SLUICE_ERROR;
+    return SLUICE_OK;
+}
+
 static int sg_initialise(void *state, sluice_host *host)
 {
     sg_state *s = state;
@@ -310,7 +336,9 @@ static int sg_initialise(void *state, sluice_host *host)
     }
     s->table = s->api->output->table_open(host, s->file, header);
     free(header);
-    return s->table ? SLUICE_OK : SLUICE_ERROR;
+    if (!s->table)
+        return SLUICE_ERROR;
+    return describe_columns(s);
 }
 
 /* S and sum_j V_j W times u_j (and, with forces, p_j - p_ref and rho_j u_j^2)

@@ -442,6 +442,42 @@ static int place_samples(wf_state *s, sluice_host *host, int pass, double rho0, 
     return SLUICE_OK;
 }
 
+/* Units and descriptions of the table's columns, in the header's order:
+ * per wall the force, the wet length (area) and the moments. */
+static int describe_columns(const wf_state *s)
+{
+    const sluice_api_output *out = s->api->output;
+    const int plane = s->dims == 2;
+    const char *force = plane ? "N m^-1" : "N", *moment = plane ? "N m m^-1" : "N m";
+    static const char axes[] = "xyz";
+    if (out->table_column(s->table, 0, "s", "simulated time", NULL) != SLUICE_OK)
+        return SLUICE_ERROR;
+    uint32_t column = 1;
+    for (uint32_t k = 0; k < s->wall_count; k++) {
+        const char *name = s->column_name[k];
+        char text[200];
+        for (uint32_t d = 0; d < s->dims; d++) {
+            snprintf(text, sizeof text, "%c component of the fluid's pressure force on %s%s",
+                     axes[d], name, plane ? " per metre of width" : "");
+            if (out->table_column(s->table, column++, force, text, NULL) != SLUICE_OK)
+                return SLUICE_ERROR;
+        }
+        snprintf(text, sizeof text, "wet %s of %s", plane ? "length" : "area", name);
+        if (out->table_column(s->table, column++, plane ? "m" : "m^2", text, NULL) != SLUICE_OK)
+            return SLUICE_ERROR;
+        for (uint32_t d = plane ? 2 : 0; s->moments && d < 3; d++) {
+            snprintf(text, sizeof text,
+                     "%c component of the moment of the pressure force on %s about (%g, %g, %g) "
+                     "m%s",
+                     axes[d], name, s->moment_about[0], s->moment_about[1], s->moment_about[2],
+                     plane ? " per metre of width" : "");
+            if (out->table_column(s->table, column++, moment, text, NULL) != SLUICE_OK)
+                return SLUICE_ERROR;
+        }
+    }
+    return SLUICE_OK;
+}
+
 /* The walls to measure, their pieces and sample points, the table. */
 static int wf_initialise(void *state, sluice_host *host)
 {
@@ -495,7 +531,9 @@ static int wf_initialise(void *state, sluice_host *host)
     }
     s->table = api->output->table_open(host, s->file, header);
     free(header);
-    return s->table ? SLUICE_OK : SLUICE_ERROR;
+    if (!s->table)
+        return SLUICE_ERROR;
+    return describe_columns(s);
 }
 
 /* S and sum_j V_j (p_j - p_ref) W at each sample of the batch. */

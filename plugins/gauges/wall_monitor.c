@@ -115,7 +115,17 @@ static int monitor_initialise(void *state, sluice_host *host)
     }
     s->table = s->api->output->table_open(host, s->file,
                                   "time,crossed,crossed_total,gap_min,gap_layer,near_wall");
-    return s->table ? SLUICE_OK : SLUICE_ERROR;
+    if (!s->table)
+        return SLUICE_ERROR;
+    const sluice_column_doc columns[] = {
+        {"s", "simulated time"},
+        {"1", "fluid particles behind a wall now"},
+        {"1", "distinct fluid particles seen behind a wall so far"},
+        {"m", "smallest signed distance of a fluid particle to a wall"},
+        {"m", "mean distance of the first fluid layer to the walls"},
+        {"1", "fluid particles within 2 h of a wall"},
+    };
+    return sluice_util_describe_columns(s->api, s->table, 0, columns, SLUICE_COUNT(columns));
 }
 
 typedef struct distance_job {

@@ -494,6 +494,36 @@ static int write_description(wp_state *s, sluice_host *host)
     return rc;
 }
 
+/* Units and descriptions of the table's columns, each sensor's at the
+ * centre of its face. */
+static int describe_columns(const wp_state *s)
+{
+    const sluice_api_output *out = s->api->output;
+    if (out->table_column(s->table, 0, "s", "simulated time", NULL) != SLUICE_OK)
+        return SLUICE_ERROR;
+    uint32_t column = 1;
+    char text[160];
+    for (uint32_t k = 0; k < s->sensor_count; k++) {
+        const wp_sensor *q = &s->sensors[k];
+        const sluice_real centre[3] = {(sluice_real)q->centre[0], (sluice_real)q->centre[1],
+                                       (sluice_real)q->centre[2]};
+        if (out->table_column(s->table, column++, "Pa",
+                              "mean gauge pressure over the sensor's face", centre) != SLUICE_OK)
+            return SLUICE_ERROR;
+        if (s->time_constant > 0) {
+            snprintf(text, sizeof text,
+                     "mean gauge pressure over the sensor's face, low-pass filtered (tau = %g s)",
+                     s->time_constant);
+            if (out->table_column(s->table, column++, "Pa", text, centre) != SLUICE_OK)
+                return SLUICE_ERROR;
+        }
+        if (out->table_column(s->table, column++, "1", "wet fraction of the sensor's face",
+                              centre) != SLUICE_OK)
+            return SLUICE_ERROR;
+    }
+    return SLUICE_OK;
+}
+
 static int wp_initialise(void *state, sluice_host *host)
 {
     wp_state *s = state;
@@ -536,7 +566,9 @@ static int wp_initialise(void *state, sluice_host *host)
     s->count = next;
     s->table = api->output->table_open(host, s->file, header);
     free(header);
-    return s->table ? SLUICE_OK : SLUICE_ERROR;
+    if (!s->table)
+        return SLUICE_ERROR;
+    return describe_columns(s);
 }
 
 /* S and the extrapolated pressure sum at each cell of the batch. */

@@ -690,6 +690,27 @@ static int add_column(boundary_state *s, sluice_host *host, double x)
  * each row: water p = p_b + rho0_a g air_depth + rho0 g (depth - z'), air
  * p = p_b + rho0_a g (depth + air_depth - z'), z' the height above the
  * bed, each through its phase's law. */
+/* Units and descriptions of an inlet's or outlet's table (per metre of
+ * span in 2D), after table_open. */
+static int describe_flux_columns(boundary_state *s)
+{
+    if (!s->table)
+        return SLUICE_ERROR;
+    const int plane = s->dims == 2;
+    const sluice_column_doc columns[] = {
+        {"s", "simulated time"},
+        {plane ? "kg s^-1 m^-1" : "kg s^-1",
+         "mass flux through the boundary's plane, averaged over the interval"},
+        {plane ? "m^2 s^-1" : "m^3 s^-1", "discharge through the plane, mass flux / rho0"},
+        {plane ? "N m^-1" : "N", "x-momentum flux through the plane"},
+        {plane ? "kg m^-1" : "kg", "mass through the plane since the start"},
+        {"1", "open particles in the boundary's buffer"},
+        {"m s^-1", "velocity imposed on the outlet's buffer layer (controlled tailwater)"},
+        {"m", "filtered water depth at the control section (controlled tailwater)"},
+    };
+    return sluice_util_describe_columns(s->api, s->table, 0, columns, s->controlled ? 8 : 6);
+}
+
 static int setup_lattice(boundary_state *s, sluice_host *host)
 {
     const sluice_api *api = s->api;
@@ -796,7 +817,7 @@ static int inlet_initialise(void *state, sluice_host *host)
                   s->column_density[s->rows + s->air_rows - 1]);
     s->table = api->output->table_open(host, s->file,
                                "time,mass_flux,discharge,momentum_flux,mass_total,open_particles");
-    return s->table ? SLUICE_OK : SLUICE_ERROR;
+    return describe_flux_columns(s);
 }
 
 static int write_flux_row(boundary_state *s, double time)
@@ -973,7 +994,7 @@ static int outlet_initialise(void *state, sluice_host *host)
         s->controlled ? "time,mass_flux,discharge,momentum_flux,mass_total,open_particles,"
                         "imposed_velocity,control_depth"
                       : "time,mass_flux,discharge,momentum_flux,mass_total,open_particles");
-    return s->table ? SLUICE_OK : SLUICE_ERROR;
+    return describe_flux_columns(s);
 }
 
 /* A controlled tailwater (a tailgate): the water depth at the control
@@ -1260,7 +1281,20 @@ static int vent_initialise(void *state, sluice_host *host)
     s->table = api->output->table_open(host, s->file,
                                "time,mass_flux,volume_flux,mass_total,water_mass_total,"
                                "air_pressure_near,air_particles_near");
-    return s->table ? SLUICE_OK : SLUICE_ERROR;
+    if (!s->table)
+        return SLUICE_ERROR;
+    /* per metre of span in 2D */
+    const int plane = s->dims == 2;
+    const sluice_column_doc columns[] = {
+        {"s", "simulated time"},
+        {plane ? "kg s^-1 m^-1" : "kg s^-1", "mass flux of the air leaving through the vent"},
+        {plane ? "m^2 s^-1" : "m^3 s^-1", "volume flux of the air leaving (mass flux / rho0_a)"},
+        {plane ? "kg m^-1" : "kg", "mass of the air that left since the start"},
+        {plane ? "kg m^-1" : "kg", "mass of the water that reached the vent since the start"},
+        {"Pa", "mean pressure of the air within the kernel support of the box"},
+        {"1", "air particles within the kernel support of the box"},
+    };
+    return sluice_util_describe_columns(api, s->table, 0, columns, SLUICE_COUNT(columns));
 }
 
 /* The mean pressure of the air within the kernel support outside the box

@@ -834,9 +834,20 @@ static int bubbles_initialise(void *state, sluice_host *host)
                                   "time,particles_removed,mass_removed_total,"
                                   "volume_removed_total,particles_removed_total,isolated_air,"
                                   "particles_compressed_total");
-    if (!s->table)
+    uint32_t dims = 2;
+    if (!s->table || sluice_util_dimensions(s->api, host, &dims) != SLUICE_OK)
         return SLUICE_ERROR;
-    return SLUICE_OK;
+    /* per metre of span in 2D */
+    const sluice_column_doc columns[] = {
+        {"s", "simulated time"},
+        {"1", "air particles removed since the previous row"},
+        {dims == 2 ? "kg m^-1" : "kg", "mass of the air removed since the start"},
+        {dims == 2 ? "m^2" : "m^3", "volume of the air removed since the start (mass / rho0_a)"},
+        {"1", "air particles removed since the start"},
+        {"1", "air particles without an air neighbour at the last check"},
+        {"1", "air particles removed as over-compressed since the start"},
+    };
+    return sluice_util_describe_columns(s->api, s->table, 0, columns, SLUICE_COUNT(columns));
 }
 
 /* the pass: an air target with an air neighbour is not isolated (its time

@@ -523,6 +523,18 @@ typedef struct sluice_api_output {
      * "date" (the run's start, UTC, ISO 8601), "host", "kernel" (the scene's
      * kernel component, e.g. "cubic_spline"). Valid for the whole run. */
     const char *(*describe_run)(sluice_host *host, const char *name);
+    /* Since ABI 2.2. Describes column `column` (0 for the first of the
+     * header's columns) of a table the component opened: its unit (SI, in
+     * the fields' notation: "s", "m", "m s^-1", "Pa", "N m^-1", "1" for a
+     * dimensionless number), what it measures (a short phrase) and, for a
+     * column measured at one place, its position (3 reals, m; NULL for none).
+     * Call it after table_open, before the run's first step (in create(),
+     * bind() or initialise()); describing a column again replaces what was
+     * said. The core writes the run's tables and their columns to
+     * tables.json in the output directory (docs/analysis.md); the CSV header
+     * is unchanged. */
+    int (*table_column)(sluice_table *table, uint32_t column, const char *unit,
+                        const char *description, const sluice_real *position);
 } sluice_api_output;
 
 /* Plugin state in checkpoints (docs/reliability.md, "Checkpoints and

@@ -204,6 +204,24 @@ static inline int sluice_util_load_int(const sluice_api *api, sluice_host *host,
     return api->state->state_read(host, name, SLUICE_STATE_INT64, 1, value);
 }
 
+/* A table column's unit and description (api->output->table_column). */
+typedef struct sluice_column_doc {
+    const char *unit, *description;
+} sluice_column_doc;
+
+/* Describes columns first .. first + count - 1 of a table, none at a
+ * position (ABI 2.2). */
+static inline int sluice_util_describe_columns(const sluice_api *api, sluice_table *table,
+                                               uint32_t first, const sluice_column_doc *columns,
+                                               uint32_t count)
+{
+    for (uint32_t k = 0; k < count; k++)
+        if (api->output->table_column(table, first + k, columns[k].unit, columns[k].description,
+                                      NULL) != SLUICE_OK)
+            return SLUICE_ERROR;
+    return SLUICE_OK;
+}
+
 /* The focused headers (each also includes this one). */
 #include "sluice/field_specs.h"
 #include "sluice/gauge_column.h"

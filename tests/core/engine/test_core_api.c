@@ -716,6 +716,168 @@ START_TEST(reach_longer_than_periodic_side_refused)
 }
 END_TEST
 
+/* --------------------------------------------------- the tables' index -- */
+
+/* The instance that writes `file`, or NULL. */
+static const sluice_table *table_of(const sluice_sim *sim, const char *file)
+{
+    for (size_t t = 0; t < sim->table_count; t++)
+        if (strcmp(sim->tables[t]->name, file) == 0)
+            return sim->tables[t];
+    return NULL;
+}
+
+/* Every column of every table has a unit and a description; returns the
+ * number of tables and sets bit k of *components for expected[k] when a
+ * table of that component is there. */
+static size_t check_described(const sluice_sim *sim, const char *const *expected, size_t count,
+                              uint32_t *components)
+{
+    for (size_t t = 0; t < sim->table_count; t++) {
+        const sluice_table *table = sim->tables[t];
+        const char *component = sim->instances[table->instance].component->name;
+        for (size_t k = 0; k < count; k++)
+            if (strcmp(component, expected[k]) == 0)
+                *components |= 1u << k;
+        ck_assert_uint_gt(table->column_count, 1);
+        ck_assert_str_eq(table->columns[0].name, "time");
+        for (uint32_t c = 0; c < table->column_count; c++) {
+            const sluice_table_column_info *info = &table->columns[c];
+            ck_assert_msg(info->unit && *info->unit && info->description && *info->description,
+                          "%s (%s): column %u '%s' is not described", table->name, component, c,
+                          info->name);
+        }
+        ck_assert_str_eq(table->columns[0].unit, "s");
+    }
+    return sim->table_count;
+}
+
+/* The hydraulic jump scene's gauges (free surface, sections with forces,
+ * 400 velocity points, 21 floor pressure sensors with a filter, the wall
+ * monitor, inlet and outlet) with an energy gauge, a front gauge, the force
+ * and moment on the walls and a point gauge of pressure added, and a
+ * two-phase tank with an inlet, the air vent and unresolved bubbles: every
+ * table of every table writer in plugins/ describes each column (ABI 2.2),
+ * gauge columns are at their scene positions, and the run's tables.json
+ * holds them, with no column left undescribed. */
+START_TEST(every_table_described)
+{
+    static const char *const expected[] = {
+        "free_surface_gauge", "section_gauge", "point_gauge", "wall_pressure", "wall_monitor",
+        "inlet",          "outlet",        "energy_gauge", "front_gauge",   "wall_force",
+        "air_vent",       "unresolved_bubbles"};
+    uint32_t found = 0;
+    char *path = test_config("hydraulic_jump_jonsson2016.yaml");
+    char *config = test_read_file(path);
+    ck_assert_ptr_nonnull(config);
+    free(path);
+    char *yaml = NULL;
+    /* the plugins are the scene's last section */
+    ck_assert_int_ge(asprintf(&yaml,
+                              "%s"
+                              "  energy_gauge: {interval: 0.1}\n"
+                              "  front_gauge: {interval: 0.1}\n"
+                              "  wall_force: {moments: true, moment_about: [1.1, 0], interval: 0.1}\n"
+                              "  pressure_points: {plugin: point_gauge, points: [[0.5, 0.01], "
+                              "[0.7, 0.015]], fields: \"velocity,pressure\", file: pressure.csv}\n",
+                              config),
+                     0);
+    free(config);
+    const char *sets[] = {"plugins.section_gauge.forces=true",
+                          "plugins.wall_pressure.time_constant=0.01"};
+    sluice_sim *sim = test_load("tables-jump", yaml, sets, 2);
+    free(yaml);
+    ck_assert_uint_eq(check_described(sim, expected, SLUICE_COUNT(expected), &found), 11);
+    /* free-surface columns at their positions (the foot of each vertical
+     * line: the domain's bottom), sections' momentum terms in N/m */
+    const sluice_table *eta = table_of(sim, "free_surface.csv");
+    ck_assert_ptr_nonnull(eta);
+    ck_assert_uint_eq(eta->column_count, 44);
+    ck_assert_str_eq(eta->columns[1].name, "eta_x0");
+    ck_assert_str_eq(eta->columns[1].unit, "m");
+    ck_assert(eta->columns[1].has_position && !eta->columns[0].has_position);
+    ck_assert_double_eq_tol(eta->columns[1].position[0], 0.025, 1e-12);
+    ck_assert_double_eq_tol(eta->columns[43].position[0], 1.075, 1e-12);
+    ck_assert_double_eq_tol(eta->columns[43].position[1], -0.1, 1e-12);
+    const sluice_table *sections = table_of(sim, "sections.csv");
+    ck_assert_uint_eq(sections->column_count, 1 + 11 * 6);
+    ck_assert_str_eq(sections->columns[5].name, "M_x0");
+    ck_assert_str_eq(sections->columns[5].unit, "N m^-1");
+    ck_assert_str_eq(sections->columns[4].unit, "1"); /* Fr_x0 */
+    const sluice_table *pressure = table_of(sim, "pressure.csv");
+    ck_assert_str_eq(pressure->columns[3].name, "p0_pressure");
+    ck_assert_str_eq(pressure->columns[3].unit, "Pa");
+    ck_assert_str_eq(pressure->columns[1].unit, "m s^-1");
+    ck_assert_double_eq_tol(pressure->columns[6].position[0], 0.7, 1e-12);
+    ck_assert_double_eq_tol(pressure->columns[6].position[1], 0.015, 1e-12);
+    const sluice_table *floor = table_of(sim, "bed_pressure.csv");
+    ck_assert_uint_eq(floor->column_count, 1 + 21 * 3);
+    ck_assert_str_eq(floor->columns[2].name, "bed005_filtered_Pa");
+    ck_assert_double_eq_tol(floor->columns[2].position[0], 0.05, 1e-9);
+    const sluice_table *forces = table_of(sim, "wall_forces.csv");
+    ck_assert_str_eq(forces->columns[1].unit, "N m^-1");
+    ck_assert_str_eq(forces->columns[4].unit, "N m m^-1"); /* Mz per metre of width */
+    /* the index, written when the run begins */
+    char *dir = test_scratch("tables-jump-run");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    char *index_path = NULL;
+    ck_assert_int_ge(asprintf(&index_path, "%s/tables.json", dir), 0);
+    char *index = test_read_file(index_path);
+    ck_assert_ptr_nonnull(index);
+    ck_assert_ptr_null(strstr(index, "null"));
+    ck_assert_ptr_nonnull(strstr(index, "\"format\": \"sluice-tables\""));
+    ck_assert_ptr_nonnull(
+        strstr(index, "{\"name\": \"eta_x0\", \"unit\": \"m\", \"description\": \"free-surface "
+                      "elevation (vertical coordinate) above the position\", \"position\": "
+                      "[0.025, -0.1]}"));
+    ck_assert_ptr_nonnull(strstr(index, "\"file\": \"wall_forces.csv\",\n      \"instance\": "
+                                        "\"wall_force\",\n      \"component\": \"wall_force\""));
+    free(index);
+    free(index_path);
+    free(dir);
+    sluice_sim_free(sim);
+
+    yaml = NULL;
+    ck_assert_int_ge(
+        asprintf(&yaml,
+                 "dimensions: 2\n"
+                 "particles: {spacing: 0.02, smoothing_length_ratio: 1.5, rest_density: 1000}\n"
+                 "time: {end: 0.1}\n"
+                 "domain: {min: [-0.1, -0.1], max: [0.7, 0.5]}\n"
+                 "geometry:\n"
+                 "  fluid:\n"
+                 "    - {shape: box, min: [0, 0], max: [0.6, 0.2]}\n"
+                 "    - {shape: box, min: [0, 0.2], max: [0.6, 0.4]}\n"
+                 "  walls:\n"
+                 "    - {shape: polyline, name: box, points: [[-0.1, 0], [0.6, 0], [0.6, 0.4], "
+                 "[0, 0.4], [0, 0.1]]}\n"
+                 "initial: {density: hydrostatic}\n"
+                 "plugins:\n"
+                 "  wendland_c2: {}\n"
+                 "  two_phase: {speed_of_sound: 10, background_pressure: 100, "
+                 "air_above: [[0, 0.2]]}\n"
+                 "  continuity: {form: volume}\n"
+                 "  pressure_gradient: {form: density_product}\n"
+                 "  gravity: {}\n"
+                 "  dbc: {}\n"
+                 "  time_step: {courant: 0.25}\n"
+                 "  symplectic: {}\n"
+                 "  inlet: {position: 0, depth: 0.1, submergence: 0.1, discharge: 0.04}\n"
+                 "  air_vent: {box_min: [0.4, 0.3], box_max: [0.6, 0.4]}\n"
+                 "  unresolved_bubbles: {}\n"),
+        0);
+    sim = test_load("tables-two-phase", yaml, NULL, 0);
+    free(yaml);
+    ck_assert_uint_eq(check_described(sim, expected, SLUICE_COUNT(expected), &found), 3);
+    const sluice_table *vent = table_of(sim, "air_vent.csv");
+    ck_assert_str_eq(vent->columns[5].name, "air_pressure_near");
+    ck_assert_str_eq(vent->columns[5].unit, "Pa");
+    sluice_sim_free(sim);
+    for (size_t k = 0; k < SLUICE_COUNT(expected); k++)
+        ck_assert_msg(found & (1u << k), "no table of '%s' was checked", expected[k]);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("core_api");
@@ -736,5 +898,9 @@ int main(void)
     tcase_add_test(c, restricted_reach_matches_brute_force_3d_periodic);
     tcase_add_test(c, reach_longer_than_periodic_side_refused);
     suite_add_tcase(s, c);
+    TCase *tables = tcase_create("table_index");
+    tcase_set_timeout(tables, 300);
+    tcase_add_test(tables, every_table_described);
+    suite_add_tcase(s, tables);
     return test_run_suite(s);
 }
