@@ -878,6 +878,52 @@ START_TEST(every_table_described)
 }
 END_TEST
 
+/* api->output->table_column refuses a column beyond the header and an
+ * empty unit, naming the table and the column; a described column is in
+ * tables.json, an undescribed one (a plugin built before ABI 2.2) has null
+ * unit and description. */
+START_TEST(table_column_refusals)
+{
+    char yaml[1024];
+    const char *scene = "dimensions: 2\n"
+                        "plugin_path: %s\n"
+                        "particles: {spacing: 0.1}\n"
+                        "time: {end: 0.1, max_step: 0.01}\n"
+                        "domain: {min: [0, 0], max: [1, 1]}\n"
+                        "geometry: {fluid: [{shape: box, min: [0, 0], max: [1, 0.5]}]}\n"
+                        "plugins: {wendland_c2: {}, tait: {speed_of_sound: 10}, "
+                        "table_probe: {%s}, symplectic: {}}\n";
+    snprintf(yaml, sizeof yaml, scene, fixture_dir(), "column: 3");
+    test_load_refused("table-column-beyond", yaml,
+                      "table 'table_probe.csv': column 3 described, and its header has 3 "
+                      "columns (0 to 2)");
+    snprintf(yaml, sizeof yaml, scene, fixture_dir(), "unit: ''");
+    test_load_refused("table-column-unitless", yaml,
+                      "table 'table_probe.csv': column 'a' needs a unit and a description");
+    snprintf(yaml, sizeof yaml, scene, fixture_dir(), "column: 2, unit: m s^-1");
+    sluice_sim *sim = test_load("table-column", yaml, NULL, 0);
+    char *dir = test_scratch("table-column-run");
+    ck_assert_int_eq(sluice_sim_begin(sim, dir), SLUICE_RUN_COMPLETE);
+    char *path = NULL;
+    ck_assert_int_ge(asprintf(&path, "%s/tables.json", dir), 0);
+    char *index = test_read_file(path);
+    ck_assert_ptr_nonnull(index);
+    ck_assert_ptr_nonnull(strstr(index, "{\"name\": \"time\", \"unit\": null, "
+                                        "\"description\": null},\n"
+                                        "        {\"name\": \"a\", \"unit\": null, "
+                                        "\"description\": null},\n"
+                                        "        {\"name\": \"b\", \"unit\": \"m s^-1\", "
+                                        "\"description\": \"a length\", \"position\": "
+                                        "[0.5, 0.25]}"));
+    ck_assert_ptr_nonnull(strstr(index, "\"component\": \"table_probe\",\n      "
+                                        "\"library\": \"api_probe\""));
+    free(index);
+    free(path);
+    free(dir);
+    sluice_sim_free(sim);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("core_api");
@@ -901,6 +947,7 @@ int main(void)
     TCase *tables = tcase_create("table_index");
     tcase_set_timeout(tables, 300);
     tcase_add_test(tables, every_table_described);
+    tcase_add_test(tables, table_column_refusals);
     suite_add_tcase(s, tables);
     return test_run_suite(s);
 }
