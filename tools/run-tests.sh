@@ -22,6 +22,8 @@ if [ -z "$missing" ]; then
     python3 -c 'import jsonschema, yaml' 2>/dev/null || missing=yes
     # libFuzzer's runtime (the short fuzz runs at the end)
     [ -f "$(clang -print-file-name=libclang_rt.fuzzer-x86_64.a 2>/dev/null)" ] || missing=yes
+    # the Python package's test (Debian's python3, the one meson runs with)
+    /usr/bin/python3 -c 'import numpy, h5py, yaml, matplotlib' 2>/dev/null || missing=yes
 fi
 if [ -n "$missing" ]; then
     if [ "$(id -u)" != 0 ]; then
@@ -32,7 +34,8 @@ if [ -n "$missing" ]; then
     apt-get update -qq
     apt-get install -y -qq --no-install-recommends build-essential meson ninja-build \
         pkg-config libyaml-dev libhdf5-dev check clang libclang-rt-14-dev libopenmpi-dev \
-        openmpi-bin libhdf5-openmpi-dev gnuplot-nox python3-jsonschema python3-yaml >/dev/null
+        openmpi-bin libhdf5-openmpi-dev gnuplot-nox python3-jsonschema python3-yaml \
+        python3-numpy python3-h5py python3-matplotlib >/dev/null
 fi
 
 jobs=$(nproc 2>/dev/null || echo 2)
