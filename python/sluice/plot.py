@@ -109,7 +109,7 @@ def particles(snapshot, field, component=None, kind="fluid", ax=None, size=None,
     ax = _axes(ax, (9, 4))
     vertical = 2 if position.shape[1] == 3 else 1
     if size is None:
-        size = max(0.5, min(20.0, 4e4 / max(len(values), 1)))
+        size = max(0.3, min(8.0, 2e4 / max(len(values), 1)))
     drawn = ax.scatter(position[:, 0], position[:, vertical], c=values, s=size, cmap=cmap,
                        linewidths=0)
     ax.set_aspect("equal")
