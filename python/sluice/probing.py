@@ -5,8 +5,8 @@ program's `probe` sub-command:
                  [--times all|last|T1,T2,...]
 
 which prints a CSV `time,point,x,y[,z],<field columns>,support` (vectors as
-NAME_x, NAME_y[, NAME_z]; support the kernel sum sum_j V_j W, 0 outside the
-fluid)."""
+NAME_x, NAME_y[, NAME_z], other multi-component fields NAME_0, NAME_1, ...;
+support the kernel sum sum_j V_j W, 0 outside the fluid)."""
 
 import io
 import os
@@ -87,8 +87,9 @@ def _column_field(name, fields):
     for field in fields:
         if name == field:
             return field, None
-        if name.startswith(field + "_") and name[len(field) + 1:] in ("x", "y", "z"):
-            return field, name[len(field) + 1:]
+        suffix = name[len(field) + 1:]
+        if name.startswith(field + "_") and (suffix in ("x", "y", "z") or suffix.isdigit()):
+            return field, suffix
     return None, None
 
 

@@ -19,10 +19,12 @@ built sluice program (unittest; meson test `python`).
    scene's (and the pressure sensors' are the centres in
    bed_pressure_sensors.csv); the plots and docs/examples/free_surface.py
    write PNG files.
- - run.probe against a stand-in for `sluice probe` (a script printing the
-   sub-command's CSV format; the real sub-command is not part of this
-   branch): the command line it is given, the table parsed from its
-   output, the units taken from the snapshots, a failure's message.
+ - run.probe through the built `sluice probe` at the tank's gauge points
+   at t = 0 (the point gauge's values to 10 digits, hydrostatic within the
+   tolerance above), and against a stand-in script printing the
+   sub-command's CSV format: the command line it is given, the table parsed
+   from its output, the units taken from the snapshots, a failure's
+   message.
  - A run written before tables.json existed loads with a warning and
    header-only columns.
 
@@ -201,6 +203,29 @@ class StillTank(unittest.TestCase):
         surface = self.result.table("free_surface")
         for column in surface.select(unit="m", positioned=True):
             self.assertLess(abs(column[0] - H), DX / 4)
+
+    def test_probe(self):
+        # `sluice probe` at the point gauge's points from the t = 0 snapshot:
+        # the gauge's rows to their 10 digits (the same point pass), the
+        # hydrostatic pressure as above, inside the fluid
+        gauge = self.result.plugin("point_gauge")["points"]
+        probed = self.result.probe(gauge, ["pressure", "velocity"], times=0, program=PROGRAM)
+        self.assertEqual(probed.names, ["time", "point", "x", "y", "pressure", "velocity_x",
+                                        "velocity_y", "support"])
+        self.assertEqual(probed["pressure"].unit, "Pa")
+        self.assertEqual(probed["velocity_y"].unit, "m s^-1")
+        np.testing.assert_array_equal(probed["point"].values, [0, 1])
+        np.testing.assert_array_equal(probed.time, [0, 0])
+        points = self.result.table("points")
+        B = SPEED_OF_SOUND ** 2 * RHO0 / 7
+        tolerance = RHO0 * G * 2 * 1.5 * DX / (7 * B)
+        for k, point in enumerate(gauge):
+            self.assertEqual((probed["x"][k], probed["y"][k]), tuple(point))
+            self.assertAlmostEqual(probed["pressure"][k] / points["p%d_pressure" % k][0], 1,
+                                   delta=1e-9)
+            self.assertLess(abs(probed["pressure"][k] / (RHO0 * G * (H - point[1])) - 1),
+                            tolerance)
+            self.assertGreater(probed["support"][k], 0.9)
 
     def test_restart_keeps_the_index(self):
         # a copy of the run, restarted from its first checkpoint
