@@ -189,7 +189,7 @@ static void check_outputs(const char *dir, scan *totals, const char *context)
             ck_assert_msg(index_whole(dir, full, why, sizeof why), "%s: %s %s", context, full,
                           why);
             totals->indexes++;
-        } else if (strcmp(name, "run.json") == 0) {
+        } else if (strcmp(name, "run.json") == 0 || strcmp(name, "tables.json") == 0) {
             char *text = test_read_file(full);
             ck_assert_ptr_nonnull(text);
             size_t n = strlen(text);
