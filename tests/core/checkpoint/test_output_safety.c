@@ -254,12 +254,14 @@ START_TEST(killed_runs_leave_readable_outputs)
      * run. On a slow machine (a sanitizer build, other work) fewer outputs
      * are written before the kills: more runs follow, killed later each
      * time, until the campaign has checked more snapshots than it killed
-     * runs (at most as many again). */
+     * runs and tables in half as many (at most as many runs again). */
     const char *requested = getenv("SLUICE_KILL_COUNT"); /* a longer campaign: docs/reliability.md */
     const int kills = requested && atoi(requested) > 0 ? atoi(requested) : 24;
     scan totals = {0};
     int finished_before_kill = 0, runs = 0;
-    for (int k = 0; k < 2 * kills && (k < kills || totals.snapshots <= kills); k++) {
+    for (int k = 0; k < 2 * kills &&
+                    (k < kills || totals.snapshots <= kills || totals.tables <= kills / 2);
+         k++) {
         char *out = NULL;
         ck_assert_int_ge(asprintf(&out, "%s/run%02d", scratch, k), 0);
         const long delay_ms =
