@@ -243,9 +243,9 @@ END_TEST
 /* The installed tree on its own (docs/install.md): everything installed, then
  * with an environment that names nothing but the installed programs (no
  * SLUICE_PLUGIN_PATH, no build directory, run outside the source tree):
- * check and run the installed default scene briefly, inspect, the help of
- * sluice-analyze, a study's dry run, pkg-config sluice. The run's plugins must
- * come from the installed tree. */
+ * check every installed scene, run the default one briefly and measure it,
+ * inspect, the help of sluice-analyze, two studies' dry runs, pkg-config
+ * sluice. The run's plugins must come from the installed tree. */
 static const char installed_script[] =
     "set -eu\n"
     "src=$1 stage=$2 version=$3\n"
@@ -271,22 +271,27 @@ static const char installed_script[] =
     "for r in $(grep -ho '{study_dir}/[^ \"]*' *.yaml | sort -u) "
     "$(grep -ho 'scene: *\\.\\./[^ ,}]*' *.yaml | sed 's/scene: *//' | sort -u); do\n"
     "  test -e \"${r#\\{study_dir\\}/}\" || { echo \"unresolved in studies: $r\"; exit 1; }; done\n"
+    /* the installed scenes need no plugin_path of the source tree's */
+    "if grep -l '^plugin_path:' \"$data\"/configs/*.yaml; then\n"
+    "  echo 'an installed scene sets plugin_path'; exit 1; fi\n"
     "cd \"$stage/..\"\n"
     "pc=$(dirname \"$(find \"$stage\" -name sluice.pc)\")\n"
     "exec env -i PATH=\"$bin:/usr/bin:/bin\" HOME=\"$PWD\" PKG_CONFIG_PATH=\"$pc\" "
     "OMP_NUM_THREADS=2 sh -eu -c '\n"
     "  data=$1 version=$2 stage=$3\n"
-    "  sluice check \"$data/configs/hydraulic_jump_jonsson2016.yaml\"\n"
+    "  for scene in \"$data\"/configs/*.yaml; do sluice check \"$scene\" >/dev/null; done\n"
     "  sluice run \"$data/configs/hydraulic_jump_jonsson2016.yaml\" --set time.end=0.02 "
     "--out run\n"
     "  test -s run/sections.csv && test -s run/run.json\n"
     "  if grep \"\\\"path\\\": \" run/run.json | grep -v \"\\\"$stage/\"; then\n"
     "    echo \"a plugin of the run is not from the installed tree\"; exit 1; fi\n"
-    "  sluice inspect | grep -q section_gauge\n"
-    "  sluice-analyze --help | grep -q conjugate\n"
-    "  sluice-analyze conjugate run --x 1.0 --no-plot | grep -q d2_Belanger\n"
-    "  sluice study \"$data/configs/studies/loads_still_tank.yaml\" --dry-run --out study "
-    "| grep -q \"runs into study/runs\"\n"
+    "  sluice inspect >inspect.txt && grep -q section_gauge inspect.txt\n"
+    "  sluice-analyze --help >help.txt && grep -q conjugate help.txt\n"
+    "  sluice-analyze conjugate run --x 1.0 --no-plot >conjugate.txt\n"
+    "  grep -q d2_Belanger conjugate.txt\n"
+    "  sluice study \"$data/configs/studies/dam_break_martin_moyce.yaml\" "
+    "\"$data/configs/studies/abrupt_drop.yaml\" --dry-run --out study >study.txt\n"
+    "  grep -q external study.txt\n"
     "  test \"$(pkg-config --modversion sluice)\" = \"$version\"\n"
     "  test -d \"$(pkg-config --variable=plugindir sluice)\"\n"
     "  test -f \"$(pkg-config --variable=includedir sluice)/sluice/plugin_util.h\"\n"
