@@ -686,7 +686,6 @@ int main(int argc, char **argv)
         usage(stdout);
         return 0;
     }
-    fprintf(stderr, "sluice: error: unknown command '%s'\n", command);
-    usage(stderr);
+    fprintf(stderr, "sluice: error: unknown command '%s' ('sluice help' lists them)\n", command);
     return 2;
 }

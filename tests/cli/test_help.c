@@ -190,6 +190,11 @@ START_TEST(sluice_commands)
     char *output = NULL;
     ck_assert_int_eq(program("sluice", "help no-such-command", 1, &output), 2);
     free(output);
+    ck_assert_int_eq(program("sluice", "no-such-command", 1, &output), 2);
+    ck_assert_msg(strstr(output, "unknown command") &&
+                      strchr(output, '\n') == strrchr(output, '\n'),
+                  "sluice no-such-command: %s", output);
+    free(output);
     ck_assert_int_eq(program("sluice", "version extra", 1, &output), 2);
     free(output);
     free_list(options);

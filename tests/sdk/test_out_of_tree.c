@@ -287,6 +287,8 @@ static const char installed_script[] =
     "    echo \"a plugin of the run is not from the installed tree\"; exit 1; fi\n"
     "  sluice inspect >inspect.txt && grep -q section_gauge inspect.txt\n"
     "  sluice-analyze --help >help.txt && grep -q conjugate help.txt\n"
+    "  sluice run --help >help.txt && grep -q -e --out help.txt\n"
+    "  sluice study --help >help.txt && grep -q -e --dry-run help.txt\n"
     "  sluice-analyze conjugate run --x 1.0 --no-plot >conjugate.txt\n"
     "  grep -q d2_Belanger conjugate.txt\n"
     "  sluice study \"$data/configs/studies/dam_break_martin_moyce.yaml\" "
