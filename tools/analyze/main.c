@@ -2954,7 +2954,9 @@ static const struct command {
      "minus --bed) against Belanger's; seed 000's statistics A and P.\n"
      "  --x X                 the position (m)\n" INFLOW_HELP WINDOW_HELP
      "  --bed B               the bed elevation under the free-surface gauge (m, default 0)\n"
-     SURFACE_HELP "  --tolerance 1e-6      position matching (m)\n" TIME_COLUMN_HELP OUT_HELP},
+     "  --positions a,b,..    the section (or free-surface) gauge's positions instead of\n"
+     "                        RUN/scene.resolved.yaml\n"
+     "  --tolerance 1e-6      position matching (m)\n" TIME_COLUMN_HELP OUT_HELP},
     {"toe", cmd_toe,
      "usage: sluice-analyze toe RUN [--d1 D --v1 V] [--fraction 0.5] [--from T0 --to T1]\n"
      "The jump toe x1(t) from the free-surface profiles: the first position where the\n"
