@@ -266,6 +266,11 @@ static const char installed_script[] =
     "same \"$src/tools/plugin-template\" \"$data/tools/plugin-template\"\n"
     "same \"$src/docs\" \"$doc\"\n"
     "test -x \"$data/tools/peers/pysph-dam-break\" || { echo \"no tools/peers\"; exit 1; }\n"
+    /* the man pages, with every command's section */
+    "man=$prefix/share/man/man1\n"
+    "grep -q '^\\.SH \"sluice run\"' \"$man/sluice.1\" && grep -q '^\\.SH \"sluice study\"' "
+    "\"$man/sluice.1\" && grep -q 'analyze conjugate\"' \"$man/sluice-analyze.1\" && "
+    "grep -q dry \"$man/sluice-study.1\" || { echo \"man pages missing\"; exit 1; }\n"
     /* every relative reference of the installed studies resolves */
     "cd \"$data/configs/studies\"\n"
     "for r in $(grep -ho '{study_dir}/[^ \"]*' *.yaml | sort -u) "
