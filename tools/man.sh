@@ -10,7 +10,8 @@
 set -eu
 program=$1 name=$2 version=$3 summary=$4 output=$5
 
-# the commands the program's usage lists (none for sluice-study)
+# the commands the program's usage lists (none for sluice-study and
+# sluice-probe)
 commands() {
     case $name in
     sluice)
@@ -39,8 +40,8 @@ upper=$(printf '%s' "$name" | tr 'a-z-' 'A-Z-')
         printf '.fi\n'
     done
     printf '.SH "SEE ALSO"\n'
-    printf 'sluice(1), sluice\\-analyze(1), sluice\\-study(1); the documentation in\n'
-    printf 'share/doc/sluice under the prefix (install.md, scene\\-format.md,\n'
-    printf 'analysis.md, studies.md).\n'
+    printf 'sluice(1), sluice\\-analyze(1), sluice\\-study(1), sluice\\-probe(1); the\n'
+    printf 'documentation in share/doc/sluice under the prefix (install.md,\n'
+    printf 'scene\\-format.md, analysis.md, studies.md, probe.md).\n'
 } >"$output.tmp"
 mv "$output.tmp" "$output"

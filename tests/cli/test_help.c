@@ -1,10 +1,11 @@
-/* The command lines' help: every command of sluice, sluice-analyze and
- * sluice-study prints its usage to stdout and exits 0 on --help and -h (and
- * `help COMMAND`), and the usage names every option its parser takes:
- *  - sluice and sluice-study: each option string of the program's source
- *    (core/cli/main.c, tools/study/main.c) that a command does not refuse as
- *    unknown is in that command's usage, and each option its usage names is
- *    taken;
+/* The command lines' help: every command of sluice, sluice-analyze,
+ * sluice-study and sluice-probe prints its usage to stdout and exits 0 on
+ * --help and -h (and `help COMMAND`), and the usage names every option its
+ * parser takes:
+ *  - sluice, sluice-study and sluice-probe: each option string of the
+ *    program's source (core/cli/main.c, tools/study/main.c,
+ *    tools/probe/probe.c) that a command does not refuse as unknown is in
+ *    that command's usage, and each option its usage names is taken;
  *  - sluice-analyze: each option of its table is in `sluice-analyze --help`,
  *    each command of its table has a usage of its own that names only options
  *    of the table.
@@ -171,7 +172,7 @@ static void check_unknown_option(const char *name, const char *command)
 START_TEST(sluice_commands)
 {
     char **options = source_options("core/cli/main.c");
-    const char *commands[] = {"run", "check", "inspect", "version"};
+    const char *commands[] = {"run", "check", "inspect", "version"}; /* study, probe: below */
     for (size_t k = 0; k < sizeof commands / sizeof *commands; k++) {
         char *usage = usage_of("sluice", "sluice", commands[k]);
         check_usage_against_parser("sluice", commands[k], usage, options);
@@ -197,6 +198,22 @@ START_TEST(sluice_commands)
     free(output);
     ck_assert_int_eq(program("sluice", "version extra", 1, &output), 2);
     free(output);
+    free_list(options);
+}
+END_TEST
+
+START_TEST(probe_command)
+{
+    char **options = source_options("tools/probe/probe.c");
+    /* sluice probe hands its arguments to sluice-probe: the same usage */
+    char *usage = usage_of("sluice", "sluice", "probe");
+    char *own = NULL;
+    ck_assert_int_eq(program("tools/sluice-probe", "--help", 0, &own), 0);
+    ck_assert_str_eq(usage, own);
+    check_usage_against_parser("tools/sluice-probe", "", usage, options);
+    check_unknown_option("sluice", "probe");
+    free(own);
+    free(usage);
     free_list(options);
 }
 END_TEST
@@ -286,6 +303,7 @@ int main(void)
     TCase *tc = tcase_create("help");
     tcase_add_test(tc, sluice_commands);
     tcase_add_test(tc, study_command);
+    tcase_add_test(tc, probe_command);
     tcase_add_test(tc, analyze_commands);
     suite_add_tcase(s, tc);
     return test_run_suite(s);

@@ -243,16 +243,16 @@ END_TEST
 /* The installed tree on its own (docs/install.md): everything installed, then
  * with an environment that names nothing but the installed programs (no
  * SLUICE_PLUGIN_PATH, no build directory, run outside the source tree):
- * check every installed scene, run the default one briefly and measure it,
- * inspect, the help of sluice-analyze, two studies' dry runs, pkg-config
- * sluice. The run's plugins must come from the installed tree. */
+ * check every installed scene, run the default one briefly, probe and
+ * measure it, inspect, the help of sluice-analyze, two studies' dry runs,
+ * pkg-config sluice. The run's plugins must come from the installed tree. */
 static const char installed_script[] =
     "set -eu\n"
     "src=$1 stage=$2 version=$3\n"
     "bin=$(dirname \"$(find \"$stage\" -path '*/bin/sluice' -type f)\")\n"
     "prefix=$(dirname \"$bin\")\n"
     "data=$prefix/share/sluice doc=$prefix/share/doc/sluice\n"
-    "for p in sluice sluice-analyze sluice-study; do\n"
+    "for p in sluice sluice-analyze sluice-study sluice-probe; do\n"
     "  test -x \"$bin/$p\" || { echo \"not installed: bin/$p\"; exit 1; }; done\n"
     "for h in \"$src\"/core/include/sluice/*.h; do\n"
     "  test -f \"$prefix/include/sluice/${h##*/}\" || { echo \"no header ${h##*/}\"; exit 1; }\n"
@@ -270,7 +270,8 @@ static const char installed_script[] =
     "man=$prefix/share/man/man1\n"
     "grep -q '^\\.SH \"sluice run\"' \"$man/sluice.1\" && grep -q '^\\.SH \"sluice study\"' "
     "\"$man/sluice.1\" && grep -q 'analyze conjugate\"' \"$man/sluice-analyze.1\" && "
-    "grep -q dry \"$man/sluice-study.1\" || { echo \"man pages missing\"; exit 1; }\n"
+    "grep -q dry \"$man/sluice-study.1\" && grep -q plane \"$man/sluice-probe.1\" || "
+    "{ echo \"man pages missing\"; exit 1; }\n"
     /* every relative reference of the installed studies resolves */
     "cd \"$data/configs/studies\"\n"
     "for r in $(grep -ho '{study_dir}/[^ \"]*' *.yaml | sort -u) "
@@ -294,6 +295,8 @@ static const char installed_script[] =
     "  sluice-analyze --help >help.txt && grep -q conjugate help.txt\n"
     "  sluice run --help >help.txt && grep -q -e --out help.txt\n"
     "  sluice study --help >help.txt && grep -q -e --dry-run help.txt\n"
+    "  sluice probe run --fields pressure --points 0.5,0.01 --times last --out probe.csv\n"
+    "  grep -q '^0.02,0,0.5,0.01,' probe.csv\n"
     "  sluice-analyze conjugate run --x 1.0 --no-plot >conjugate.txt\n"
     "  grep -q d2_Belanger conjugate.txt\n"
     "  sluice study \"$data/configs/studies/dam_break_martin_moyce.yaml\" "
