@@ -61,7 +61,7 @@ static void usage(FILE *out)
 }
 
 /* Each command's usage (`sluice COMMAND --help`, `sluice help COMMAND`): the
- * options its parser takes (tests/cli/test_help.c holds them to it).
+ * options its parser takes (tests/core/cli/test_help.c holds them to it).
  * `sluice study --help` and `sluice probe --help` are their tools' own. */
 static const struct command_usage {
     const char *name, *text;
@@ -85,9 +85,15 @@ static const struct command_usage {
      "                           plugins.tait.speed_of_sound=60 (repeatable)\n"
      "  -j, --threads N          OpenMP threads (at most 16 per processor)\n"
      "  --progress, --no-progress\n"
-     "                           the progress line on stderr (default: when stderr is a\n"
-     "                           terminal)\n"
-     "  -q, --quiet              no information messages (warnings and errors still)\n"
+     "                           progress on stderr is one line rewritten in place on a\n"
+     "                           terminal, else (a batch log) a line with a UTC timestamp\n"
+     "                           at the start, every --log-every S and at the end;\n"
+     "                           --progress forces the terminal's line, --no-progress\n"
+     "                           drops both\n"
+     "  --log-every S            seconds of wall time between a batch log's lines\n"
+     "                           (default 10)\n"
+     "  -q, --quiet              only warnings and failures\n"
+     "  -v, --verbose            also the run's provenance and every plugin loaded\n"
      "  -h, --help               this text\n"
      "After the variant come the removals, the swaps, then the --set. Plugins are searched\n"
      "in the scene's plugin_path, SLUICE_PLUGIN_PATH, then next to the program (the build\n"
@@ -106,7 +112,8 @@ static const struct command_usage {
      "  --swap OLD=NEW           replace the plugin OLD by NEW with NEW's defaults\n"
      "  -s, --set KEY=VALUE      set a scene key by its dotted path (repeatable)\n"
      "  -j, --threads N          OpenMP threads for filling the scene\n"
-     "  -q, --quiet              accepted as for run (a check prints the same)\n"
+     "  -q, --quiet              no plugin notes while the scene loads\n"
+     "  -v, --verbose            accepted as for run (a check prints the same)\n"
      "  -h, --help               this text\n"
      "Exit status: 0 valid, 2 bad input (one file:line:column message per problem), 4\n"
      "other failure.\n"},
