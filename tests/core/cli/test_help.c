@@ -156,7 +156,7 @@ static void check_usage_against_parser(const char *name, const char *command, co
     }
 }
 
-/* An unknown option: one line on stderr, exit 2. */
+/* An unknown option: one line (on stderr), exit 2. */
 static void check_unknown_option(const char *name, const char *command)
 {
     char *args = NULL, *output = NULL;
@@ -186,6 +186,7 @@ START_TEST(sluice_commands)
     for (size_t k = 0; k < sizeof commands / sizeof *commands; k++)
         ck_assert_msg(names_option(usage, commands[k]), "sluice --help lacks %s", commands[k]);
     ck_assert_ptr_nonnull(strstr(usage, "sluice study"));
+    ck_assert_ptr_nonnull(strstr(usage, "sluice probe"));
     ck_assert_ptr_nonnull(strstr(usage, "sluice help COMMAND"));
     free(usage);
     char *output = NULL;
