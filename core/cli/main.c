@@ -119,9 +119,12 @@ static const struct command_usage {
      "other failure.\n"},
     {"inspect",
      "usage: sluice inspect [PLUGIN] [--markdown]\n"
+     "       sluice inspect --schema > sluice-scene.schema.json\n"
      "Lists the plugins found on the search path (SLUICE_PLUGIN_PATH, then next to the\n"
      "program), or one plugin's components, parameters and fields.\n"
      "  --markdown               the reference as Markdown (docs/plugins.md)\n"
+     "  --schema                 a JSON Schema (draft-07) of scene files, with the plugins\n"
+     "                           on the plugin path, for editors (docs/scene-format.md)\n"
      "  -h, --help               this text\n"},
     {"version",
      "usage: sluice version\n"
