@@ -1,4 +1,5 @@
-/* The sluice command line: run, check, inspect. */
+/* The sluice command line: run, check, inspect, study, version; `sluice help
+ * COMMAND` and `sluice COMMAND --help` print one command's usage. */
 #define _GNU_SOURCE
 #include <stdio.h>
 #include <stdlib.h>
@@ -31,6 +32,7 @@ static void usage(FILE *out)
             "  sluice study STUDY.yaml [--out DIR] [--jobs N] [--dry-run] [--summary]\n"
             "  sluice probe RUN --fields NAME[,...] (--points P | --line A;B --count N | ...)\n"
             "  sluice version\n"
+            "  sluice help COMMAND, sluice COMMAND --help: one command's options\n"
             "\n"
             "--set overrides any scene key by its dotted path, e.g. --set time.end=0.2 or\n"
             "--set plugins.tait.speed_of_sound=60. Plugins are searched in the scene's\n"
@@ -56,6 +58,95 @@ static void usage(FILE *out)
             "Exit status: 0 success, 2 bad input, 3 the run went unstable, 4 other failure (out\n"
             "of memory, a failed write),\n"
             "5 stopped by SIGINT/SIGTERM after a whole step (a checkpoint was written).\n");
+}
+
+/* Each command's usage (`sluice COMMAND --help`, `sluice help COMMAND`): the
+ * options its parser takes (tests/core/cli/test_help.c holds them to it).
+ * `sluice study --help` and `sluice probe --help` are their tools' own. */
+static const struct command_usage {
+    const char *name, *text;
+} command_usages[] = {
+    {"run",
+     "usage: sluice run SCENE.yaml --out DIR [OPTIONS]\n"
+     "Runs the scene and writes its outputs into DIR: scene.resolved.yaml, HDF5 snapshots\n"
+     "with an XDMF index, gauge CSV files, checkpoints and run.json.\n"
+     "  -o, --out DIR            the output directory (required); one that holds another\n"
+     "                           run is refused, as is one that a live run writes to\n"
+     "                           (DIR/.sluice.lock)\n"
+     "  --overwrite              replace the run in DIR\n"
+     "  --restart CHECKPOINT.h5  continue the scene's run from a checkpoint\n"
+     "                           (DIR/checkpoint_*.h5)\n"
+     "  --variant NAME           apply one of the scene's named variants\n"
+     "                           ('sluice check SCENE' lists them)\n"
+     "  --remove PATH            take a key out, e.g. plugins.xsph (repeatable)\n"
+     "  --swap OLD=NEW           replace the plugin OLD by NEW with NEW's defaults; the\n"
+     "                           walls OLD handled follow it, e.g. dbc=mdbc (repeatable)\n"
+     "  -s, --set KEY=VALUE      set a scene key by its dotted path, e.g. time.end=0.2 or\n"
+     "                           plugins.tait.speed_of_sound=60 (repeatable)\n"
+     "  -j, --threads N          OpenMP threads (at most 16 per processor)\n"
+     "  --progress, --no-progress\n"
+     "                           progress on stderr is one line rewritten in place on a\n"
+     "                           terminal, else (a batch log) a line with a UTC timestamp\n"
+     "                           at the start, every --log-every S and at the end;\n"
+     "                           --progress forces the terminal's line, --no-progress\n"
+     "                           drops both\n"
+     "  --log-every S            seconds of wall time between a batch log's lines\n"
+     "                           (default 10)\n"
+     "  -q, --quiet              only warnings and failures\n"
+     "  -v, --verbose            also the run's provenance and every plugin loaded\n"
+     "  -h, --help               this text\n"
+     "After the variant come the removals, the swaps, then the --set. Plugins are searched\n"
+     "in the scene's plugin_path, SLUICE_PLUGIN_PATH, then next to the program (the build\n"
+     "tree's plugins/, an install's lib/.../sluice/plugins).\n"
+     "Exit status: 0 success, 2 bad input, 3 the run went unstable, 4 other failure (out\n"
+     "of memory, a failed write), 5 stopped by SIGINT/SIGTERM after a whole step (a\n"
+     "checkpoint was written: continue with --restart).\n"},
+    {"check",
+     "usage: sluice check SCENE.yaml [OPTIONS]\n"
+     "Validates the scene without running it: its particle counts, end time, plugin\n"
+     "instances and variants.\n"
+     "  --schedule               also print the evaluation schedule: prepare, passes in\n"
+     "                           order, on-demand terms, integrated fields\n"
+     "  --variant NAME           check one of the scene's named variants\n"
+     "  --remove PATH            take a key out, e.g. plugins.xsph (repeatable)\n"
+     "  --swap OLD=NEW           replace the plugin OLD by NEW with NEW's defaults\n"
+     "  -s, --set KEY=VALUE      set a scene key by its dotted path (repeatable)\n"
+     "  -j, --threads N          OpenMP threads for filling the scene\n"
+     "  -q, --quiet              no plugin notes while the scene loads\n"
+     "  -v, --verbose            accepted as for run (a check prints the same)\n"
+     "  -h, --help               this text\n"
+     "Exit status: 0 valid, 2 bad input (one file:line:column message per problem), 4\n"
+     "other failure.\n"},
+    {"inspect",
+     "usage: sluice inspect [PLUGIN] [--markdown]\n"
+     "       sluice inspect --schema > sluice-scene.schema.json\n"
+     "Lists the plugins found on the search path (SLUICE_PLUGIN_PATH, then next to the\n"
+     "program), or one plugin's components, parameters and fields.\n"
+     "  --markdown               the reference as Markdown (docs/plugins.md)\n"
+     "  --schema                 a JSON Schema (draft-07) of scene files, with the plugins\n"
+     "                           on the plugin path, for editors (docs/scene-format.md)\n"
+     "  -h, --help               this text\n"},
+    {"version",
+     "usage: sluice version\n"
+     "Prints the program's version and the plugin ABI it loads.\n"
+     "  -h, --help               this text\n"},
+};
+
+static const char *command_usage(const char *name)
+{
+    for (size_t i = 0; i < sizeof command_usages / sizeof *command_usages; i++)
+        if (strcmp(command_usages[i].name, name) == 0)
+            return command_usages[i].text;
+    return NULL;
+}
+
+/* -h or --help among a command's arguments */
+static int asks_for_help(int argc, char **argv)
+{
+    for (int i = 2; i < argc; i++)
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0)
+            return 1;
+    return 0;
 }
 
 typedef struct arguments {
@@ -179,7 +270,8 @@ static int parse(int argc, char **argv, int first, arguments *a, int allow_out)
         } else if (!allow_out && strcmp(arg, "--schedule") == 0) {
             a->schedule = 1;
         } else if (arg[0] == '-' && arg[1]) {
-            fprintf(stderr, "sluice: error: unknown option '%s'\n", arg);
+            fprintf(stderr, "sluice: error: unknown option '%s' ('sluice %s --help' lists them)\n",
+                    arg, argv[1]);
             return -1;
         } else if (!a->scene) {
             a->scene = arg;
@@ -301,7 +393,6 @@ static int command_run(int argc, char **argv, int across_ranks)
     memset(&a, 0, sizeof a);
     if (parse(argc, argv, 2, &a, 1) != 0) {
         free_arguments(&a);
-        usage(stderr);
         return 2;
     }
     if (!a.out) {
@@ -418,7 +509,6 @@ static int command_check(int argc, char **argv)
     memset(&a, 0, sizeof a);
     if (parse(argc, argv, 2, &a, 0) != 0) {
         free_arguments(&a);
-        usage(stderr);
         return 2;
     }
     int resources = 0;
@@ -476,7 +566,9 @@ static int command_inspect(int argc, char **argv)
         else if (strcmp(argv[i], "--schema") == 0)
             schema = 1;
         else if (argv[i][0] == '-') {
-            fprintf(stderr, "sluice: error: unknown option '%s'\n", argv[i]);
+            fprintf(stderr,
+                    "sluice: error: unknown option '%s' ('sluice inspect --help' lists them)\n",
+                    argv[i]);
             return 2;
         } else if (!plugin)
             plugin = argv[i];
@@ -526,6 +618,31 @@ static int command_tool(char **argv, const char *tool)
     return 4;
 }
 
+/* `sluice help [COMMAND]`: the usage, or one command's. */
+static int command_help(int argc, char **argv)
+{
+    if (argc < 3) {
+        usage(stdout);
+        return 0;
+    }
+    if (argc > 3) {
+        fprintf(stderr, "sluice: error: 'sluice help' takes one command\n");
+        return 2;
+    }
+    if (strcmp(argv[2], "study") == 0 || strcmp(argv[2], "probe") == 0) {
+        char *tool_help[] = {argv[0], argv[2], "--help", NULL};
+        return command_tool(tool_help, argv[2]);
+    }
+    const char *text = command_usage(argv[2]);
+    if (!text) {
+        fprintf(stderr, "sluice: error: unknown command '%s' ('sluice help' lists them)\n",
+                argv[2]);
+        return 2;
+    }
+    fputs(text, stdout);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     sluice_cli_set_wait_policy(argc, argv);
@@ -534,6 +651,13 @@ int main(int argc, char **argv)
         return 2;
     }
     const char *command = argv[1];
+    if (strcmp(command, "help") == 0)
+        return command_help(argc, argv);
+    /* `sluice COMMAND --help` (sluice-study and sluice-probe answer their own) */
+    if (command_usage(command) && asks_for_help(argc, argv)) {
+        fputs(command_usage(command), stdout);
+        return 0;
+    }
     if (strcmp(command, "run") == 0) {
 #ifdef SLUICE_MPI
         /* MPI only under a launcher (mpiexec sets these): a plain `sluice
@@ -559,15 +683,19 @@ int main(int argc, char **argv)
     if (strcmp(command, "study") == 0 || strcmp(command, "probe") == 0)
         return command_tool(argv, command);
     if (strcmp(command, "version") == 0 || strcmp(command, "--version") == 0) {
+        if (argc > 2) {
+            fprintf(stderr, "sluice: error: 'sluice version' takes no arguments ('%s')\n",
+                    argv[2]);
+            return 2;
+        }
         printf("sluice %s (plugin ABI %d.%d)\n", SLUICE_VERSION, SLUICE_ABI_MAJOR,
                SLUICE_ABI_MINOR);
         return 0;
     }
-    if (strcmp(command, "help") == 0 || strcmp(command, "--help") == 0 || strcmp(command, "-h") == 0) {
+    if (strcmp(command, "--help") == 0 || strcmp(command, "-h") == 0) {
         usage(stdout);
         return 0;
     }
-    fprintf(stderr, "sluice: error: unknown command '%s'\n", command);
-    usage(stderr);
+    fprintf(stderr, "sluice: error: unknown command '%s' ('sluice help' lists them)\n", command);
     return 2;
 }

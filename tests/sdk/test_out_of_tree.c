@@ -13,14 +13,14 @@
  *    mid-step; read at the step's start it would be first order. */
 #include <math.h>
 
+#include "build_config.h"
 #include "sim_util.h"
 
-/* Installs Sluice into DIR/stage (DIR a new scratch directory) and builds the
- * plugins of `source` (a directory of the source tree with a Makefile) into
- * DIR with pkg-config sluice from the stage alone. */
-static char *stage_and_build(const char *tag, const char *source)
+/* Installs Sluice into DIR/stage, DIR a new scratch directory. */
+static char *stage(const char *tag)
 {
     char *dir = test_scratch(tag), *command = NULL;
+    ck_assert_ptr_nonnull(dir);
     ck_assert_int_ge(asprintf(&command,
                               "meson install -C %s --no-rebuild --quiet --destdir %s/stage "
                               ">%s/install.log 2>&1",
@@ -28,6 +28,15 @@ static char *stage_and_build(const char *tag, const char *source)
                      0);
     ck_assert_msg(system(command) == 0, "meson install failed: see %s/install.log", dir);
     free(command);
+    return dir;
+}
+
+/* Installs Sluice into DIR/stage (DIR a new scratch directory) and builds the
+ * plugins of `source` (a directory of the source tree with a Makefile) into
+ * DIR with pkg-config sluice from the stage alone. */
+static char *stage_and_build(const char *tag, const char *source)
+{
+    char *dir = stage(tag), *command = NULL;
     ck_assert_int_ge(asprintf(&command,
                               "pc=$(dirname $(find %s/stage -name sluice.pc | head -n 1)) && "
                               "PKG_CONFIG_PATH=$pc make -s -C %s/%s OUT=%s >%s/make.log 2>&1",
@@ -231,6 +240,88 @@ START_TEST(body_force_reads_the_stage_time)
 }
 END_TEST
 
+/* The installed tree on its own (docs/install.md): everything installed, then
+ * with an environment that names nothing but the installed programs (no
+ * SLUICE_PLUGIN_PATH, no build directory, run outside the source tree):
+ * check every installed scene, run the default one briefly, probe and
+ * measure it, inspect, the help of sluice-analyze, two studies' dry runs,
+ * pkg-config sluice. The run's plugins must come from the installed tree. */
+static const char installed_script[] =
+    "set -eu\n"
+    "src=$1 stage=$2 version=$3\n"
+    "bin=$(dirname \"$(find \"$stage\" -path '*/bin/sluice' -type f)\")\n"
+    "prefix=$(dirname \"$bin\")\n"
+    "data=$prefix/share/sluice doc=$prefix/share/doc/sluice\n"
+    "for p in sluice sluice-analyze sluice-study sluice-probe; do\n"
+    "  test -x \"$bin/$p\" || { echo \"not installed: bin/$p\"; exit 1; }; done\n"
+    "for h in \"$src\"/core/include/sluice/*.h; do\n"
+    "  test -f \"$prefix/include/sluice/${h##*/}\" || { echo \"no header ${h##*/}\"; exit 1; }\n"
+    "done\n"
+    /* every file of configs/, the reference data, docs/ and the template */
+    "same() { (cd \"$1\" && find . -type f | sort) >\"$stage/a\"; "
+    "(cd \"$2\" && find . -type f | sort) >\"$stage/b\"; "
+    "diff \"$stage/a\" \"$stage/b\" || { echo \"$2 differs from $1\"; exit 1; }; }\n"
+    "same \"$src/configs\" \"$data/configs\"\n"
+    "same \"$src/tests/scenes/data\" \"$data/tests/scenes/data\"\n"
+    "same \"$src/tools/plugin-template\" \"$data/tools/plugin-template\"\n"
+    "same \"$src/docs\" \"$doc\"\n"
+    "test -x \"$data/tools/peers/pysph-dam-break\" || { echo \"no tools/peers\"; exit 1; }\n"
+    /* the man pages, with every command's section */
+    "man=$prefix/share/man/man1\n"
+    "grep -q '^\\.SH \"sluice run\"' \"$man/sluice.1\" && grep -q '^\\.SH \"sluice study\"' "
+    "\"$man/sluice.1\" && grep -q 'analyze conjugate\"' \"$man/sluice-analyze.1\" && "
+    "grep -q dry \"$man/sluice-study.1\" && grep -q plane \"$man/sluice-probe.1\" || "
+    "{ echo \"man pages missing\"; exit 1; }\n"
+    /* every relative reference of the installed studies resolves */
+    "cd \"$data/configs/studies\"\n"
+    "for r in $(grep -ho '{study_dir}/[^ \"]*' *.yaml | sort -u) "
+    "$(grep -ho 'scene: *\\.\\./[^ ,}]*' *.yaml | sed 's/scene: *//' | sort -u); do\n"
+    "  test -e \"${r#\\{study_dir\\}/}\" || { echo \"unresolved in studies: $r\"; exit 1; }; done\n"
+    /* the installed scenes need no plugin_path of the source tree's */
+    "if grep -l '^plugin_path:' \"$data\"/configs/*.yaml; then\n"
+    "  echo 'an installed scene sets plugin_path'; exit 1; fi\n"
+    "cd \"$stage/..\"\n"
+    "pc=$(dirname \"$(find \"$stage\" -name sluice.pc)\")\n"
+    "exec env -i PATH=\"$bin:/usr/bin:/bin\" HOME=\"$PWD\" PKG_CONFIG_PATH=\"$pc\" "
+    "OMP_NUM_THREADS=2 sh -eu -c '\n"
+    "  data=$1 version=$2 stage=$3\n"
+    "  for scene in \"$data\"/configs/*.yaml; do sluice check \"$scene\" >/dev/null; done\n"
+    "  sluice run \"$data/configs/hydraulic_jump_jonsson2016.yaml\" --set time.end=0.02 "
+    "--out run\n"
+    "  test -s run/sections.csv && test -s run/run.json\n"
+    "  if grep \"\\\"path\\\": \" run/run.json | grep -v \"\\\"$stage/\"; then\n"
+    "    echo \"a plugin of the run is not from the installed tree\"; exit 1; fi\n"
+    "  sluice inspect >inspect.txt && grep -q section_gauge inspect.txt\n"
+    "  sluice-analyze --help >help.txt && grep -q conjugate help.txt\n"
+    "  sluice run --help >help.txt && grep -q -e --out help.txt\n"
+    "  sluice study --help >help.txt && grep -q -e --dry-run help.txt\n"
+    "  sluice probe run --fields pressure --points 0.5,0.01 --times last --out probe.csv\n"
+    "  grep -q '^0.02,0,0.5,0.01,' probe.csv\n"
+    "  sluice-analyze conjugate run --x 1.0 --no-plot >conjugate.txt\n"
+    "  grep -q d2_Belanger conjugate.txt\n"
+    "  sluice study \"$data/configs/studies/dam_break_martin_moyce.yaml\" "
+    "\"$data/configs/studies/abrupt_drop.yaml\" --dry-run --out study >study.txt\n"
+    "  grep -q external study.txt\n"
+    "  test \"$(pkg-config --modversion sluice)\" = \"$version\"\n"
+    "  test -d \"$(pkg-config --variable=plugindir sluice)\"\n"
+    "  test -f \"$(pkg-config --variable=includedir sluice)/sluice/plugin_util.h\"\n"
+    "' sh \"$data\" \"$version\" \"$stage\"\n";
+
+START_TEST(installed_tree_runs_alone)
+{
+    char *dir = stage("installed"), *command = NULL;
+    char *script = test_write_file(dir, "installed.sh", installed_script);
+    ck_assert_ptr_nonnull(script);
+    ck_assert_int_ge(asprintf(&command, "sh %s %s %s/stage %s >%s/installed.log 2>&1", script,
+                              test_source_dir(), dir, SLUICE_VERSION, dir),
+                     0);
+    ck_assert_msg(system(command) == 0, "the installed tree failed: see %s/installed.log", dir);
+    free(command);
+    free(script);
+    free(dir);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("out of tree");
@@ -240,5 +331,9 @@ int main(void)
     tcase_add_test(tc, background_eos_hydrostatic);
     tcase_add_test(tc, body_force_reads_the_stage_time);
     suite_add_tcase(s, tc);
+    TCase *installed = tcase_create("installed");
+    tcase_set_timeout(installed, 300);
+    tcase_add_test(installed, installed_tree_runs_alone);
+    suite_add_tcase(s, installed);
     return test_run_suite(s);
 }

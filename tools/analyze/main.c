@@ -112,6 +112,7 @@ static const struct option_spec {
 
 static const char usage[] =
     "usage: sluice-analyze COMMAND [ARGS] [OPTIONS]\n"
+    "       sluice-analyze COMMAND --help, or help COMMAND: the options COMMAND reads\n"
     "  belanger  --d1 D (--v1 V | --fr F)          Belanger's conjugate depth\n"
     "  conjugate RUN --d1 --v1 --x X               d2(t) at x, seed 000's A and P\n"
     "  toe       RUN --d1 --v1 [--fraction 0.5]   jump toe x1(t) from the free surface\n"
@@ -132,7 +133,8 @@ static const char usage[] =
     "                                              dam-break front vs Martin & Moyce: raw,\n"
     "                                              shifted and best-fit time origin\n"
     "  classify  --y1 --yt --v1 --drop S           jump at an abrupt drop (momentum limits)\n"
-    "  drop-type RUN [--drop-x X] [--drop S]       jump type at an abrupt drop from a run\n"
+    "  drop-type RUN [--drop-x X] [--drop S] [--wave-min 0.1]\n"
+    "                                              jump type at an abrupt drop from a run\n"
     "  momentum  RUN                               mean momentum function M + P per section\n"
     "                                              (section_gauge with forces: true)\n"
     "  step-profiles RUN|POINTS.csv --per-line N --edges x,y;x,y.. --theta DEG --dc DC --uc UC\n"
@@ -2907,6 +2909,208 @@ done:
     return status;
 }
 
+/* ------------------------------------------------------------ commands -- */
+
+/* The commands, each with its usage (`sluice-analyze COMMAND --help`,
+ * `sluice-analyze help COMMAND`): the options it reads. Every command
+ * accepts every option of option_specs; those it does not read have no
+ * effect. */
+#define WINDOW_HELP "  --from T0 --to T1     the time window (s; default the whole series)\n"
+#define TIME_COLUMN_HELP "  --time-column NAME    the tables' time column (default time)\n"
+#define OUT_HELP                                                                              \
+    "  --out DIR             where the CSV and PNG go (default RUN/analysis)\n"               \
+    "  --no-plot             no PNG (else drawn with gnuplot when installed)\n"
+#define INFLOW_HELP                                                                           \
+    "  --d1 D --v1 V         the inflow depth (m) and velocity (m/s), or --fr F instead of\n" \
+    "                        --v1; without them, the run's inlet; --g 9.81 (m/s^2)\n"
+#define SURFACE_HELP                                                                          \
+    "  --positions a,b,..    the free-surface gauge's positions instead of\n"                 \
+    "                        RUN/scene.resolved.yaml\n"
+#define POINTS_HELP                                                                           \
+    "  --points x,y;x,y..    the point gauge's points instead of RUN/scene.resolved.yaml\n"   \
+    "  --field velocity      the point gauge's field\n"                                      \
+    "  --min-wet 0.5         the least fraction of wet rows a point needs for a mean\n"       \
+    "  --tolerance 1e-6      position matching (m)\n"
+#define X1_HELP                                                                               \
+    "  --x1 X1               the toe (m); default the mean toe as 'toe' finds it, with\n"     \
+    "                        --fraction 0.5 and --bed B (m, default 0)\n"
+
+static const struct command {
+    const char *name;
+    int (*run)(analyze_ctx *, const options *);
+    const char *help;
+} commands[] = {
+    {"belanger", cmd_belanger,
+     "usage: sluice-analyze belanger --d1 D (--v1 V | --fr F) [--g 9.81] [--out DIR]\n"
+     "Belanger's conjugate depth d2 of a jump in a horizontal rectangular channel.\n"
+     "  --d1 D                the inflow depth (m)\n"
+     "  --v1 V | --fr F       the inflow velocity (m/s) or Froude number\n"
+     "  --g 9.81              gravity (m/s^2)\n"
+     "  --out DIR             also write belanger.csv and belanger.png into DIR\n"
+     "  --no-plot             no PNG\n"},
+    {"conjugate", cmd_conjugate,
+     "usage: sluice-analyze conjugate RUN --x X [--d1 D --v1 V] [--from T0 --to T1]\n"
+     "The sequent depth d2(t) at x = X (a section gauge there, else the free surface\n"
+     "minus --bed) against Belanger's; seed 000's statistics A and P.\n"
+     "  --x X                 the position (m)\n" INFLOW_HELP WINDOW_HELP
+     "  --bed B               the bed elevation under the free-surface gauge (m, default 0)\n"
+     "  --positions a,b,..    the section (or free-surface) gauge's positions instead of\n"
+     "                        RUN/scene.resolved.yaml\n"
+     "  --tolerance 1e-6      position matching (m)\n" TIME_COLUMN_HELP OUT_HELP},
+    {"toe", cmd_toe,
+     "usage: sluice-analyze toe RUN [--d1 D --v1 V] [--fraction 0.5] [--from T0 --to T1]\n"
+     "The jump toe x1(t) from the free-surface profiles: the first position where the\n"
+     "depth rises through d1 + fraction (d2_Belanger - d1).\n"
+     "  --fraction 0.5        the threshold between d1 and d2\n"
+     "  --bed B               the bed elevation (m, default 0)\n" INFLOW_HELP WINDOW_HELP
+     SURFACE_HELP TIME_COLUMN_HELP OUT_HELP},
+    {"roller", cmd_roller,
+     "usage: sluice-analyze roller RUN [--d1 D --v1 V] [--x1 X1] [--from T0 --to T1]\n"
+     "The roller length: the first position downstream of the toe with a non-negative\n"
+     "time-mean horizontal velocity, against Hager et al. (1990).\n" X1_HELP
+     INFLOW_HELP WINDOW_HELP POINTS_HELP SURFACE_HELP TIME_COLUMN_HELP OUT_HELP},
+    {"vmax", cmd_vmax,
+     "usage: sluice-analyze vmax RUN [--d1 D --v1 V] [--x1 X1] [--from T0 --to T1]\n"
+     "The decay of each section's largest time-mean velocity, Vmax/V1, against Chanson\n"
+     "(2010).\n" X1_HELP INFLOW_HELP WINDOW_HELP POINTS_HELP SURFACE_HELP TIME_COLUMN_HELP
+     OUT_HELP},
+    {"surface", cmd_surface,
+     "usage: sluice-analyze surface RUN [--d1 D --v1 V] [--x1 X1] [--from T0 --to T1]\n"
+     "The free surface's mean and standard deviation at each gauge, against Murzyn &\n"
+     "Chanson (2009).\n" X1_HELP
+     "  --min-wet 0.5         the least fraction of wet rows a gauge needs\n" INFLOW_HELP
+     WINDOW_HELP SURFACE_HELP TIME_COLUMN_HELP OUT_HELP},
+    {"spectrum", cmd_spectrum,
+     "usage: sluice-analyze spectrum RUN --column [FILE:]NAME [--fmin F --fmax F]\n"
+     "                      [--d1 D --v1 V] [--from T0 --to T1]\n"
+     "The amplitude spectrum of one column, its dominant frequency and (given the\n"
+     "inflow) the Strouhal number f d1 / V1.\n"
+     "  --column [FILE:]NAME  the column (searched in the run's gauge files, or in FILE\n"
+     "                        relative to RUN)\n"
+     "  --fmin F --fmax F     the band searched for the peak (Hz)\n" INFLOW_HELP WINDOW_HELP
+     TIME_COLUMN_HELP OUT_HELP},
+    {"correlate", cmd_correlate,
+     "usage: sluice-analyze correlate A.csv:COL B.csv:COL [--from T0 --to T1] [--out DIR]\n"
+     "Pearson's correlation coefficient r of two series (seed 004), B interpolated onto\n"
+     "A's times.\n" WINDOW_HELP TIME_COLUMN_HELP
+     "  --out DIR             where the CSV and PNG go (default A.csv's directory/analysis)\n"
+     "  --no-plot             no PNG\n"},
+    {"profile", cmd_profile,
+     "usage: sluice-analyze profile RUN [--column FILE:SUFFIX] [--force F --viscosity NU\n"
+     "                     --width L] [--from T0 --to T1]\n"
+     "A point_gauge line's time-mean profile: the slip at the wall and, given the\n"
+     "Poiseuille flow's data, the error against it.\n"
+     "  --column FILE:SUFFIX  the columns pK_SUFFIX of FILE (default points.csv:velocity_x)\n"
+     "  --force F             the driving acceleration (m/s^2)\n"
+     "  --viscosity NU        the kinematic viscosity (m^2/s)\n"
+     "  --width L             the channel's width (m)\n"
+     "  --points x,y;x,y..    the points instead of RUN/scene.resolved.yaml\n" WINDOW_HELP
+     TIME_COLUMN_HELP},
+    {"impact", cmd_impact,
+     "usage: sluice-analyze impact RUN --column [FILE:]NAME --arrival P [--duration D]\n"
+     "                    [--scale P0] [--time-scale T0] [--time-column t] [--from T0 --to T1]\n"
+     "An impact on a pressure sensor: arrival, peak, rise time and impulse.\n"
+     "  --column [FILE:]NAME  the sensor's column\n"
+     "  --arrival P           the pressure that marks the arrival (the column's unit)\n"
+     "  --duration D          the impact's duration after the arrival (s; default to the\n"
+     "                        window's end)\n"
+     "  --scale P0            divides the pressures (e.g. rho g H)\n"
+     "  --time-scale T0       divides the times (e.g. sqrt(H/g))\n" WINDOW_HELP
+     TIME_COLUMN_HELP},
+    {"l2", cmd_l2,
+     "usage: sluice-analyze l2 RUN --reference REF.csv [--time T]\n"
+     "The free surface's L2 error and RMSE against measured levels (seed 002).\n"
+     "  --reference REF.csv   the measured levels\n"
+     "  --time T              the time of the measured profile when REF.csv has no time\n"
+     "                        column\n" SURFACE_HELP WINDOW_HELP TIME_COLUMN_HELP OUT_HELP},
+    {"front", cmd_front,
+     "usage: sluice-analyze front RUN --reference REF.csv [--shift DT] [--width A]\n"
+     "                   [--series A_IN] [--from T0 --to T1]\n"
+     "A dam break's surge front against Martin & Moyce (1952): raw, shifted and\n"
+     "best-fit time origin.\n"
+     "  --reference REF.csv   the experiment's points (columns T, Z, optionally a_in)\n"
+     "  --shift DT            a time shift (s) for the shifted comparison\n"
+     "  --width A             the column's width (m; default from the scene)\n"
+     "  --series A_IN         the reference series (a_in; default the first)\n"
+     "  --g 9.81              gravity (m/s^2)\n"
+     "  --out DIR             where the CSV goes (default RUN/analysis)\n" WINDOW_HELP},
+    {"classify", cmd_classify,
+     "usage: sluice-analyze classify --y1 Y1 --yt YT --v1 V --drop S [--out DIR]\n"
+     "The jump at an abrupt drop (momentum limits): A-jump, wave-jump region or B-jump.\n"
+     "  --y1 Y1               the inflow depth on the upper bed (m)\n"
+     "  --yt YT               the tailwater depth above the lower bed (m)\n"
+     "  --v1 V | --fr F       the inflow velocity (m/s) or Froude number\n"
+     "  --drop S              the step height (m)\n"
+     "  --g 9.81              gravity (m/s^2)\n"
+     "  --out DIR             also write classify.csv and classify.png into DIR\n"
+     "  --no-plot             no PNG\n"},
+    {"drop-type", cmd_drop_type,
+     "usage: sluice-analyze drop-type RUN [--drop-x X] [--drop S] [--d1 D --v1 V]\n"
+     "                       [--fraction 0.5] [--wave-min 0.1] [--from T0 --to T1]\n"
+     "The jump type at an abrupt drop from a run's free surface.\n"
+     "  --drop-x X            the step edge's position (m; default from the scene)\n"
+     "  --drop S              the step height (m; default the inlet's bed)\n"
+     "  --fraction 0.5        the toe's threshold between d1 and d2\n"
+     "  --wave-min 0.1        the share of wave samples below which the type is an A- or\n"
+     "                        B-jump (above 1 - it, a wave jump)\n"
+     INFLOW_HELP WINDOW_HELP SURFACE_HELP TIME_COLUMN_HELP OUT_HELP},
+    {"momentum", cmd_momentum,
+     "usage: sluice-analyze momentum RUN [--from T0 --to T1] [--g 9.81]\n"
+     "The mean momentum function S = M + P per section (section_gauge with forces:\n"
+     "true) and the hydrostatic force of the mean depth.\n"
+     "  --g 9.81              gravity (m/s^2)\n"
+     "  --positions a,b,..    the section gauge's positions instead of\n"
+     "                        RUN/scene.resolved.yaml\n" WINDOW_HELP TIME_COLUMN_HELP OUT_HELP},
+    {"step-profiles", cmd_step_profiles,
+     "usage: sluice-analyze step-profiles RUN|POINTS.csv --per-line N --edges x,y;x,y..\n"
+     "                           --theta DEG --dc DC --uc UC [--first-step 1]\n"
+     "                           [--threshold 0.05] [--h H] [--points x,y;..]\n"
+     "Velocity and air-concentration profiles at the step edges of a stepped chute:\n"
+     "U/Uc, C, Y90, the free surface and the inception of aeration (CSV on stdout given\n"
+     "POINTS.csv).\n"
+     "  --per-line N          points per step edge\n"
+     "  --edges x,y;x,y..     the step edges (m)\n"
+     "  --theta DEG           the chute's slope (degrees)\n"
+     "  --dc DC --uc UC       the critical depth (m) and velocity (m/s)\n"
+     "  --first-step 1        the number of the first edge\n"
+     "  --threshold 0.05      the air concentration of the aerated flow's edge\n"
+     "  --h H                 the smoothing length (m; default from the scene)\n"
+     "  --points x,y;x,y..    the points instead of the scene.resolved.yaml beside them\n"
+     "  --field velocity      the point gauge's field\n"
+     "  --tolerance 1e-6      position matching (m)\n"
+     "  --g 9.81              gravity (m/s^2)\n" WINDOW_HELP TIME_COLUMN_HELP
+     "  --out DIR             where the CSV goes (default RUN/analysis)\n"},
+    {"dissolved-oxygen", cmd_dissolved_oxygen,
+     "usage: sluice-analyze dissolved-oxygen POINTS.csv --per-line N --cs CS --cu CU\n"
+     "                              [--calibrate S --target C] [--field dissolved_oxygen]\n"
+     "Dissolved oxygen per station of N points, the reaeration rate, and the source's\n"
+     "scale calibrated on one station (CSV on stdout).\n"
+     "  --per-line N          points per station\n"
+     "  --cs CS               the saturation concentration\n"
+     "  --cu CU               the inflow's concentration\n"
+     "  --calibrate S         the station (1..) to calibrate on, with --target C\n"
+     "  --target C            the concentration measured at that station\n"
+     "  --field NAME          the point gauge's field (default dissolved_oxygen)\n" WINDOW_HELP
+     TIME_COLUMN_HELP},
+};
+
+static const struct command *find_command(const char *name)
+{
+    for (size_t k = 0; k < sizeof commands / sizeof *commands; k++)
+        if (strcmp(commands[k].name, name) == 0)
+            return &commands[k];
+    return NULL;
+}
+
+/* `sluice-analyze COMMAND ... --help`: -h or --help among the arguments. */
+static int asks_for_help(int argc, char **argv)
+{
+    for (int i = 2; i < argc; i++)
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0)
+            return 1;
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -2915,7 +3119,18 @@ int main(int argc, char **argv)
     }
     if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 ||
         strcmp(argv[1], "help") == 0) {
-        fputs(usage, stdout);
+        /* `sluice-analyze help [COMMAND]` */
+        const struct command *topic = argc > 2 && strcmp(argv[1], "help") == 0
+                                          ? find_command(argv[2])
+                                          : NULL;
+        if (argc > 2 && strcmp(argv[1], "help") == 0 && !topic) {
+            fprintf(stderr,
+                    "sluice-analyze: error: unknown command '%s' (sluice-analyze --help lists "
+                    "them)\n",
+                    argv[2]);
+            return SLUICE_ANALYZE_BAD_INPUT;
+        }
+        fputs(topic ? topic->help : usage, stdout);
         return SLUICE_ANALYZE_OK;
     }
     analyze_ctx cx = {{0}, SLUICE_ANALYZE_OK};
@@ -2936,21 +3151,11 @@ int main(int argc, char **argv)
     o.min_wet = 0.5;
     o.tolerance = 1e-6;
     o.field = "velocity";
-    static const struct {
-        const char *name;
-        int (*run)(analyze_ctx *, const options *);
-    } commands[] = {
-        {"belanger", cmd_belanger}, {"conjugate", cmd_conjugate}, {"toe", cmd_toe},
-        {"roller", cmd_roller},     {"vmax", cmd_vmax},           {"surface", cmd_surface},
-        {"spectrum", cmd_spectrum}, {"correlate", cmd_correlate}, {"l2", cmd_l2},
-        {"classify", cmd_classify}, {"drop-type", cmd_drop_type}, {"momentum", cmd_momentum},
-        {"step-profiles", cmd_step_profiles}, {"impact", cmd_impact}, {"profile", cmd_profile}, {"dissolved-oxygen", cmd_dissolved_oxygen},
-        {"front", cmd_front},
-    };
-    int (*command)(analyze_ctx *, const options *) = NULL;
-    for (size_t k = 0; k < sizeof commands / sizeof *commands; k++)
-        if (strcmp(commands[k].name, argv[1]) == 0)
-            command = commands[k].run;
+    const struct command *command = find_command(argv[1]);
+    if (command && asks_for_help(argc, argv)) {
+        fputs(command->help, stdout);
+        return SLUICE_ANALYZE_OK;
+    }
     if (!command)
         analyze_fail(&cx, SLUICE_ANALYZE_BAD_INPUT,
                      "unknown command '%s' (sluice-analyze --help lists them)", argv[1]);
@@ -2962,7 +3167,7 @@ int main(int argc, char **argv)
         else if (!(o.tolerance >= 0.0))
             analyze_fail(&cx, SLUICE_ANALYZE_BAD_INPUT, "--tolerance must be >= 0");
         else if (inflow_from_run(&cx, &o) == 0)
-            command(&cx, &o);
+            command->run(&cx, &o);
     }
     fflush(stdout);
     if (cx.status != SLUICE_ANALYZE_OK)

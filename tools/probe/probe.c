@@ -50,6 +50,7 @@ static const char usage_text[] =
     "  --min-support points where sum_j V_j W is below S (default 0.5) are outside\n"
     "                the fluid: nan\n"
     "  --out         write the CSV there (atomically); default standard output\n"
+    "  -h, --help    this text\n"
     "\n"
     "CSV columns: time (s), point (index), x, y[, z] (m), each field (vectors as\n"
     "NAME_x, NAME_y[, NAME_z]; other multi-component fields NAME_0, NAME_1, ...) in\n"
@@ -115,6 +116,16 @@ static int parse_arguments(int argc, char **argv, probe_request *r)
             }
             r->run = a;
             continue;
+        }
+        static const char *const known[] = {
+            "--fields", "--points", "--line",     "--plane",      "--count",       "--times",
+            "--prefix", "--out",    "--snapshot", "--correction", "--min-support", "--threads"};
+        size_t k = 0;
+        while (k < sizeof known / sizeof *known && strcmp(a, known[k]) != 0)
+            k++;
+        if (k == sizeof known / sizeof *known) {
+            error("unknown option '%s' (sluice probe --help)", a);
+            return -1;
         }
         if (i + 1 >= argc) {
             error("%s needs a value", a);

@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "study.h"
@@ -21,17 +22,27 @@
 static void usage(FILE *out)
 {
     fprintf(out,
-            "usage: sluice study STUDY.yaml [STUDY.yaml ...] [--out DIR] [--profile NAME]\n"
-            "                    [--jobs N] [--dry-run] [--summary] [--retry-failed] [--quiet]\n"
-            "Runs every combination of the study's axes as a run directory DIR/runs/NAME\n"
-            "(default DIR: runs/<study file name>[-<profile>]; with several study files,\n"
-            "DIR/<study file name> for each), then writes DIR/study.csv, DIR/study.md,\n"
-            "DIR/orders.csv and PNG plots in DIR/plots (gnuplot). A run finished by an earlier\n"
-            "invocation with the same command is not redone; a failed one is kept as failed\n"
-            "(--retry-failed runs it again). --jobs N: runs at a time (default: the study's\n"
-            "'jobs', 1). --dry-run: check the study and every run's scene, list the runs.\n"
-            "--summary: no runs; the reports from what is there. --profile NAME: one of the\n"
-            "study's profiles (its edits and axis values, e.g. a quick one). docs/studies.md\n");
+            "usage: sluice study STUDY.yaml [STUDY.yaml ...] [OPTIONS]\n"
+            "       (sluice-study, the same program)\n"
+            "Runs every combination of the study's axes as a run directory DIR/runs/NAME, then\n"
+            "writes DIR/study.csv, DIR/study.md, DIR/orders.csv and PNG plots in DIR/plots\n"
+            "(gnuplot). A run finished by an earlier invocation with the same command is not\n"
+            "redone; a failed one is kept as failed. docs/studies.md\n"
+            "  -o, --out DIR        the study's directory (default runs/<study file\n"
+            "                       name>[-<profile>]; with several study files,\n"
+            "                       DIR/<study file name> for each and DIR/studies.md)\n"
+            "  --profile NAME       one of the study's profiles (its edits and axis values,\n"
+            "                       e.g. a quick one)\n"
+            "  -j, --jobs N         runs at a time (default: the study's 'jobs', 1)\n"
+            "  --dry-run            check the study and every run's scene, list the runs\n"
+            "  --summary            no runs: the reports from what is there\n"
+            "  --retry-failed       run the failed runs again\n"
+            "  -q, --quiet          no progress messages\n"
+            "  -h, --help           this text\n"
+            "The sluice program and sluice-analyze are $SLUICE and $SLUICE_ANALYZE, else the\n"
+            "ones beside this program.\n"
+            "Exit status: 0 the study ran (failed runs are recorded in its table), 2 bad input,\n"
+            "4 another failure, 5 stopped by SIGINT/SIGTERM (the same command goes on).\n");
 }
 
 /* The sluice program and sluice-analyze: $SLUICE and $SLUICE_ANALYZE, or
@@ -49,7 +60,8 @@ static char *program_beside(const char *env, const char *const *relative, size_t
     char *dir = dirname(self);
     for (size_t i = 0; i < count; i++) {
         char *path = study_printf("%s/%s", dir, relative[i]);
-        if (access(path, X_OK) == 0)
+        struct stat st;
+        if (stat(path, &st) == 0 && S_ISREG(st.st_mode) && access(path, X_OK) == 0)
             return path;
         free(path);
     }
@@ -70,11 +82,16 @@ static int parse(int argc, char **argv, command_line *c)
         return -1;
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i];
-        if ((strcmp(arg, "--out") == 0 || strcmp(arg, "-o") == 0) && i + 1 < argc)
-            c->out = argv[++i];
-        else if (strcmp(arg, "--profile") == 0 && i + 1 < argc)
-            c->profile = argv[++i];
-        else if (strcmp(arg, "--jobs") == 0 || strcmp(arg, "-j") == 0) {
+        if (strcmp(arg, "--out") == 0 || strcmp(arg, "-o") == 0 || strcmp(arg, "--profile") == 0) {
+            if (i + 1 >= argc) {
+                fprintf(stderr, "sluice-study: error: %s needs a value\n", arg);
+                return -1;
+            }
+            if (strcmp(arg, "--profile") == 0)
+                c->profile = argv[++i];
+            else
+                c->out = argv[++i];
+        } else if (strcmp(arg, "--jobs") == 0 || strcmp(arg, "-j") == 0) {
             char *end = NULL;
             long jobs = i + 1 < argc ? strtol(argv[++i], &end, 10) : 0;
             if (!end || *end || jobs < 1 || jobs > 4096) {
@@ -95,7 +112,10 @@ static int parse(int argc, char **argv, command_line *c)
             usage(stdout);
             exit(0);
         } else if (arg[0] == '-') {
-            fprintf(stderr, "sluice-study: error: unknown option '%s'\n", arg);
+            fprintf(stderr,
+                    "sluice-study: error: unknown option '%s' ('sluice study --help' lists "
+                    "them)\n",
+                    arg);
             return -1;
         } else
             c->files[c->file_count++] = arg;
@@ -235,7 +255,6 @@ int main(int argc, char **argv)
     command_line c;
     memset(&c, 0, sizeof c);
     if (parse(argc, argv, &c) != 0) {
-        usage(stderr);
         free(c.files);
         return 2;
     }
