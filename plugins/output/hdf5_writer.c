@@ -25,20 +25,45 @@
  *    build, command_line, date, host: api->output->describe_run), status
  *    ("ok" or "failed"). Strings are variable-length UTF-8.
  *
+ * The scene's walls (1.2.0; api->walls, every wall whatever its scheme:
+ * wall particles or geometric walls alike) are written once, at the first
+ * snapshot, to DIR/<prefix>_walls.h5: the elements of the fixed walls first,
+ * then those of the moving walls (each group in wall order), at the scene's
+ * geometry:
+ *  - points [P, 3] (double, m; z = 0 in 2D): 2 per segment (2D) or 3 per
+ *    triangle (3D), element after element;
+ *  - connectivity [E, 2 or 3] (int64): 0, 1, 2, ... (every grid of the
+ *    index takes its first rows);
+ *  - wall [E] (int32): the wall of each element (its index in the scene's
+ *    geometry.walls); normal [E, 3] (double): the unit normal into the fluid;
+ *  - per wall: name and scheme (variable-length UTF-8 strings), moves (uint8);
+ *  - attributes dimensions, nodes_per_element, fixed_elements, moving_elements.
+ * A wall that moves (its scheme reports a displacement,
+ * api->walls->wall_displacement: dbc's moving_wall) is also in every
+ * snapshot: /walls/points [moving elements x nodes, 3] at the snapshot's time
+ * and /walls/displacement [walls, 3] (zero for a fixed wall).
+ *
  * DIR/<prefix>.xdmf is rewritten atomically after every snapshot: a temporal
- * collection of every snapshot so far, each a Uniform grid with Polyvertex
- * topology, Geometry XY / XYZ from /position and one Attribute per written
- * field. The Polyvertex connectivity is the first N entries (a HyperSlab) of
+ * collection of every snapshot so far. Without walls each is a Uniform grid
+ * with Polyvertex topology, Geometry XY / XYZ from /position and one
+ * Attribute per written field; with walls each is a spatial collection of
+ * that grid (named "particles"), a grid "walls" (the fixed walls: Polyline
+ * cells with NodesPerElement 2 in 2D, Triangle cells in 3D, from
+ * <prefix>_walls.h5) and a grid "moving_walls" (their points from the
+ * snapshot), both with the cell attributes wall and normal. The Polyvertex
+ * connectivity is the first N entries (a HyperSlab) of
  * /index = 0, 1, 2, ... in DIR/<prefix>_vertices.h5, shared by all snapshots
  * and grown when the particle count does: without connectivity ParaView's
  * XDMF 3 readers make no cells and the particles only show as Point Gaussian.
  * Ids are declared Int (ParaView reads UInt of precision 8 as 32-bit). File
  * names in it are relative, so the run directory can be moved.
+ * tools/paraview/open_run.py shows a run with its walls (docs/paraview.md).
  *
  * Across MPI ranks (1.1.0, parallel HDF5): the same files. Every rank
  * writes its particles at its offset (the ranks' particles in rank order)
  * into one snapshot, opened collectively as <name>.partial and renamed by
- * rank 0 once complete; rank 0 writes the XDMF index and the vertex file.
+ * rank 0 once complete; rank 0 writes the XDMF index, the vertex file and
+ * the walls file, and the moving walls' points in the snapshot.
  *
  * Fields written: `fields: ""` (the default) writes every field flagged
  * SLUICE_FIELD_OUTPUT; otherwise `fields` is a comma-separated list of field
@@ -1662,7 +1687,8 @@ static int h5w_load(void *state, sluice_host *host)
 
 static const sluice_component components[] = {{
     .name = "hdf5",
-    .summary = "particle snapshots in HDF5 (one file per output time) with an XDMF index",
+    .summary = "particle snapshots in HDF5 (one file per output time) with the scene's walls "
+               "and an XDMF index",
     .reference = "HDF5 (The HDF Group); XDMF 3 (xdmf.org)",
     .dimensions = SLUICE_DIMS_ALL,
     .flags = SLUICE_COMPONENT_ACROSS_RANKS,
