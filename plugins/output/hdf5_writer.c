@@ -37,7 +37,11 @@
  *  - wall [E] (int32): the wall of each element (its index in the scene's
  *    geometry.walls); normal [E, 3] (double): the unit normal into the fluid;
  *  - per wall: name and scheme (variable-length UTF-8 strings), moves (uint8);
- *  - attributes dimensions, nodes_per_element, fixed_elements, moving_elements.
+ *  - attributes dimensions, nodes_per_element, fixed_elements, moving_elements;
+ *  - when a wall moves, groups fixed and moving with the points,
+ *    connectivity, wall and normal of the fixed and of the moving elements
+ *    (the index's grids name whole datasets: ParaView 5.11's XDMF 3 readers
+ *    read no HyperSlab of a geometry or an attribute).
  * A wall that moves (its scheme reports a displacement,
  * api->walls->wall_displacement: dbc's moving_wall) is also in every
  * snapshot: /walls/points [moving elements x nodes, 3] at the snapshot's time
@@ -50,7 +54,8 @@
  * that grid (named "particles"), a grid "walls" (the fixed walls: Polyline
  * cells with NodesPerElement 2 in 2D, Triangle cells in 3D, from
  * <prefix>_walls.h5) and a grid "moving_walls" (their points from the
- * snapshot), both with the cell attributes wall and normal. The Polyvertex
+ * snapshot, the rest from the walls file's group moving), both with the
+ * cell attributes wall and normal. The Polyvertex
  * connectivity is the first N entries (a HyperSlab) of
  * /index = 0, 1, 2, ... in DIR/<prefix>_vertices.h5, shared by all snapshots
  * and grown when the particle count does: without connectivity ParaView's
@@ -1034,6 +1039,32 @@ static void write_snapshot_walls(const h5w_state *s, hid_t file, const h5w_part 
     close_id(&group, H5Gclose, f, "H5Gclose");
 }
 
+/* Elements [first, first + count) of the walls as group `name` (points,
+ * connectivity 0, 1, 2, ..., wall, normal): the grids of the XDMF index
+ * when a wall moves (ParaView's XDMF 3 readers read no HyperSlab of a
+ * geometry or an attribute). */
+static void write_wall_group(hid_t file, const char *name, const h5w_walls *w, uint64_t first,
+                             uint64_t count, const int64_t *connectivity, h5w_failure *f)
+{
+    if (f->text[0] || count == 0)
+        return;
+    hid_t group = H5Gcreate2(file, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (group < 0) {
+        fail(f, "creating group '%s' failed", name);
+        return;
+    }
+    const h5w_part whole = {0, 0, H5P_DEFAULT, 0};
+    const hsize_t points[2] = {count * w->nodes, 3}, cells[2] = {count, w->nodes},
+                  normals[2] = {count, 3}, per_element[1] = {count};
+    write_array(group, "points", H5T_NATIVE_DOUBLE, 2, points, w->points + 3 * w->nodes * first,
+                &whole, 1, 1, f);
+    write_array(group, "connectivity", H5T_NATIVE_INT64, 2, cells, connectivity, &whole, 1, 1, f);
+    write_array(group, "wall", H5T_NATIVE_INT32, 1, per_element, w->wall + first, &whole, 1, 1, f);
+    write_array(group, "normal", H5T_NATIVE_DOUBLE, 2, normals, w->normals + 3 * first, &whole, 1,
+                1, f);
+    close_id(&group, H5Gclose, f, "H5Gclose");
+}
+
 /* <prefix>_walls.h5's writer (write_file_with): every wall at the scene's
  * geometry, fixed walls' elements first (docs: the header comment). */
 static int write_walls_file(void *context, const char *temporary, char *error, size_t error_size)
@@ -1063,6 +1094,10 @@ static int write_walls_file(void *context, const char *temporary, char *error, s
     write_array(file, "moves", H5T_NATIVE_UINT8, 1, per_wall, w->moves, &whole, 1, 1, f);
     write_array(file, "name", text, 1, per_wall, w->names, &whole, 1, 0, f);
     write_array(file, "scheme", text, 1, per_wall, w->schemes, &whole, 1, 0, f);
+    if (w->moving > 0) {
+        write_wall_group(file, "fixed", w, 0, w->fixed, connectivity, f);
+        write_wall_group(file, "moving", w, w->fixed, w->moving, connectivity, f);
+    }
     const int dimensions = (int)w->dimensions, nodes = (int)w->nodes;
     if (!f->text[0] &&
         (attr_scalar(file, "dimensions", H5T_NATIVE_INT, H5T_NATIVE_INT, &dimensions, f) != 0 ||
@@ -1316,18 +1351,20 @@ static void xdmf_particles(h5w_text *t, const h5w_state *s, const h5w_record *g,
     text_printf(t, "%s</Grid>\n", pad);
 }
 
-/* The fixed walls (grid "walls": every point from <prefix>_walls.h5) or the
- * moving ones (grid "moving_walls": the points from the snapshot), as
- * Polyline (2D) or Triangle (3D) cells with the attributes wall (its index)
- * and normal (into the fluid). Nothing when there are none. */
+/* The fixed walls (grid "walls") or the moving ones (grid "moving_walls":
+ * their points from the snapshot), as Polyline (2D) or Triangle (3D) cells
+ * with the attributes wall (its index) and normal (into the fluid), from
+ * <prefix>_walls.h5: its whole arrays when no wall moves, else its groups
+ * fixed and moving. Nothing when there are none. */
 static void xdmf_walls(h5w_text *t, const h5w_walls *w, const char *walls_file,
                        const char *snapshot_file, int moving)
 {
-    const uint64_t count = moving ? w->moving : w->fixed, first = moving ? w->fixed : 0;
-    const uint64_t total = w->fixed + w->moving;
+    const uint64_t count = moving ? w->moving : w->fixed;
     if (count == 0)
         return;
+    const char *group = w->moving == 0 ? "" : moving ? "moving/" : "fixed/";
     const char *pad = "            ";
+    char name[64];
     text_printf(t, "        <Grid Name=\"%s\" GridType=\"Uniform\">\n",
                 moving ? "moving_walls" : "walls");
     if (w->nodes == 2)
@@ -1338,21 +1375,20 @@ static void xdmf_walls(h5w_text *t, const h5w_walls *w, const char *walls_file,
     else
         text_printf(t, "          <Topology TopologyType=\"Triangle\" NumberOfElements=\"%llu\">\n",
                     (unsigned long long)count);
-    /* connectivity is 0, 1, 2, ...: each grid takes its first rows */
-    xdmf_rows(t, pad, walls_file, "connectivity", "Int", 8, 0, count, total, w->nodes);
+    snprintf(name, sizeof name, "%sconnectivity", group);
+    xdmf_rows(t, pad, walls_file, name, "Int", 8, 0, count, count, w->nodes);
     text_printf(t, "          </Topology>\n          <Geometry GeometryType=\"XYZ\">\n");
-    if (moving)
-        xdmf_rows(t, pad, snapshot_file, "walls/points", "Float", 8, 0, count * w->nodes,
-                  count * w->nodes, 3);
-    else
-        xdmf_rows(t, pad, walls_file, "points", "Float", 8, 0, count * w->nodes,
-                  total * w->nodes, 3);
+    snprintf(name, sizeof name, "%spoints", group);
+    xdmf_rows(t, pad, moving ? snapshot_file : walls_file, moving ? "walls/points" : name, "Float",
+              8, 0, count * w->nodes, count * w->nodes, 3);
     text_printf(t, "          </Geometry>\n"
                    "          <Attribute Name=\"wall\" AttributeType=\"Scalar\" Center=\"Cell\">\n");
-    xdmf_rows(t, pad, walls_file, "wall", "Int", 4, first, count, total, 0);
+    snprintf(name, sizeof name, "%swall", group);
+    xdmf_rows(t, pad, walls_file, name, "Int", 4, 0, count, count, 0);
     text_printf(t, "          </Attribute>\n"
                    "          <Attribute Name=\"normal\" AttributeType=\"Vector\" Center=\"Cell\">\n");
-    xdmf_rows(t, pad, walls_file, "normal", "Float", 8, first, count, total, 3);
+    snprintf(name, sizeof name, "%snormal", group);
+    xdmf_rows(t, pad, walls_file, name, "Float", 8, 0, count, count, 3);
     text_printf(t, "          </Attribute>\n        </Grid>\n");
 }
 

@@ -12,8 +12,8 @@ a corner.
 
 RUN is the run's output directory (`sluice run SCENE --out RUN`). With --png
 the picture is rendered off screen (pvbatch, or pvpython under xvfb-run
-where there is no display: docs/paraview.md). Needs ParaView 5.10 or later
-(Debian 12: apt-get install paraview python3-paraview).
+where there is no display: docs/paraview.md). Needs ParaView's Python
+(tested with 5.11, Debian 12: apt-get install paraview python3-paraview).
 """
 
 import argparse
@@ -36,8 +36,12 @@ def parse_arguments(argv):
                         metavar=("WIDTH", "HEIGHT"), help="picture size in pixels")
     parser.add_argument("--range", type=float, nargs=2, metavar=("MIN", "MAX"),
                         help="velocity colour range, m/s (default: the shown snapshot's)")
-    parser.add_argument("--fit", choices=["fluid", "all"], default="fluid",
-                        help="frame the fluid particles (default) or everything, walls included")
+    parser.add_argument("--fit", choices=["fluid", "all"],
+                        help="frame the fluid particles or everything, walls included (default: "
+                             "the fluid in 2D, everything in 3D)")
+    parser.add_argument("--wall-particles", choices=["show", "hide"],
+                        help="wall particles (kind 1) in grey or hidden (default: shown in 2D, "
+                             "hidden in 3D, where the walls' surfaces show the walls)")
     parser.add_argument("--point-size", type=float,
                         help="particle size in pixels (default: about the particle spacing in "
                              "2D, 3 in 3D)")
@@ -106,8 +110,6 @@ def build(args):
     if args.range:
         lut.RescaleTransferFunction(args.range[0], args.range[1])
         lut.AutomaticRescaleRangeMode = "Never"
-    else:
-        shown.RescaleTransferFunctionToDataRange(True, False)
     bar = simple.GetScalarBar(lut, view)
     bar.Title = "|velocity| (m/s)"
     bar.ComponentTitle = ""
@@ -122,6 +124,9 @@ def build(args):
     shown.PointSize = max(1.0, (args.point_size or 3.0) - 1)
     shown.ColorArrayName = ["POINTS", ""]
     shown.AmbientColor = shown.DiffuseColor = [0.6, 0.6, 0.6]
+    show_wall_particles = flat if args.wall_particles is None else args.wall_particles == "show"
+    if not show_wall_particles:
+        simple.Hide(wall_particles, view)
 
     walls = threshold(reader, "wall", "CELLS", 0, 1e9)
     simple.RenameSource("walls", walls)
@@ -148,6 +153,9 @@ def build(args):
     scene.UpdateAnimationUsingDataTimeSteps()
     scene.AnimationTime = time
     view.ViewTime = time
+    if not args.range:  # the shown snapshot's range
+        fluid.UpdatePipeline(time)
+        fluid_shown.RescaleTransferFunctionToDataRange(False, True)
     if flat:
         view.InteractionMode = "2D"
         view.CameraParallelProjection = 1
@@ -155,12 +163,15 @@ def build(args):
         view.CameraFocalPoint = [0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]), 0.0]
         view.CameraViewUp = [0.0, 1.0, 0.0]
     else:
-        view.CameraPosition = [bounds[1] + (bounds[1] - bounds[0]), bounds[2] - 2 * (bounds[3] - bounds[2]),
-                               bounds[5] + (bounds[5] - bounds[4])]
-        view.CameraFocalPoint = [0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
-                                 0.5 * (bounds[4] + bounds[5])]
+        # from the front (-y), a little to the right and above; z is up
+        centre = [0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
+                  0.5 * (bounds[4] + bounds[5])]
+        reach = 2.0 * max(bounds[1] - bounds[0], bounds[3] - bounds[2], bounds[5] - bounds[4])
+        view.CameraFocalPoint = centre
+        view.CameraPosition = [centre[0] + 0.35 * reach, centre[1] - reach,
+                               centre[2] + 0.45 * reach]
         view.CameraViewUp = [0.0, 0.0, 1.0]
-    if args.fit == "fluid":
+    if (args.fit or ("fluid" if flat else "all")) == "fluid":
         fluid.UpdatePipeline(time)
         box = fluid.GetDataInformation().GetBounds()
         if box[0] <= box[1]:
