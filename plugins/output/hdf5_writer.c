@@ -973,7 +973,8 @@ static void move_walls(h5w_state *s, sluice_host *host)
     for (size_t p = 0; p < (size_t)w->moving * w->nodes; p++) {
         const int32_t k = w->wall[(first + p) / w->nodes];
         for (int c = 0; c < 3; c++)
-            w->moving_points[3 * p + c] = w->points[3 * (first + p) + c] + w->displacement[3 * k + c];
+            w->moving_points[3 * p + c] =
+                w->points[3 * (first + p) + c] + w->displacement[3 * k + c];
     }
 }
 
@@ -1031,7 +1032,8 @@ static void write_snapshot_walls(const h5w_state *s, hid_t file, const h5w_part 
         return;
     }
     const hsize_t points[2] = {(hsize_t)w->moving * w->nodes, 3}, displacement[2] = {w->count, 3};
-    write_array(group, "points", H5T_NATIVE_DOUBLE, 2, points, w->moving_points, part, writes, 1, f);
+    write_array(group, "points", H5T_NATIVE_DOUBLE, 2, points, w->moving_points, part, writes, 1,
+                f);
     write_array(group, "displacement", H5T_NATIVE_DOUBLE, 2, displacement, w->displacement, part,
                 writes, 1, f);
     if (!f->text[0])
@@ -1293,7 +1295,8 @@ static void xdmf_rows(h5w_text *t, const char *pad, const char *file_name, const
                         "%u</DataItem>\n",
                         pad, (unsigned long long)first, (unsigned long long)count, columns);
         else
-            text_printf(t, "%s  <DataItem Dimensions=\"3 1\" Format=\"XML\">%llu 1 %llu</DataItem>\n",
+            text_printf(t,
+                        "%s  <DataItem Dimensions=\"3 1\" Format=\"XML\">%llu 1 %llu</DataItem>\n",
                         pad, (unsigned long long)first, (unsigned long long)count);
         text_printf(t, "%s  ", pad);
     } else {
@@ -1381,12 +1384,14 @@ static void xdmf_walls(h5w_text *t, const h5w_walls *w, const char *walls_file,
     snprintf(name, sizeof name, "%spoints", group);
     xdmf_rows(t, pad, moving ? snapshot_file : walls_file, moving ? "walls/points" : name, "Float",
               8, 0, count * w->nodes, count * w->nodes, 3);
-    text_printf(t, "          </Geometry>\n"
-                   "          <Attribute Name=\"wall\" AttributeType=\"Scalar\" Center=\"Cell\">\n");
+    text_printf(t,
+                "          </Geometry>\n"
+                "          <Attribute Name=\"wall\" AttributeType=\"Scalar\" Center=\"Cell\">\n");
     snprintf(name, sizeof name, "%swall", group);
     xdmf_rows(t, pad, walls_file, name, "Int", 4, 0, count, count, 0);
-    text_printf(t, "          </Attribute>\n"
-                   "          <Attribute Name=\"normal\" AttributeType=\"Vector\" Center=\"Cell\">\n");
+    text_printf(t,
+                "          </Attribute>\n"
+                "          <Attribute Name=\"normal\" AttributeType=\"Vector\" Center=\"Cell\">\n");
     snprintf(name, sizeof name, "%snormal", group);
     xdmf_rows(t, pad, walls_file, name, "Float", 8, 0, count, count, 3);
     text_printf(t, "          </Attribute>\n        </Grid>\n");

@@ -161,8 +161,8 @@ static void check_segments(const char *dir, const segment *expected, size_t coun
     ck_assert_uint_eq(ndims[1], 3);
     ck_assert_double_eq(read_attribute(file, "dimensions"), 2);
     ck_assert_double_eq(read_attribute(file, "nodes_per_element"), 2);
-    ck_assert_double_eq(read_attribute(file, "fixed_elements") + read_attribute(file,
-                                                                                "moving_elements"),
+    ck_assert_double_eq(read_attribute(file, "fixed_elements") +
+                            read_attribute(file, "moving_elements"),
                         (double)count);
     for (size_t e = 0; e < count; e++) {
         const segment *s = &expected[e];
@@ -205,7 +205,7 @@ static void check_segments(const char *dir, const segment *expected, size_t coun
 typedef struct xml_frame {
     char name[32];
     char attributes[512];
-    const char *content; /* text after the start tag */
+    const char *content;           /* text after the start tag */
     unsigned long long slab[3][2]; /* a HyperSlab's start, stride, count */
     int slab_rank, has_slab;
     unsigned long long source[2]; /* its HDF item's dimensions */
@@ -259,7 +259,8 @@ static void check_hdf_item(const char *dir, const char *dims_text, const char *c
     int actual_rank = H5Sget_simple_extent_ndims(space);
     H5Sget_simple_extent_dims(space, actual, NULL);
     *rank = parse_numbers(dims_text, dims, 2);
-    ck_assert_msg(*rank == actual_rank && dims[0] == actual[0] && (*rank < 2 || dims[1] == actual[1]),
+    ck_assert_msg(*rank == actual_rank && dims[0] == actual[0] &&
+                      (*rank < 2 || dims[1] == actual[1]),
                   "%s:%s: the index says %s", reference, colon + 1, dims_text);
     H5Sclose(space);
     H5Dclose(set);
@@ -287,8 +288,8 @@ static int check_xdmf(const char *dir)
             ck_assert_msg(depth > 0, "an end tag without a start");
             xml_frame *f = &stack[--depth];
             size_t n = strlen(f->name);
-            ck_assert_msg(strncmp(p + 2, f->name, n) == 0 && p[2 + n] == '>',
-                          "<%s> closed by %.*s", f->name, (int)(end - p + 1), p);
+            ck_assert_msg(strncmp(p + 2, f->name, n) == 0 && p[2 + n] == '>', "<%s> closed by %.*s",
+                          f->name, (int)(end - p + 1), p);
             char value[128];
             if (strcmp(f->name, "DataItem") == 0) {
                 xml_frame *parent = depth > 0 ? &stack[depth - 1] : NULL;
@@ -400,7 +401,7 @@ static void check_index_walls(const char *dir, int snapshots, uint64_t fixed, ui
 
 /* the tank's three segments (down, along, up) and the baffle's two */
 static const segment tank_and_baffle[] = {
-    {{0, 1}, {0, 0}, 0},       {{0, 0}, {2, 0}, 0},         {{2, 0}, {2, 1}, 0},
+    {{0, 1}, {0, 0}, 0},          {{0, 0}, {2, 0}, 0},           {{2, 0}, {2, 1}, 0},
     {{0.5, 0.8}, {0.5, 0.35}, 1}, {{0.5, 0.35}, {0.3, 0.15}, 1},
 };
 static const char *const baffle =
@@ -433,9 +434,8 @@ END_TEST
 START_TEST(particle_walls_2d)
 {
     char *walls = NULL;
-    ck_assert_int_ge(asprintf(&walls, "%.*s, scheme: repulsive_force}\n",
-                              (int)(strlen(baffle) - 2), baffle),
-                     0);
+    ck_assert_int_ge(
+        asprintf(&walls, "%.*s, scheme: repulsive_force}\n", (int)(strlen(baffle) - 2), baffle), 0);
     char *yaml = scene_2d("dbc: {}\n  repulsive_force: {}", walls);
     /* the tank names no scheme: name dbc */
     char *edited = NULL;
@@ -576,8 +576,10 @@ START_TEST(moving_wall)
                      0);
     char *out = run_scene("walls-moving", yaml);
     /* the walls file: the tank (fixed) first, then the paddle at rest */
-    const segment rest[] = {
-        {{0, 1}, {0, 0}, 0}, {{0, 0}, {2, 0}, 0}, {{2, 0}, {2, 1}, 0}, {{0.5, 0.8}, {0.5, 0.05}, 1}};
+    const segment rest[] = {{{0, 1}, {0, 0}, 0},
+                            {{0, 0}, {2, 0}, 0},
+                            {{2, 0}, {2, 1}, 0},
+                            {{0.5, 0.8}, {0.5, 0.05}, 1}};
     const char *names[] = {"tank", "paddle"}, *schemes[] = {"dbc", "dbc"};
     check_segments(out, rest, 4, names, schemes, 2);
     hid_t walls = open_output(out, "particles_walls.h5");
@@ -614,8 +616,7 @@ START_TEST(moving_wall)
         const double tau = t - start;
         double law[2] = {0, 0};
         for (int d = 0; d < 2 && tau >= 0; d++)
-            law[d] = U[d] * tau +
-                     A[d] * (sin(2 * M_PI * f * tau + phase) - sin(phase));
+            law[d] = U[d] * tau + A[d] * (sin(2 * M_PI * f * tau + phase) - sin(phase));
         hsize_t dims[2], ddims[2];
         double *points = read_doubles(file, "walls/points", dims);
         double *displacement = read_doubles(file, "walls/displacement", ddims);
@@ -629,8 +630,8 @@ START_TEST(moving_wall)
             ck_assert_double_eq(displacement[d], 0); /* the tank */
         }
         moved += fabs(law[0]) > 0.005;
-        fprintf(stderr, "moving wall: t = %g s, paddle displaced by (%.6f, %.6f) m as the law\n",
-                t, points[0] - rest[3].a[0], points[1] - rest[3].a[1]);
+        fprintf(stderr, "moving wall: t = %g s, paddle displaced by (%.6f, %.6f) m as the law\n", t,
+                points[0] - rest[3].a[0], points[1] - rest[3].a[1]);
         free(points);
         free(displacement);
         H5Fclose(file);
