@@ -25,7 +25,7 @@
  *    build, command_line, date, host: api->output->describe_run), status
  *    ("ok" or "failed"). Strings are variable-length UTF-8.
  *
- * The scene's walls (1.2.0; api->walls, every wall whatever its scheme:
+ * The scene's walls (1.3.0; api->walls, every wall whatever its scheme:
  * wall particles or geometric walls alike) are written once, at the first
  * snapshot, to DIR/<prefix>_walls.h5: the elements of the fixed walls first,
  * then those of the moving walls (each group in wall order), at the scene's
@@ -1746,5 +1746,5 @@ static const sluice_component components[] = {{
     .load_state = h5w_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("hdf5_writer", "1.2.0", "HDF5 particle snapshots with an XDMF index",
+SLUICE_DEFINE_LIBRARY("hdf5_writer", "1.3.0", "HDF5 particle snapshots with an XDMF index",
                       SLUICE_DIMS_ALL, components)
