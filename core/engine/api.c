@@ -1000,6 +1000,58 @@ static int64_t api_state_length(sluice_host *host, const char *name)
     return store->length(host, name);
 }
 
+/* A moving wall's displacement, set by the wall scheme that handles it. */
+static int api_set_wall_displacement(sluice_host *host, uint32_t index,
+                                     const sluice_real *displacement)
+{
+    sluice_sim *sim = host->sim;
+    if (index >= sim->scene.wall_count || !displacement) {
+        api_error(host, "set_wall_displacement: no wall %u (the scene has %zu)", index,
+                  sim->scene.wall_count);
+        return SLUICE_ERROR;
+    }
+    const sluice_wall *wall = &sim->walls[index];
+    const sluice_component *component =
+        host->instance < sim->instance_count ? sim->instances[host->instance].component : NULL;
+    if (!component || !(component->flags & SLUICE_COMPONENT_WALL_SCHEME) || !wall->scheme ||
+        strcmp(component->name, wall->scheme) != 0) {
+        api_error(host, "set_wall_displacement: wall %u is handled by '%s'; only its wall scheme "
+                        "moves it",
+                  index, wall->scheme ? wall->scheme : "(none)");
+        return SLUICE_ERROR;
+    }
+    if (!sim->wall_moves[index] && sim->phase == SLUICE_PHASE_RUN) {
+        api_error(host, "set_wall_displacement: wall %u was not marked as moving before the run "
+                        "(the first call belongs in create(), bind() or initialise())",
+                  index);
+        return SLUICE_ERROR;
+    }
+    if (sim->evaluating) {
+        api_error(host, "set_wall_displacement inside an evaluation; move walls between steps");
+        return SLUICE_ERROR;
+    }
+    for (int d = 0; d < 3; d++) {
+        if (!isfinite((double)displacement[d])) {
+            api_error(host, "set_wall_displacement: wall %u: displacement %d is not finite",
+                      index, d);
+            return SLUICE_ERROR;
+        }
+        sim->wall_displacement[3 * index + d] =
+            d < (int)sim->scene.dimensions ? displacement[d] : 0;
+    }
+    sim->wall_moves[index] = 1;
+    return SLUICE_OK;
+}
+
+static int api_wall_displacement(sluice_host *host, uint32_t index, sluice_real *out)
+{
+    const sluice_sim *sim = host->sim;
+    const int moves = index < sim->scene.wall_count && sim->wall_moves[index];
+    for (int d = 0; d < 3; d++)
+        out[d] = moves ? sim->wall_displacement[3 * index + d] : 0;
+    return moves;
+}
+
 static const sluice_api_messages messages_table = {
     sizeof(sluice_api_messages), api_error, api_warning, api_info,
 };
@@ -1016,7 +1068,7 @@ static const sluice_api_particles particles_table = {
 
 static const sluice_api_walls walls_table = {
     sizeof(sluice_api_walls), api_wall_count, api_wall, api_wall_layer_points, api_release,
-    api_wall_distance, api_wall_nearest,
+    api_wall_distance, api_wall_nearest, api_set_wall_displacement, api_wall_displacement,
 };
 
 static const sluice_api_evaluation evaluation_table = {

@@ -330,7 +330,9 @@ static int place_walls(sluice_sim *sim)
     }
     sim->wall_bounds = calloc(6 * (scene->wall_count + 1), sizeof *sim->wall_bounds);
     sim->wall_geometries = calloc(scene->wall_count + 1, sizeof *sim->wall_geometries);
-    if (!sim->wall_bounds || !sim->wall_geometries)
+    sim->wall_displacement = calloc(3 * (scene->wall_count + 1), sizeof *sim->wall_displacement);
+    sim->wall_moves = calloc(scene->wall_count + 1, 1);
+    if (!sim->wall_bounds || !sim->wall_geometries || !sim->wall_displacement || !sim->wall_moves)
         return errors + 1;
     for (size_t w = 0; w < scene->wall_count; w++)
         sim->wall_geometries[w] = &scene->walls[w].geometry;
@@ -368,7 +370,9 @@ static int publish_core(sluice_sim *sim)
         {"position", SLUICE_TYPE_REAL, SLUICE_COMPONENTS_DIM, "m", SLUICE_WRITE,
          SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "particle position"},
         {"kind", SLUICE_TYPE_UINT8, 1, "1", SLUICE_WRITE,
-         SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0, "particle kind: 0 fluid, 1 wall"},
+         SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART, NULL, 0,
+         "particle kind: 0 fluid, 1 wall particle, 2 open-boundary fluid (in an inlet or "
+         "outlet buffer, its state imposed)"},
         {"id", SLUICE_TYPE_ID, 1, "1", SLUICE_WRITE, SLUICE_FIELD_OUTPUT | SLUICE_FIELD_RESTART,
          NULL, 0, "permanent particle identity"},
     };
@@ -800,6 +804,8 @@ void sluice_sim_free(sluice_sim *sim)
         free(sim->instances[k].on_demand);
     }
     free(sim->wall_bounds);
+    free(sim->wall_displacement);
+    free(sim->wall_moves);
     free(sim->passes);
     free(sim->prepare);
     free(sim->accumulate_columns);

@@ -175,6 +175,10 @@ struct sluice_sim {
     uint32_t rate_count;
     sluice_wall *walls;
     sluice_real *wall_bounds; /* 6 per wall: min xyz, max xyz (wall_nearest) */
+    /* 3 per wall: the displacement its scheme last set for a moving wall
+     * (api->walls->set_wall_displacement); wall_moves[w] once it set one */
+    sluice_real *wall_displacement;
+    uint8_t *wall_moves;
     /* api->walls->wall_distance's cells, built at its first call (a scene whose
      * plugins never ask pays nothing); wall_distance_built is set once
      * they are (or once their build failed: the queries then ask every

@@ -25,20 +25,50 @@
  *    build, command_line, date, host: api->output->describe_run), status
  *    ("ok" or "failed"). Strings are variable-length UTF-8.
  *
+ * The scene's walls (1.3.0; api->walls, every wall whatever its scheme:
+ * wall particles or geometric walls alike) are written once, at the first
+ * snapshot, to DIR/<prefix>_walls.h5: the elements of the fixed walls first,
+ * then those of the moving walls (each group in wall order), at the scene's
+ * geometry:
+ *  - points [P, 3] (double, m; z = 0 in 2D): 2 per segment (2D) or 3 per
+ *    triangle (3D), element after element;
+ *  - connectivity [E, 2 or 3] (int64): 0, 1, 2, ... (every grid of the
+ *    index takes its first rows);
+ *  - wall [E] (int32): the wall of each element (its index in the scene's
+ *    geometry.walls); normal [E, 3] (double): the unit normal into the fluid;
+ *  - per wall: name and scheme (variable-length UTF-8 strings), moves (uint8);
+ *  - attributes dimensions, nodes_per_element, fixed_elements, moving_elements;
+ *  - when a wall moves, groups fixed and moving with the points,
+ *    connectivity, wall and normal of the fixed and of the moving elements
+ *    (the index's grids name whole datasets: ParaView 5.11's XDMF 3 readers
+ *    read no HyperSlab of a geometry or an attribute).
+ * A wall that moves (its scheme reports a displacement,
+ * api->walls->wall_displacement: dbc's moving_wall) is also in every
+ * snapshot: /walls/points [moving elements x nodes, 3] at the snapshot's time
+ * and /walls/displacement [walls, 3] (zero for a fixed wall).
+ *
  * DIR/<prefix>.xdmf is rewritten atomically after every snapshot: a temporal
- * collection of every snapshot so far, each a Uniform grid with Polyvertex
- * topology, Geometry XY / XYZ from /position and one Attribute per written
- * field. The Polyvertex connectivity is the first N entries (a HyperSlab) of
+ * collection of every snapshot so far. Without walls each is a Uniform grid
+ * with Polyvertex topology, Geometry XY / XYZ from /position and one
+ * Attribute per written field; with walls each is a spatial collection of
+ * that grid (named "particles"), a grid "walls" (the fixed walls: Polyline
+ * cells with NodesPerElement 2 in 2D, Triangle cells in 3D, from
+ * <prefix>_walls.h5) and a grid "moving_walls" (their points from the
+ * snapshot, the rest from the walls file's group moving), both with the
+ * cell attributes wall and normal. The Polyvertex
+ * connectivity is the first N entries (a HyperSlab) of
  * /index = 0, 1, 2, ... in DIR/<prefix>_vertices.h5, shared by all snapshots
  * and grown when the particle count does: without connectivity ParaView's
  * XDMF 3 readers make no cells and the particles only show as Point Gaussian.
  * Ids are declared Int (ParaView reads UInt of precision 8 as 32-bit). File
  * names in it are relative, so the run directory can be moved.
+ * tools/paraview/open_run.py shows a run with its walls (docs/paraview.md).
  *
  * Across MPI ranks (1.1.0, parallel HDF5): the same files. Every rank
  * writes its particles at its offset (the ranks' particles in rank order)
  * into one snapshot, opened collectively as <name>.partial and renamed by
- * rank 0 once complete; rank 0 writes the XDMF index and the vertex file.
+ * rank 0 once complete; rank 0 writes the XDMF index, the vertex file and
+ * the walls file, and the moving walls' points in the snapshot.
  *
  * Fields written: `fields: ""` (the default) writes every field flagged
  * SLUICE_FIELD_OUTPUT; otherwise `fields` is a comma-separated list of field
@@ -94,6 +124,28 @@ typedef struct h5w_text {
     int failed; /* out of memory: the text is incomplete */
 } h5w_text;
 
+/* The scene's walls as the snapshots show them (api->walls, every scheme),
+ * gathered at the first snapshot (every wall scheme has initialised and
+ * said which walls move): the elements of fixed walls first, then those of
+ * moving walls, each in wall order. */
+typedef struct h5w_walls {
+    int ready;              /* gathered */
+    int written;            /* <prefix>_walls.h5 written by this process */
+    uint32_t dimensions;
+    uint32_t count;         /* walls */
+    uint32_t nodes;         /* points per element: 2 (segments) or 3 (triangles) */
+    uint64_t fixed, moving; /* elements of fixed walls, of moving walls */
+    double *points;         /* 3 per point, nodes per element: the scene's geometry */
+    double *normals;        /* 3 per element, into the fluid */
+    int32_t *wall;          /* per element: the wall's index (api->walls->wall) */
+    uint8_t *moves;         /* per wall */
+    const char **names, **schemes; /* per wall, the core's strings */
+    /* at the snapshot being written: every wall's displacement (3 each) and
+     * the moving walls' points (3 per point) */
+    double *displacement;
+    double *moving_points;
+} h5w_walls;
+
 typedef struct h5w_state {
     const sluice_api *api;
     int compression;
@@ -128,6 +180,7 @@ typedef struct h5w_state {
     /* restarted: the records are those of the checkpointed run; the first
      * XDMF rewrite keeps those whose files are in this output directory */
     int prune_records;
+    h5w_walls walls;
 } h5w_state;
 
 static const sluice_param_spec params[] = {
@@ -292,6 +345,14 @@ static void h5w_destroy(void *state)
     free(s->scratch);
     free(s->xdmf.data);
     free(s->records);
+    free(s->walls.points);
+    free(s->walls.normals);
+    free(s->walls.wall);
+    free(s->walls.moves);
+    free(s->walls.names);
+    free(s->walls.schemes);
+    free(s->walls.displacement);
+    free(s->walls.moving_points);
     free(s);
 }
 
@@ -832,6 +893,258 @@ static void write_attributes(h5w_state *s, hid_t file, const sluice_view *v, uin
         attr_string(file, "status", status, f);
 }
 
+/* --------------------------------------------------------------- walls -- */
+
+/* Gathers the scene's walls (api->walls->wall, of every scheme), fixed
+ * walls' elements first, then moving walls' (those whose scheme set a
+ * displacement: api->walls->wall_displacement). */
+static int gather_walls(h5w_state *s, sluice_host *host)
+{
+    const sluice_api *api = s->api;
+    h5w_walls *w = &s->walls;
+    w->ready = 1;
+    w->dimensions = api->particles->view(host)->dimensions;
+    w->nodes = w->dimensions == 3 ? 3 : 2;
+    w->count = api->walls->wall_count(host);
+    if (w->count == 0)
+        return SLUICE_OK;
+    w->moves = calloc(w->count, 1);
+    w->names = calloc(w->count, sizeof *w->names);
+    w->schemes = calloc(w->count, sizeof *w->schemes);
+    w->displacement = calloc(3 * (size_t)w->count, sizeof *w->displacement);
+    if (!w->moves || !w->names || !w->schemes || !w->displacement) {
+        api->messages->error(host, "out of memory gathering the walls");
+        return SLUICE_ERROR;
+    }
+    for (uint32_t k = 0; k < w->count; k++) {
+        const sluice_wall *wall = api->walls->wall(host, k);
+        if (!wall) {
+            api->messages->error(host, "cannot read wall %u of %u", k, w->count);
+            return SLUICE_ERROR;
+        }
+        sluice_real d[3];
+        w->moves[k] = api->walls->wall_displacement(host, k, d) != 0;
+        w->names[k] = wall->name ? wall->name : "";
+        w->schemes[k] = wall->scheme ? wall->scheme : "";
+        if (w->moves[k])
+            w->moving += wall->element_count;
+        else
+            w->fixed += wall->element_count;
+    }
+    const size_t elements = (size_t)(w->fixed + w->moving);
+    w->points = malloc((elements * w->nodes * 3 + 1) * sizeof *w->points);
+    w->normals = malloc((elements * 3 + 1) * sizeof *w->normals);
+    w->wall = malloc((elements + 1) * sizeof *w->wall);
+    w->moving_points = malloc(((size_t)w->moving * w->nodes * 3 + 1) * sizeof *w->moving_points);
+    if (!w->points || !w->normals || !w->wall || !w->moving_points) {
+        api->messages->error(host, "out of memory gathering the walls");
+        return SLUICE_ERROR;
+    }
+    size_t e = 0;
+    for (int moving = 0; moving < 2; moving++)
+        for (uint32_t k = 0; k < w->count; k++) {
+            const sluice_wall *wall = api->walls->wall(host, k);
+            if (w->moves[k] != moving)
+                continue;
+            for (uint32_t q = 0; q < wall->element_count; q++, e++) {
+                for (size_t c = 0; c < 3 * (size_t)w->nodes; c++)
+                    w->points[3 * w->nodes * e + c] =
+                        (double)wall->points[3 * w->nodes * (size_t)q + c];
+                for (size_t c = 0; c < 3; c++)
+                    w->normals[3 * e + c] = (double)wall->normals[3 * (size_t)q + c];
+                w->wall[e] = (int32_t)k;
+            }
+        }
+    return SLUICE_OK;
+}
+
+/* The moving walls' displacements and points now. */
+static void move_walls(h5w_state *s, sluice_host *host)
+{
+    h5w_walls *w = &s->walls;
+    for (uint32_t k = 0; k < w->count; k++) {
+        sluice_real d[3] = {0, 0, 0};
+        if (w->moves[k])
+            s->api->walls->wall_displacement(host, k, d);
+        for (int c = 0; c < 3; c++)
+            w->displacement[3 * k + c] = (double)d[c];
+    }
+    const size_t first = (size_t)w->fixed * w->nodes;
+    for (size_t p = 0; p < (size_t)w->moving * w->nodes; p++) {
+        const int32_t k = w->wall[(first + p) / w->nodes];
+        for (int c = 0; c < 3; c++)
+            w->moving_points[3 * p + c] =
+                w->points[3 * (first + p) + c] + w->displacement[3 * k + c];
+    }
+}
+
+/* A small dataset written whole. Across ranks every rank takes part in the
+ * collective calls and the one with `writes` set writes the values; outside
+ * MPI-IO it is one chunk with a Fletcher-32 checksum when `checksum`. */
+static void write_array(hid_t where, const char *name, hid_t type, int rank, const hsize_t *dims,
+                        const void *data, const h5w_part *part, int writes, int checksum,
+                        h5w_failure *f)
+{
+    if (f->text[0])
+        return;
+    hsize_t elements = 1;
+    for (int r = 0; r < rank; r++)
+        elements *= dims[r];
+    hid_t space = H5W_NONE, dcpl = H5W_NONE, set = H5W_NONE, none = H5W_NONE;
+    if ((space = H5Screate_simple(rank, dims, NULL)) < 0 ||
+        (dcpl = H5Pcreate(H5P_DATASET_CREATE)) < 0)
+        fail(f, "creating dataset '%s' failed", name);
+    else if (checksum && !part->parallel && elements > 0 &&
+             (H5Pset_chunk(dcpl, rank, dims) < 0 || H5Pset_fletcher32(dcpl) < 0))
+        fail(f, "setting up the chunk of dataset '%s' failed", name);
+    else if ((set = H5Dcreate2(where, name, type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT)) < 0)
+        fail(f, "creating dataset '%s' failed", name);
+    else if (elements > 0) {
+        hid_t memory = H5S_ALL, selection = H5S_ALL;
+        if (!writes) {
+            if ((none = H5Screate_simple(rank, dims, NULL)) < 0 || H5Sselect_none(none) < 0 ||
+                H5Sselect_none(space) < 0)
+                fail(f, "selecting nothing of dataset '%s' failed", name);
+            memory = none;
+            selection = space;
+        }
+        if (!f->text[0] && H5Dwrite(set, type, memory, selection, part->transfer, data) < 0)
+            fail(f, "writing dataset '%s' failed", name);
+    }
+    close_id(&none, H5Sclose, f, "H5Sclose");
+    close_id(&set, H5Dclose, f, "H5Dclose");
+    close_id(&dcpl, H5Pclose, f, "H5Pclose");
+    close_id(&space, H5Sclose, f, "H5Sclose");
+}
+
+/* The moving walls in a snapshot: /walls/points (their points at the
+ * snapshot's time, in the walls file's order) and /walls/displacement
+ * (every wall's, zero for fixed ones). Nothing when no wall moves. */
+static void write_snapshot_walls(const h5w_state *s, hid_t file, const h5w_part *part, int writes,
+                                 h5w_failure *f)
+{
+    const h5w_walls *w = &s->walls;
+    if (f->text[0] || w->moving == 0)
+        return;
+    hid_t group = H5Gcreate2(file, "walls", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (group < 0) {
+        fail(f, "creating group 'walls' failed");
+        return;
+    }
+    const hsize_t points[2] = {(hsize_t)w->moving * w->nodes, 3}, displacement[2] = {w->count, 3};
+    write_array(group, "points", H5T_NATIVE_DOUBLE, 2, points, w->moving_points, part, writes, 1,
+                f);
+    write_array(group, "displacement", H5T_NATIVE_DOUBLE, 2, displacement, w->displacement, part,
+                writes, 1, f);
+    if (!f->text[0])
+        attr_string(group, "units", "m", f);
+    close_id(&group, H5Gclose, f, "H5Gclose");
+}
+
+/* Elements [first, first + count) of the walls as group `name` (points,
+ * connectivity 0, 1, 2, ..., wall, normal): the grids of the XDMF index
+ * when a wall moves (ParaView's XDMF 3 readers read no HyperSlab of a
+ * geometry or an attribute). */
+static void write_wall_group(hid_t file, const char *name, const h5w_walls *w, uint64_t first,
+                             uint64_t count, const int64_t *connectivity, h5w_failure *f)
+{
+    if (f->text[0] || count == 0)
+        return;
+    hid_t group = H5Gcreate2(file, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (group < 0) {
+        fail(f, "creating group '%s' failed", name);
+        return;
+    }
+    const h5w_part whole = {0, 0, H5P_DEFAULT, 0};
+    const hsize_t points[2] = {count * w->nodes, 3}, cells[2] = {count, w->nodes},
+                  normals[2] = {count, 3}, per_element[1] = {count};
+    write_array(group, "points", H5T_NATIVE_DOUBLE, 2, points, w->points + 3 * w->nodes * first,
+                &whole, 1, 1, f);
+    write_array(group, "connectivity", H5T_NATIVE_INT64, 2, cells, connectivity, &whole, 1, 1, f);
+    write_array(group, "wall", H5T_NATIVE_INT32, 1, per_element, w->wall + first, &whole, 1, 1, f);
+    write_array(group, "normal", H5T_NATIVE_DOUBLE, 2, normals, w->normals + 3 * first, &whole, 1,
+                1, f);
+    close_id(&group, H5Gclose, f, "H5Gclose");
+}
+
+/* <prefix>_walls.h5's writer (write_file_with): every wall at the scene's
+ * geometry, fixed walls' elements first (docs: the header comment). */
+static int write_walls_file(void *context, const char *temporary, char *error, size_t error_size)
+{
+    const h5w_walls *w = context;
+    const uint64_t elements = w->fixed + w->moving, point_count = elements * w->nodes;
+    h5w_failure failure = {{0}}, *f = &failure;
+    const h5w_part whole = {0, 0, H5P_DEFAULT, 0};
+    int64_t *connectivity = malloc((size_t)(point_count + 1) * sizeof *connectivity);
+    hid_t file = H5W_NONE, text = H5W_NONE;
+    errno = 0;
+    if (!connectivity)
+        fail(f, "out of memory");
+    else if ((file = H5Fcreate(temporary, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT)) < 0)
+        fail(f, "cannot create it: %s", errno ? strerror(errno) : "H5Fcreate failed");
+    else if ((text = H5Tcopy(H5T_C_S1)) < 0 || H5Tset_size(text, H5T_VARIABLE) < 0 ||
+             H5Tset_cset(text, H5T_CSET_UTF8) < 0)
+        fail(f, "making a string type failed");
+    for (uint64_t p = 0; connectivity && p < point_count; p++)
+        connectivity[p] = (int64_t)p;
+    const hsize_t points[2] = {point_count, 3}, cells[2] = {elements, w->nodes},
+                  normals[2] = {elements, 3}, per_element[1] = {elements}, per_wall[1] = {w->count};
+    write_array(file, "points", H5T_NATIVE_DOUBLE, 2, points, w->points, &whole, 1, 1, f);
+    write_array(file, "connectivity", H5T_NATIVE_INT64, 2, cells, connectivity, &whole, 1, 1, f);
+    write_array(file, "wall", H5T_NATIVE_INT32, 1, per_element, w->wall, &whole, 1, 1, f);
+    write_array(file, "normal", H5T_NATIVE_DOUBLE, 2, normals, w->normals, &whole, 1, 1, f);
+    write_array(file, "moves", H5T_NATIVE_UINT8, 1, per_wall, w->moves, &whole, 1, 1, f);
+    write_array(file, "name", text, 1, per_wall, w->names, &whole, 1, 0, f);
+    write_array(file, "scheme", text, 1, per_wall, w->schemes, &whole, 1, 0, f);
+    if (w->moving > 0) {
+        write_wall_group(file, "fixed", w, 0, w->fixed, connectivity, f);
+        write_wall_group(file, "moving", w, w->fixed, w->moving, connectivity, f);
+    }
+    const int dimensions = (int)w->dimensions, nodes = (int)w->nodes;
+    if (!f->text[0] &&
+        (attr_scalar(file, "dimensions", H5T_NATIVE_INT, H5T_NATIVE_INT, &dimensions, f) != 0 ||
+         attr_scalar(file, "nodes_per_element", H5T_NATIVE_INT, H5T_NATIVE_INT, &nodes, f) != 0 ||
+         attr_scalar(file, "fixed_elements", H5T_NATIVE_UINT64, H5T_NATIVE_UINT64, &w->fixed,
+                     f) != 0 ||
+         attr_scalar(file, "moving_elements", H5T_NATIVE_UINT64, H5T_NATIVE_UINT64, &w->moving,
+                     f) != 0))
+        fail(f, "writing the attributes failed");
+    close_id(&text, H5Tclose, f, "H5Tclose");
+    if (file >= 0 && H5Fclose(file) < 0 && !f->text[0])
+        fail(f, "%s", errno ? strerror(errno) : "H5Fclose failed");
+    free(connectivity);
+    if (f->text[0]) {
+        snprintf(error, error_size, "%s", f->text);
+        return -1;
+    }
+    return 0;
+}
+
+/* Writes <prefix>_walls.h5 once per process (a restart into another
+ * directory writes it there too). */
+static int write_walls_index(h5w_state *s, sluice_host *host)
+{
+    const sluice_api *api = s->api;
+    if (s->walls.written || s->walls.count == 0)
+        return SLUICE_OK;
+    char name[H5W_PREFIX_MAX + 16], path[H5W_PATH_MAX];
+    snprintf(name, sizeof name, "%s_walls.h5", s->prefix);
+    if (api->output->output_path(host, name, path, sizeof path) != SLUICE_OK) {
+        api->messages->error(host, "the path of '%s' in the output directory is too long", name);
+        return SLUICE_ERROR;
+    }
+    H5E_auto2_t old_func = NULL;
+    void *old_data = NULL;
+    H5Eget_auto2(H5E_DEFAULT, &old_func, &old_data);
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+    int rc = api->output->write_file_with(host, path, write_walls_file, &s->walls);
+    H5Eclear2(H5E_DEFAULT);
+    H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
+    if (rc == SLUICE_OK)
+        s->walls.written = 1;
+    return rc;
+}
+
 /* What a snapshot's writer needs (write_snapshot_file). */
 typedef struct h5w_job {
     h5w_state *s;
@@ -860,6 +1173,7 @@ static int write_snapshot_file(void *context, const char *temporary, char *error
     const h5w_part whole = {0, v->count, H5P_DEFAULT, 0};
     for (uint32_t i = 0; i < s->field_count && !f->text[0]; i++)
         write_field(s, file, &s->fields[i], v, &whole, f);
+    write_snapshot_walls(s, file, &whole, 1, f);
     if (!f->text[0])
         write_attributes(s, file, v, v->count, scene ? scene : "", job->status, f);
     if (file >= 0 && H5Fclose(file) < 0 && !f->text[0])
@@ -899,6 +1213,7 @@ static int write_shared(h5w_state *s, sluice_host *host, const sluice_view *v,
         fail(f, "H5Fcreate of '%s' failed", partial);
     for (uint32_t i = 0; i < s->field_count && !f->text[0]; i++)
         write_field(s, file, &s->fields[i], v, &part, f);
+    write_snapshot_walls(s, file, &part, ranks->rank == 0, f);
     if (!f->text[0])
         write_attributes(s, file, v, ranks->particle_total, scene ? scene : "", status, f);
     if (file >= 0 && H5Fclose(file) < 0)
@@ -955,6 +1270,131 @@ static void xdmf_data_item(h5w_text *t, const h5w_field *field, size_t n, const 
     text_append(t, ":/", 2);
     text_xml(t, field->name);
     text_append(t, "</DataItem>", 11);
+}
+
+/* Rows [first, first + count) of an HDF dataset of `total` rows and
+ * `columns` columns (0: one-dimensional) as a DataItem. */
+static void xdmf_rows(h5w_text *t, const char *pad, const char *file_name, const char *dataset,
+                      const char *number, int precision, uint64_t first, uint64_t count,
+                      uint64_t total, uint32_t columns)
+{
+    char shape[64], whole[64];
+    if (columns)
+        snprintf(shape, sizeof shape, "%llu %u", (unsigned long long)count, columns),
+            snprintf(whole, sizeof whole, "%llu %u", (unsigned long long)total, columns);
+    else
+        snprintf(shape, sizeof shape, "%llu", (unsigned long long)count),
+            snprintf(whole, sizeof whole, "%llu", (unsigned long long)total);
+    const int slab = first != 0 || count != total;
+    if (slab) {
+        text_printf(t, "%s<DataItem ItemType=\"HyperSlab\" Dimensions=\"%s\" Type=\"HyperSlab\">\n",
+                    pad, shape);
+        if (columns)
+            text_printf(t,
+                        "%s  <DataItem Dimensions=\"3 2\" Format=\"XML\">%llu 0 1 1 %llu "
+                        "%u</DataItem>\n",
+                        pad, (unsigned long long)first, (unsigned long long)count, columns);
+        else
+            text_printf(t,
+                        "%s  <DataItem Dimensions=\"3 1\" Format=\"XML\">%llu 1 %llu</DataItem>\n",
+                        pad, (unsigned long long)first, (unsigned long long)count);
+        text_printf(t, "%s  ", pad);
+    } else {
+        text_printf(t, "%s", pad);
+    }
+    text_printf(t, "<DataItem Dimensions=\"%s\" NumberType=\"%s\" Precision=\"%d\" Format=\"HDF\">",
+                whole, number, precision);
+    text_xml(t, file_name);
+    text_append(t, ":/", 2);
+    text_xml(t, dataset);
+    text_append(t, "</DataItem>\n", 12);
+    if (slab)
+        text_printf(t, "%s</DataItem>\n", pad);
+}
+
+/* One snapshot's particles: a Uniform grid of Polyvertex cells. */
+static void xdmf_particles(h5w_text *t, const h5w_state *s, const h5w_record *g,
+                           const char *file_name, const char *vertices, const char *name,
+                           const char *pad, int with_time)
+{
+    const size_t n = (size_t)g->count;
+    const h5w_field *position = NULL;
+    for (uint32_t i = 0; i < s->field_count; i++)
+        if (strcmp(s->fields[i].name, "position") == 0)
+            position = &s->fields[i];
+    text_printf(t, "%s<Grid Name=\"", pad);
+    text_xml(t, name);
+    text_printf(t, "\" GridType=\"Uniform\">\n");
+    if (with_time)
+        text_printf(t, "%s  <Time Value=\"%.15g\"/>\n", pad, g->time);
+    text_printf(t,
+                "%s  <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" "
+                "NodesPerElement=\"1\">\n",
+                pad, n);
+    char inner[32];
+    snprintf(inner, sizeof inner, "%s    ", pad);
+    xdmf_rows(t, inner, vertices, "index", "Int", 8, 0, n, s->vertex_capacity, 0);
+    text_printf(t, "%s  </Topology>\n", pad);
+    text_printf(t, "%s  <Geometry GeometryType=\"%s\">\n%s    ", pad,
+                g->dimensions == 3 ? "XYZ" : "XY", pad);
+    if (position)
+        xdmf_data_item(t, position, n, file_name);
+    text_printf(t, "\n%s  </Geometry>\n", pad);
+    for (uint32_t i = 0; i < s->field_count; i++) {
+        const h5w_field *field = &s->fields[i];
+        const char *kind = field->components == 1               ? "Scalar"
+                           : field->components == g->dimensions ? "Vector"
+                                                                : "Matrix";
+        text_printf(t, "%s  <Attribute Name=\"", pad);
+        text_xml(t, field->name);
+        text_printf(t, "\" AttributeType=\"%s\" Center=\"Node\">\n%s    ", kind, pad);
+        xdmf_data_item(t, field, n, file_name);
+        text_printf(t, "\n%s  </Attribute>\n", pad);
+    }
+    text_printf(t, "%s</Grid>\n", pad);
+}
+
+/* The fixed walls (grid "walls") or the moving ones (grid "moving_walls":
+ * their points from the snapshot), as Polyline (2D) or Triangle (3D) cells
+ * with the attributes wall (its index) and normal (into the fluid), from
+ * <prefix>_walls.h5: its whole arrays when no wall moves, else its groups
+ * fixed and moving. Nothing when there are none. */
+static void xdmf_walls(h5w_text *t, const h5w_walls *w, const char *walls_file,
+                       const char *snapshot_file, int moving)
+{
+    const uint64_t count = moving ? w->moving : w->fixed;
+    if (count == 0)
+        return;
+    const char *group = w->moving == 0 ? "" : moving ? "moving/" : "fixed/";
+    const char *pad = "            ";
+    char name[64];
+    text_printf(t, "        <Grid Name=\"%s\" GridType=\"Uniform\">\n",
+                moving ? "moving_walls" : "walls");
+    if (w->nodes == 2)
+        text_printf(t,
+                    "          <Topology TopologyType=\"Polyline\" NumberOfElements=\"%llu\" "
+                    "NodesPerElement=\"2\">\n",
+                    (unsigned long long)count);
+    else
+        text_printf(t, "          <Topology TopologyType=\"Triangle\" NumberOfElements=\"%llu\">\n",
+                    (unsigned long long)count);
+    snprintf(name, sizeof name, "%sconnectivity", group);
+    xdmf_rows(t, pad, walls_file, name, "Int", 8, 0, count, count, w->nodes);
+    text_printf(t, "          </Topology>\n          <Geometry GeometryType=\"XYZ\">\n");
+    snprintf(name, sizeof name, "%spoints", group);
+    xdmf_rows(t, pad, moving ? snapshot_file : walls_file, moving ? "walls/points" : name, "Float",
+              8, 0, count * w->nodes, count * w->nodes, 3);
+    text_printf(t,
+                "          </Geometry>\n"
+                "          <Attribute Name=\"wall\" AttributeType=\"Scalar\" Center=\"Cell\">\n");
+    snprintf(name, sizeof name, "%swall", group);
+    xdmf_rows(t, pad, walls_file, name, "Int", 4, 0, count, count, 0);
+    text_printf(t,
+                "          </Attribute>\n"
+                "          <Attribute Name=\"normal\" AttributeType=\"Vector\" Center=\"Cell\">\n");
+    snprintf(name, sizeof name, "%snormal", group);
+    xdmf_rows(t, pad, walls_file, name, "Float", 8, 0, count, count, 3);
+    text_printf(t, "          </Attribute>\n        </Grid>\n");
 }
 
 /* The vertex file's writer (write_file_with): /index = 0 .. capacity - 1
@@ -1066,10 +1506,6 @@ static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v, uin
     rec->count = count;
     rec->dimensions = v->dimensions;
 
-    const h5w_field *position = NULL;
-    for (uint32_t i = 0; i < s->field_count; i++)
-        if (strcmp(s->fields[i].name, "position") == 0)
-            position = &s->fields[i];
     h5w_text *t = &s->xdmf;
     t->length = 0;
     if (t->data)
@@ -1080,43 +1516,26 @@ static int write_xdmf(h5w_state *s, sluice_host *host, const sluice_view *v, uin
                    "    <Grid Name=\"");
     text_xml(t, s->prefix);
     text_printf(t, "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
-    char vertices[H5W_PREFIX_MAX + 16];
+    char vertices[H5W_PREFIX_MAX + 16], walls[H5W_PREFIX_MAX + 16];
     snprintf(vertices, sizeof vertices, "%s_vertices.h5", s->prefix);
+    snprintf(walls, sizeof walls, "%s_walls.h5", s->prefix);
     for (size_t r = 0; r < s->record_count; r++) {
         const h5w_record *g = &s->records[r];
         char file_name[H5W_PREFIX_MAX + 40];
         snprintf(file_name, sizeof file_name, "%s.h5", g->stem);
-        const size_t n = (size_t)g->count;
+        if (s->walls.count == 0) {
+            xdmf_particles(t, s, g, file_name, vertices, g->stem, "      ", 1);
+            continue;
+        }
+        /* with walls: a spatial collection per time, the particles and the walls */
         text_printf(t, "      <Grid Name=\"");
         text_xml(t, g->stem);
-        text_printf(t, "\" GridType=\"Uniform\">\n        <Time Value=\"%.15g\"/>\n", g->time);
-        text_printf(t,
-                    "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" "
-                    "NodesPerElement=\"1\">\n"
-                    "          <DataItem ItemType=\"HyperSlab\" Dimensions=\"%zu\" "
-                    "Type=\"HyperSlab\">\n"
-                    "            <DataItem Dimensions=\"3 1\" Format=\"XML\">0 1 %zu</DataItem>\n"
-                    "            <DataItem Dimensions=\"%llu\" NumberType=\"Int\" "
-                    "Precision=\"8\" Format=\"HDF\">",
-                    n, n, n, (unsigned long long)s->vertex_capacity);
-        text_xml(t, vertices);
-        text_printf(t, ":/index</DataItem>\n          </DataItem>\n        </Topology>\n");
-        text_printf(t, "        <Geometry GeometryType=\"%s\">\n          ",
-                    g->dimensions == 3 ? "XYZ" : "XY");
-        if (position)
-            xdmf_data_item(t, position, n, file_name);
-        text_printf(t, "\n        </Geometry>\n");
-        for (uint32_t i = 0; i < s->field_count; i++) {
-            const h5w_field *field = &s->fields[i];
-            const char *kind = field->components == 1               ? "Scalar"
-                               : field->components == g->dimensions ? "Vector"
-                                                                    : "Matrix";
-            text_printf(t, "        <Attribute Name=\"");
-            text_xml(t, field->name);
-            text_printf(t, "\" AttributeType=\"%s\" Center=\"Node\">\n          ", kind);
-            xdmf_data_item(t, field, n, file_name);
-            text_printf(t, "\n        </Attribute>\n");
-        }
+        text_printf(t, "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n"
+                       "        <Time Value=\"%.15g\"/>\n",
+                    g->time);
+        xdmf_particles(t, s, g, file_name, vertices, "particles", "        ", 0);
+        xdmf_walls(t, &s->walls, walls, file_name, 0);
+        xdmf_walls(t, &s->walls, walls, file_name, 1);
         text_printf(t, "      </Grid>\n");
     }
     text_printf(t, "    </Grid>\n  </Domain>\n</Xdmf>\n");
@@ -1153,6 +1572,13 @@ static int write_snapshot(h5w_state *s, sluice_host *host, const char *status)
         return SLUICE_ERROR;
     }
 
+    if (!s->walls.ready && gather_walls(s, host) != SLUICE_OK) {
+        s->broken = 1;
+        return SLUICE_ERROR;
+    }
+    if (s->walls.count > 0)
+        move_walls(s, host);
+
     /* HDF5 errors are reported once, here, not printed by the library */
     H5E_auto2_t old_func = NULL;
     void *old_data = NULL;
@@ -1185,7 +1611,8 @@ static int write_snapshot(h5w_state *s, sluice_host *host, const char *status)
     s->have_last = 1;
     s->last_step = v->step;
     s->last_time = v->time;
-    if (write_xdmf(s, host, v, ranks.particle_total, stem) != SLUICE_OK) {
+    if (write_walls_index(s, host) != SLUICE_OK ||
+        write_xdmf(s, host, v, ranks.particle_total, stem) != SLUICE_OK) {
         s->broken = 1;
         return SLUICE_ERROR;
     }
@@ -1301,7 +1728,8 @@ static int h5w_load(void *state, sluice_host *host)
 
 static const sluice_component components[] = {{
     .name = "hdf5",
-    .summary = "particle snapshots in HDF5 (one file per output time) with an XDMF index",
+    .summary = "particle snapshots in HDF5 (one file per output time) with the scene's walls "
+               "and an XDMF index",
     .reference = "HDF5 (The HDF Group); XDMF 3 (xdmf.org)",
     .dimensions = SLUICE_DIMS_ALL,
     .flags = SLUICE_COMPONENT_ACROSS_RANKS,
@@ -1318,5 +1746,5 @@ static const sluice_component components[] = {{
     .load_state = h5w_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("hdf5_writer", "1.2.0", "HDF5 particle snapshots with an XDMF index",
+SLUICE_DEFINE_LIBRARY("hdf5_writer", "1.3.0", "HDF5 particle snapshots with an XDMF index",
                       SLUICE_DIMS_ALL, components)

@@ -20,7 +20,8 @@
  * so that the wall does not jump at t = start. Positions and velocities are
  * set from the law in before_step (right at the step's start whatever the
  * hook order) and again in after_step (so that outputs, gauges and the state
- * between steps are at the new time). The integrators never move wall
+ * between steps are at the new time), with the wall's displacement for the
+ * writers (api->walls->set_wall_displacement, ABI 2.2). The integrators never move wall
  * particles; within a step the wall stays where it was at the step's start
  * (the mid-step evaluation of two-stage integrators sees it there). */
 #include <math.h>
@@ -50,6 +51,7 @@ typedef struct dbc_state {
     sluice_index count, fixed_count, moving_count;
     sluice_real *rest; /* moving wall: rest positions, 3 reals per particle */
     const char *moving_wall;
+    uint32_t moving_index; /* the moving wall's index (api->walls->wall) */
     double velocity_law[3], amplitude[3], frequency, phase, start;
 } dbc_state;
 
@@ -157,11 +159,12 @@ static void dbc_destroy(void *state)
     free(s);
 }
 
-/* Sets the moving wall's particles to the law at time t. */
-static void apply_motion(const dbc_state *s, const sluice_view *v, double t)
+/* The moving wall's displacement dx and velocity u at time t (3 each). */
+static void motion_at(const dbc_state *s, double t, double dx[3], double u[3])
 {
     const double tau = t - s->start, omega = 2 * SLUICE_PI * s->frequency;
-    double dx[3] = {0, 0, 0}, u[3] = {0, 0, 0};
+    for (int d = 0; d < 3; d++)
+        dx[d] = u[d] = 0;
     if (tau >= 0) {
         const double sine = sin(omega * tau + s->phase) - sin(s->phase);
         const double cosine = omega * cos(omega * tau + s->phase);
@@ -170,6 +173,19 @@ static void apply_motion(const dbc_state *s, const sluice_view *v, double t)
             u[d] = s->velocity_law[d] + s->amplitude[d] * cosine;
         }
     }
+}
+
+/* Sets the moving wall's particles to the law at time t, and its
+ * displacement for the writers (api->walls->set_wall_displacement). */
+static int apply_motion(const dbc_state *s, sluice_host *host, double t)
+{
+    const sluice_view *v = s->api->particles->view(host);
+    double dx[3], u[3];
+    motion_at(s, t, dx, u);
+    const sluice_real displacement[3] = {(sluice_real)dx[0], (sluice_real)dx[1],
+                                         (sluice_real)dx[2]};
+    if (s->api->walls->set_wall_displacement(host, s->moving_index, displacement) != SLUICE_OK)
+        return SLUICE_ERROR;
     const sluice_id first = s->first_id + s->fixed_count;
     for (uint32_t d = 0; d < s->dims; d++) {
         sluice_real *restrict x = sluice_real_column(v, s->position, d);
@@ -182,6 +198,7 @@ static void apply_motion(const dbc_state *s, const sluice_view *v, double t)
             }
         }
     }
+    return SLUICE_OK;
 }
 
 static int dbc_initialise(void *state, sluice_host *host)
@@ -237,7 +254,9 @@ static int dbc_initialise(void *state, sluice_host *host)
         }
         memcpy(s->rest, layers.positions + 3 * (size_t)s->fixed_count,
                (size_t)s->moving_count * 3 * sizeof *s->rest);
-        apply_motion(s, api->particles->view(host), api->particles->view(host)->time);
+        s->moving_index = (uint32_t)moving;
+        free(layers.positions);
+        return apply_motion(s, host, api->particles->view(host)->time);
     }
     free(layers.positions);
     return SLUICE_OK;
@@ -268,10 +287,8 @@ static void dbc_particle(void *state, const sluice_view *v, sluice_index begin, 
 static int dbc_before_step(void *state, sluice_host *host)
 {
     dbc_state *s = state;
-    if (s->moving_count) {
-        const sluice_view *v = s->api->particles->view(host);
-        apply_motion(s, v, v->time);
-    }
+    if (s->moving_count)
+        return apply_motion(s, host, s->api->particles->view(host)->time);
     return SLUICE_OK;
 }
 
@@ -279,8 +296,9 @@ static int dbc_after_step(void *state, sluice_host *host)
 {
     dbc_state *s = state;
     const sluice_view *v = s->api->particles->view(host);
-    if (s->moving_count)
-        apply_motion(s, v, v->time);
+    if (s->moving_count && apply_motion(s, host, v->time) != SLUICE_OK)
+        return SLUICE_ERROR;
+    v = s->api->particles->view(host);
     if (s->clamp)
         s->api->particles->parallel_for(host, v->count, clamp, s);
     return SLUICE_OK;
@@ -308,4 +326,4 @@ static const sluice_component components[] = {{
     .after_step = dbc_after_step,
 }};
 
-SLUICE_DEFINE_LIBRARY("dbc", "2.0.0", "dynamic boundary particles", SLUICE_DIMS_ALL, components)
+SLUICE_DEFINE_LIBRARY("dbc", "2.1.0", "dynamic boundary particles", SLUICE_DIMS_ALL, components)

@@ -416,6 +416,20 @@ typedef struct sluice_api_walls {
      * Thread-safe. */
     int (*wall_nearest)(sluice_host *host, const sluice_real *point, int32_t wall,
                         sluice_wall_point *out);
+    /* Since ABI 2.2. A wall that moves as a rigid body: the wall scheme that
+     * handles wall `index` (its component is wall->scheme) sets the wall's
+     * displacement from the scene's geometry (3 reals, m; the third 0 in 2D)
+     * whenever it moves the wall. The first call, which marks the wall as
+     * moving for the whole run, is made in create(), bind() or
+     * initialise(); later ones between steps. wall() keeps the scene's
+     * points, and wall_distance and wall_nearest measure to them: the
+     * displacement is what writers show. */
+    int (*set_wall_displacement)(sluice_host *host, uint32_t index,
+                                 const sluice_real *displacement);
+    /* Since ABI 2.2. 1 when wall `index` moves (its scheme set a
+     * displacement), with the displacement last set in out (3 reals); 0 with
+     * zeros for a fixed wall or an index out of range. */
+    int (*wall_displacement)(sluice_host *host, uint32_t index, sluice_real *out);
 } sluice_api_walls;
 
 /* Evaluations, time steps and passes. */

@@ -611,6 +611,47 @@ static void compare_table(const char *one, const char *dir, const char *name, in
     free(a), free(b);
 }
 
+/* The walls file's `points` of the run in `dir` (every wall's segments). */
+static double *read_wall_points(const char *dir, hsize_t *rows)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/particles_walls.h5", dir);
+    hid_t file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    ck_assert_msg(file >= 0, "cannot open %s", path);
+    hid_t set = H5Dopen2(file, "points", H5P_DEFAULT);
+    ck_assert_int_ge(set, 0);
+    hid_t space = H5Dget_space(set);
+    hsize_t dims[2] = {0, 0};
+    H5Sget_simple_extent_dims(space, dims, NULL);
+    double *points = malloc((size_t)(dims[0] * 3 + 1) * sizeof *points);
+    ck_assert_ptr_nonnull(points);
+    ck_assert_int_ge(H5Dread(set, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, points), 0);
+    H5Sclose(space);
+    H5Dclose(set);
+    H5Fclose(file);
+    *rows = dims[0];
+    return points;
+}
+
+/* The walls in the output across ranks (rank 0 writes them): the walls
+ * file's points and the XDMF index, wall grids included, as on one rank. */
+static void compare_walls(const char *one, const char *dir)
+{
+    hsize_t rows_one = 0, rows = 0;
+    double *a = read_wall_points(one, &rows_one), *b = read_wall_points(dir, &rows);
+    ck_assert_uint_eq(rows, rows_one);
+    ck_assert_uint_eq(rows, 6); /* the tank's three segments */
+    for (hsize_t i = 0; i < 3 * rows; i++)
+        ck_assert_double_eq(a[i], b[i]);
+    char a_path[600], b_path[600];
+    snprintf(a_path, sizeof a_path, "%s/particles.xdmf", one);
+    snprintf(b_path, sizeof b_path, "%s/particles.xdmf", dir);
+    char *x = test_read_file(a_path), *y = test_read_file(b_path);
+    ck_assert_msg(x && y && strcmp(x, y) == 0, "%s differs from the one-rank index", b_path);
+    ck_assert_ptr_nonnull(strstr(x, "<Grid Name=\"walls\""));
+    free(a), free(b), free(x), free(y);
+}
+
 START_TEST(output_as_one_rank)
 {
     int rank = 0, size = 1;
@@ -655,6 +696,7 @@ START_TEST(output_as_one_rank)
         /* the restarts rewrite from the checkpoint's time on: t = 0.1 s and the end */
         ck_assert_int_eq(compare_snapshots(one, again, 0), 4);
         ck_assert_int_eq(compare_snapshots(one, alone, 0), 4);
+        compare_walls(one, across);
         int front_rows = 0, point_rows = 0, other_rows = 0;
         compare_table(one, across, "front.csv", &front_rows);
         compare_table(one, across, "points.csv", &point_rows);
