@@ -47,6 +47,10 @@
  * snapshot: /walls/points [moving elements x nodes, 3] at the snapshot's time
  * and /walls/displacement [walls, 3] (zero for a fixed wall).
  *
+ * Every file of the writer (snapshots, the walls file, the vertex file)
+ * carries the run's provenance as string attributes of its root:
+ * sluice_version, git_revision, build, command_line, date, host.
+ *
  * DIR/<prefix>.xdmf is rewritten atomically after every snapshot: a temporal
  * collection of every snapshot so far. Without walls each is a Uniform grid
  * with Polyvertex topology, Geometry XY / XYZ from /position and one
@@ -144,7 +148,16 @@ typedef struct h5w_walls {
      * the moving walls' points (3 per point) */
     double *displacement;
     double *moving_points;
+    const char *const *provenance; /* the state's, for the file's attributes */
 } h5w_walls;
+
+/* The run's provenance, written into every file (api->output->describe_run):
+ * attribute names and the describe_run names they come from. */
+#define H5W_PROVENANCE 6
+static const char *const provenance_attribute[H5W_PROVENANCE] = {
+    "sluice_version", "git_revision", "build", "command_line", "date", "host"};
+static const char *const provenance_name[H5W_PROVENANCE] = {
+    "version", "git_revision", "build", "command_line", "date", "host"};
 
 typedef struct h5w_state {
     const sluice_api *api;
@@ -159,6 +172,8 @@ typedef struct h5w_state {
     char *plugins; /* the `plugins` attribute text */
     sluice_host *host;     /* for api->output->describe_run */
     double kernel_support; /* the kernel's support radius over h */
+    const char *kernel;    /* the scene's kernel component */
+    const char *provenance[H5W_PROVENANCE];
     sluice_schedule schedule; /* the next regular snapshot */
     uint64_t snapshots; /* files written; the next file's index */
     int have_last;
@@ -550,6 +565,13 @@ static int h5w_initialise(void *state, sluice_host *host)
     if (sluice_util_constant(api, host, "kernel_support", &support) != SLUICE_OK)
         return SLUICE_ERROR;
     s->kernel_support = (double)support;
+    const char *kernel = api->output->describe_run(host, "kernel");
+    s->kernel = kernel ? kernel : "";
+    for (int k = 0; k < H5W_PROVENANCE; k++) {
+        const char *value = api->output->describe_run(host, provenance_name[k]);
+        s->provenance[k] = value ? value : "";
+    }
+    s->walls.provenance = s->provenance;
     uint32_t count = api->fields->field_count(host);
     if (s->name_count == 0) {
         for (uint32_t f = 0; f < count; f++) {
@@ -857,6 +879,15 @@ done:
     return f->text[0] ? -1 : 0;
 }
 
+/* The run's provenance as root attributes of `file`. */
+static int write_provenance(hid_t file, const char *const *provenance, h5w_failure *f)
+{
+    int rc = 0;
+    for (int k = 0; k < H5W_PROVENANCE && rc == 0; k++)
+        rc = attr_string(file, provenance_attribute[k], provenance[k], f);
+    return rc;
+}
+
 /* The root attributes of a snapshot (the same on every rank). */
 static void write_attributes(h5w_state *s, hid_t file, const sluice_view *v, uint64_t count,
                              const char *scene, const char *status, h5w_failure *f)
@@ -882,13 +913,10 @@ static void write_attributes(h5w_state *s, hid_t file, const sluice_view *v, uin
     if (rc == 0)
         rc = attr_scalar(file, "kernel_support", H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE,
                          &s->kernel_support, f);
-    /* the kernel and the run's provenance (api->output->describe_run) */
-    static const char *const described[] = {"kernel",       "version", "git_revision", "build",
-                                            "command_line", "date",    "host"};
-    for (size_t k = 0; k < SLUICE_COUNT(described) && rc == 0; k++) {
-        const char *value = s->api->output->describe_run(s->host, described[k]);
-        rc = attr_string(file, k == 1 ? "sluice_version" : described[k], value ? value : "", f);
-    }
+    if (rc == 0)
+        rc = attr_string(file, "kernel", s->kernel, f);
+    if (rc == 0)
+        rc = write_provenance(file, s->provenance, f);
     if (rc == 0)
         attr_string(file, "status", status, f);
 }
@@ -1107,7 +1135,8 @@ static int write_walls_file(void *context, const char *temporary, char *error, s
          attr_scalar(file, "fixed_elements", H5T_NATIVE_UINT64, H5T_NATIVE_UINT64, &w->fixed,
                      f) != 0 ||
          attr_scalar(file, "moving_elements", H5T_NATIVE_UINT64, H5T_NATIVE_UINT64, &w->moving,
-                     f) != 0))
+                     f) != 0 ||
+         write_provenance(file, w->provenance, f) != 0))
         fail(f, "writing the attributes failed");
     close_id(&text, H5Tclose, f, "H5Tclose");
     if (file >= 0 && H5Fclose(file) < 0 && !f->text[0])
@@ -1399,10 +1428,17 @@ static void xdmf_walls(h5w_text *t, const h5w_walls *w, const char *walls_file,
 
 /* The vertex file's writer (write_file_with): /index = 0 .. capacity - 1
  * (int64), written in blocks. */
+/* What the vertex file's writer needs. */
+typedef struct h5w_vertex_job {
+    uint64_t capacity;
+    const char *const *provenance;
+} h5w_vertex_job;
+
 static int write_vertex_file(void *context, const char *temporary, char *error,
                              size_t error_size)
 {
-    const uint64_t capacity = *(const uint64_t *)context;
+    const h5w_vertex_job *job = context;
+    const uint64_t capacity = job->capacity;
     enum { BLOCK = 65536 };
     int64_t *index = malloc(BLOCK * sizeof *index);
     h5w_failure failure = {{0}}, *f = &failure;
@@ -1434,6 +1470,8 @@ static int write_vertex_file(void *context, const char *temporary, char *error,
         H5Dclose(set);
     if (space >= 0)
         H5Sclose(space);
+    if (file >= 0 && !f->text[0])
+        write_provenance(file, job->provenance, f);
     if (file >= 0 && H5Fclose(file) < 0 && !f->text[0])
         fail(f, "%s", errno ? strerror(errno) : "H5Fclose failed");
     free(index);
@@ -1458,7 +1496,8 @@ static int write_vertex_index(h5w_state *s, sluice_host *host, uint64_t capacity
     void *old_data = NULL;
     H5Eget_auto2(H5E_DEFAULT, &old_func, &old_data);
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-    int rc = api->output->write_file_with(host, path, write_vertex_file, &capacity);
+    h5w_vertex_job job = {capacity, s->provenance};
+    int rc = api->output->write_file_with(host, path, write_vertex_file, &job);
     H5Eclear2(H5E_DEFAULT);
     H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
     if (rc == SLUICE_OK)

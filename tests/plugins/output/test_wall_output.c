@@ -161,6 +161,11 @@ static void check_segments(const char *dir, const segment *expected, size_t coun
     ck_assert_uint_eq(ndims[1], 3);
     ck_assert_double_eq(read_attribute(file, "dimensions"), 2);
     ck_assert_double_eq(read_attribute(file, "nodes_per_element"), 2);
+    /* the run's provenance, as in every file of the run */
+    static const char *const provenance[] = {"sluice_version", "git_revision", "build",
+                                             "command_line", "date", "host"};
+    for (size_t k = 0; k < sizeof provenance / sizeof *provenance; k++)
+        ck_assert_msg(H5Aexists(file, provenance[k]) > 0, "no attribute '%s'", provenance[k]);
     ck_assert_double_eq(read_attribute(file, "fixed_elements") +
                             read_attribute(file, "moving_elements"),
                         (double)count);

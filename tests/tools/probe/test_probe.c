@@ -465,24 +465,29 @@ START_TEST(provenance_and_interpolation_data)
     H5Dclose(mass);
     H5Dclose(density);
     H5Fclose(file);
-    /* a checkpoint records the same provenance */
-    char *command = NULL, *checkpoint = NULL;
-    ck_assert_int_ge(asprintf(&command, "ls %s/run/checkpoint_*.h5 | head -1 | tr -d '\\n'", dir),
+    /* a checkpoint and the writer's vertex index record the same provenance */
+    char *command = NULL, *files = NULL;
+    ck_assert_int_ge(asprintf(&command, "ls %s/run/checkpoint_*.h5 | head -1 | tr -d '\\n'; echo "
+                                        "' %s/run/particles_vertices.h5'",
+                              dir, dir),
                      0);
-    ck_assert_int_eq(test_popen(command, &checkpoint), 0);
-    file = H5Fopen(checkpoint, H5F_ACC_RDONLY, H5P_DEFAULT);
-    ck_assert_msg(file >= 0, "no checkpoint '%s'", checkpoint);
-    for (size_t k = 0; k < 5; k++) {
-        char *value = string_attribute(file, same[k]), *quoted = NULL;
-        ck_assert_int_ge(asprintf(&quoted, "\"%s\": \"%s\"", same[k], value), 0);
-        if (k != 2)
-            ck_assert_msg(strstr(json, quoted), "checkpoint %s differs from run.json", quoted);
-        free(quoted);
-        free(value);
+    ck_assert_int_eq(test_popen(command, &files), 0);
+    char *save = NULL;
+    for (char *name = strtok_r(files, " \n", &save); name; name = strtok_r(NULL, " \n", &save)) {
+        file = H5Fopen(name, H5F_ACC_RDONLY, H5P_DEFAULT);
+        ck_assert_msg(file >= 0, "cannot open '%s'", name);
+        for (size_t k = 0; k < 5; k++) {
+            char *value = string_attribute(file, same[k]), *quoted = NULL;
+            ck_assert_int_ge(asprintf(&quoted, "\"%s\": \"%s\"", same[k], value), 0);
+            if (k != 2)
+                ck_assert_msg(strstr(json, quoted), "%s: %s differs from run.json", name, quoted);
+            free(quoted);
+            free(value);
+        }
+        H5Fclose(file);
     }
-    H5Fclose(file);
     free(command);
-    free(checkpoint);
+    free(files);
     free(json);
     free(path);
     free(args);
