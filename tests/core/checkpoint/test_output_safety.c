@@ -53,8 +53,12 @@ static herr_t read_object(hid_t group, const char *name, const H5L_info_t *info,
     if (!buffer || points < 0 ||
         H5Dread(dataset, memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer) < 0)
         check->failures++;
-    else
+    else {
         check->datasets++;
+        /* variable-length data (the walls file's names) is HDF5's to free */
+        if (H5Tdetect_class(memory_type, H5T_VLEN) > 0 || H5Tis_variable_str(memory_type) > 0)
+            H5Dvlen_reclaim(memory_type, space, H5P_DEFAULT, buffer);
+    }
     free(buffer);
     H5Sclose(space);
     H5Tclose(memory_type);
