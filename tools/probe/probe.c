@@ -336,6 +336,7 @@ static int snapshot_time(const char *path, double *time)
 static probe_snapshot *list_snapshots(const probe_request *r, size_t *count)
 {
     size_t n = 0, capacity = 16;
+    int failed = 0;
     probe_snapshot *list = malloc(capacity * sizeof *list);
     DIR *dir = r->snapshot_count ? NULL : opendir(r->run);
     if (!list || (!r->snapshot_count && !dir)) {
@@ -357,32 +358,38 @@ static probe_snapshot *list_snapshots(const probe_request *r, size_t *count)
             name = r->snapshots[k];
         else
             break;
-        probe_snapshot *grown = n == capacity ? realloc(list, 2 * capacity * sizeof *list) : list;
+        if (n == capacity) {
+            probe_snapshot *grown = realloc(list, 2 * capacity * sizeof *list);
+            if (!grown) {
+                error("out of memory");
+                failed = 1;
+                break;
+            }
+            list = grown;
+            capacity *= 2;
+        }
         char *path = NULL;
-        if (!grown || (dir ? asprintf(&path, "%s/%s", r->run, name) < 0
-                           : !(path = strdup(name)))) {
+        if (dir ? asprintf(&path, "%s/%s", r->run, name) < 0 : !(path = strdup(name))) {
             error("out of memory");
-            n = (size_t)-1;
+            failed = 1;
             break;
         }
-        capacity = grown == list ? capacity : 2 * capacity;
-        list = grown;
         list[n] = (probe_snapshot){path, 0};
         if (snapshot_time(path, &list[n].time) != 0) {
             free(path);
-            n = (size_t)-1;
+            failed = 1;
             break;
         }
         n++;
     }
     if (dir)
         closedir(dir);
-    if (n == (size_t)-1 || n == 0) {
-        if (n == 0)
+    if (failed || n == 0) {
+        if (!failed)
             error("no snapshots %s_NNNNNN.h5 in '%s' (the scene's hdf5 writer writes them; "
                   "another prefix: --prefix)",
                   r->prefix, r->run);
-        for (size_t k = 0; n != (size_t)-1 && k < n; k++)
+        for (size_t k = 0; k < n; k++)
             free(list[k].path);
         free(list);
         return NULL;
