@@ -325,7 +325,10 @@ static sluice_sim *load(const arguments *a, int check_only, const void *communic
                                    .removal_count = a->removal_count,
                                    .swaps = a->swaps,
                                    .swap_count = a->swap_count,
-                                   .quiet = a->quiet};
+                                   .quiet = a->quiet,
+                                   /* a run into a batch log: as its progress lines */
+                                   .timestamps = !check_only && !a->quiet && a->progress != 0 &&
+                                                 a->progress != 1 && !isatty(STDERR_FILENO)};
     sluice_sim *sim = sluice_sim_load_variant(a->scene, a->variant, &options, diag);
     if (world_rank() == 0)
         sluice_diag_print(diag, stderr);

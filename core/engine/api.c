@@ -54,7 +54,7 @@ static void host_message(sluice_host *host, sluice_severity severity, const char
             sluice_sim_fail(sim, "plugin '%s': %s", name, text);
         } else if (sim->comm.size == 1) {
             char stamp[40] = "";
-            if (sim->progress == SLUICE_PROGRESS_LOG) {
+            if (sim->timestamps || sim->progress == SLUICE_PROGRESS_LOG) {
                 sluice_utc_timestamp(stamp, sizeof stamp - 1);
                 strcat(stamp, " ");
             }
@@ -98,7 +98,13 @@ static void api_info(sluice_host *host, const char *format, ...)
     char text[2048];
     vsnprintf(text, sizeof text, format, ap);
     va_end(ap);
-    fprintf(stderr, "sluice: %s: %s\n", sluice_sim_instance_name(host->sim, host->instance), text);
+    char stamp[40] = "";
+    if (host->sim->timestamps || host->sim->progress == SLUICE_PROGRESS_LOG) {
+        sluice_utc_timestamp(stamp, sizeof stamp - 1);
+        strcat(stamp, " ");
+    }
+    fprintf(stderr, "%ssluice: %s: %s\n", stamp, sluice_sim_instance_name(host->sim, host->instance),
+            text);
 }
 
 static int api_declare_field(sluice_host *host, const sluice_field_spec *spec)

@@ -736,6 +736,7 @@ sluice_sim *sluice_engine_load(const char *scene_path, const char *variant,
     sim->mass.column = sim->velocity.column = sim->density.column = -1;
     sim->check_only = options ? options->check_only : 0;
     sim->quiet = options ? options->quiet : 0;
+    sim->timestamps = options ? options->timestamps : 0;
     sim->comm = sluice_comm_self();
     if (options && options->communicator) {
 #ifdef SLUICE_MPI

@@ -28,6 +28,8 @@ typedef struct sluice_load_options {
     size_t swap_count;
     int quiet;                    /* no informational messages from the plugins while
                                      loading (warnings and errors still go to diag) */
+    int timestamps;               /* the plugins' informational messages begin with a UTC
+                                     timestamp (a batch log: SLUICE_PROGRESS_LOG) */
 } sluice_load_options;
 
 /* How a run reports its progress on stderr. */

@@ -243,7 +243,7 @@ struct sluice_sim {
     char failure[4096];
     sluice_table **tables;
     size_t table_count;
-    int progress, quiet;
+    int progress, quiet, timestamps;
     /* provenance (run.json, api->output->describe_run): the program's command line
      * (sluice_sim_set_command_line), the start date (UTC, ISO 8601) and host */
     char *command_line;
