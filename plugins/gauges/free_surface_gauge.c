@@ -255,7 +255,8 @@ static int fs_initialise(void *state, sluice_host *host)
         return SLUICE_ERROR;
     for (sluice_index k = 0; k < s->columns; k++)
         if (out->table_column(s->table, 1 + k, "m",
-                              "free-surface elevation (vertical coordinate) above the position",
+                              "free-surface elevation: the vertical coordinate of the surface on the "
+                              "vertical line of samples through the position (its lowest sample)",
                               s->points + 3 * (size_t)s->first[k]) != SLUICE_OK)
             return SLUICE_ERROR;
     return SLUICE_OK;
@@ -341,5 +342,5 @@ static const sluice_component components[] = {{
     .load_state = fs_load,
 }};
 
-SLUICE_DEFINE_LIBRARY("free_surface_gauge", "1.1.0", "free-surface elevation gauges",
+SLUICE_DEFINE_LIBRARY("free_surface_gauge", "1.2.0", "free-surface elevation gauges",
                       SLUICE_DIMS_ALL, components)

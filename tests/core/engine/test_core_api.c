@@ -828,7 +828,8 @@ START_TEST(every_table_described)
     ck_assert_ptr_nonnull(strstr(index, "\"format\": \"sluice-tables\""));
     ck_assert_ptr_nonnull(
         strstr(index, "{\"name\": \"eta_x0\", \"unit\": \"m\", \"description\": \"free-surface "
-                      "elevation (vertical coordinate) above the position\", \"position\": "
+                      "elevation: the vertical coordinate of the surface on the vertical line "
+                      "of samples through the position (its lowest sample)\", \"position\": "
                       "[0.025, -0.1]}"));
     ck_assert_ptr_nonnull(strstr(index, "\"file\": \"wall_forces.csv\",\n      \"instance\": "
                                         "\"wall_force\",\n      \"component\": \"wall_force\""));
