@@ -158,7 +158,24 @@ static void headline(const char *name, double value, const char *unit)
     printf("%s = %.6g%s%s\n", name, value, unit ? " " : "", unit ? unit : "");
 }
 
-static int parse_options(analyze_ctx *cx, int argc, char **argv, options *o)
+/* 1 when the command's usage names --NAME (the options it reads). */
+static int reads_option(const char *help, const char *name)
+{
+    const size_t len = strlen(name);
+    for (const char *p = strstr(help, "--"); p; p = strstr(p + 2, "--")) {
+        const char end = p[2 + len];
+        if (strncmp(p + 2, name, len) == 0 &&
+            !((end >= 'a' && end <= 'z') || (end >= '0' && end <= '9') || end == '-' ||
+              end == '_'))
+            return 1;
+    }
+    return 0;
+}
+
+/* Options of option_specs. One the command's usage `help` does not name has
+ * no effect: a warning says so (sluice study passes --from, --to and --out
+ * to every measure, read or not, and discards the warning). */
+static int parse_options(analyze_ctx *cx, int argc, char **argv, options *o, const char *help)
 {
     for (int i = 2; i < argc; i++) {
         const char *arg = argv[i];
@@ -180,6 +197,11 @@ static int parse_options(analyze_ctx *cx, int argc, char **argv, options *o)
             return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT,
                                 "unknown option %.*s (sluice-analyze --help lists them)",
                                 (int)len + 2, arg);
+        if (!reads_option(help, spec->name))
+            fprintf(stderr,
+                    "sluice-analyze: warning: '%s' does not read --%s: it has no effect "
+                    "(sluice-analyze %s --help lists what it reads)\n",
+                    o->command, spec->name, o->command);
         if (spec->kind == OPT_FLAG) {
             if (eq)
                 return analyze_fail(cx, SLUICE_ANALYZE_BAD_INPUT, "--%s takes no value",
@@ -2912,9 +2934,8 @@ done:
 /* ------------------------------------------------------------ commands -- */
 
 /* The commands, each with its usage (`sluice-analyze COMMAND --help`,
- * `sluice-analyze help COMMAND`): the options it reads. Every command
- * accepts every option of option_specs; those it does not read have no
- * effect. */
+ * `sluice-analyze help COMMAND`): the options it reads (any other is
+ * accepted with a warning that it has no effect: parse_options). */
 #define WINDOW_HELP "  --from T0 --to T1     the time window (s; default the whole series)\n"
 #define TIME_COLUMN_HELP "  --time-column NAME    the tables' time column (default time)\n"
 #define OUT_HELP                                                                              \
@@ -3159,7 +3180,7 @@ int main(int argc, char **argv)
     if (!command)
         analyze_fail(&cx, SLUICE_ANALYZE_BAD_INPUT,
                      "unknown command '%s' (sluice-analyze --help lists them)", argv[1]);
-    else if (parse_options(&cx, argc, argv, &o) == 0) {
+    else if (parse_options(&cx, argc, argv, &o, command->help) == 0) {
         if (!(o.from <= o.to))
             analyze_fail(&cx, SLUICE_ANALYZE_BAD_INPUT, "--from must not exceed --to");
         else if (!(o.min_wet >= 0.0 && o.min_wet <= 1.0))

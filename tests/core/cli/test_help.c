@@ -290,6 +290,17 @@ START_TEST(analyze_commands)
     char *output = NULL;
     ck_assert_int_eq(program("tools/sluice-analyze", "help no-such-command", 1, &output), 2);
     free(output);
+    /* an option the command does not read: a warning that it has no effect */
+    ck_assert_int_eq(program("tools/sluice-analyze", "belanger --d1 0.02 --v1 1.5 --x 3", 1,
+                             &output),
+                     0);
+    ck_assert_msg(strstr(output, "warning: 'belanger' does not read --x: it has no effect"),
+                  "%s", output);
+    free(output);
+    ck_assert_int_eq(program("tools/sluice-analyze", "belanger --d1 0.02 --v1 1.5", 1, &output),
+                     0);
+    ck_assert_msg(!strstr(output, "warning"), "%s", output);
+    free(output);
     free(usage);
     free_list(options);
     free_list(commands);
