@@ -8,6 +8,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "mesh_file.h"
 #include "schema.h"
 
 #define OFF(type, member) offsetof(type, member)
@@ -252,9 +253,14 @@ typedef struct {
     const char *scheme, *name;
     sluice_real lattice_origin[3];
     sluice_real across[3]; /* 3D outlines: extruded over y in [across[0], across[1]] */
+    const char *file;      /* mesh */
+    int fluid;             /* mesh: MESH_FLUID_SIDES */
+    sluice_real scale, rotate_axis[3], rotate_angle, translate[3];
 } wall_config;
 
-#define WALL_SHAPES "tank|box|polyline|polygon|profile|channel"
+#define WALL_SHAPES "tank|box|polyline|polygon|profile|channel|mesh"
+#define MESH_FLUID_SIDES "outside|inside|front|back"
+enum { MESH_FLUID_OUTSIDE = 0, MESH_FLUID_INSIDE = 1, MESH_FLUID_FRONT = 2, MESH_FLUID_BACK = 3 };
 #define WALL_COMMON                                                                             \
     {"scheme", SLUICE_PARAM_STRING, OFF(wall_config, scheme), NULL, 0, 0, SLUICE_PARAM_OPTIONAL, \
      NULL, "wall scheme plugin for this wall (default: the only one loaded)", NULL, 0},        \
@@ -331,6 +337,32 @@ static const sluice_param_spec wall_profile_specs[] = {
      "join the end back to the start (the fluid is still on the left: inside a "
      "counter-clockwise profile, outside a clockwise one)",
      NULL, 0},
+    WALL_COMMON,
+};
+
+/* A surface read from a mesh file (3D): docs/scene-format.md, "Walls from
+ * mesh files". */
+static const sluice_param_spec wall_mesh_specs[] = {
+    {"shape", SLUICE_PARAM_ENUM, OFF(wall_config, shape), NULL, 0, 0, 0, NULL,
+     "mesh: a triangulated surface read from an STL (ASCII or binary) or OBJ file (3D)",
+     WALL_SHAPES, 0},
+    {"file", SLUICE_PARAM_STRING, OFF(wall_config, file), NULL, 0, 0, 0, NULL,
+     "the surface: a .stl or .obj file, relative to the scene file's directory", NULL, 0},
+    {"fluid", SLUICE_PARAM_ENUM, OFF(wall_config, fluid), NULL, 0, 0, 0, NULL,
+     "side of the fluid: outside or inside a closed surface (whatever its winding), or in "
+     "front of every triangle (the side from which its corners turn counter-clockwise) or "
+     "behind it (open or closed surfaces)",
+     MESH_FLUID_SIDES, 0},
+    {"scale", SLUICE_PARAM_REAL, OFF(wall_config, scale), "1", 0, 0,
+     SLUICE_PARAM_HAS_MIN | SLUICE_PARAM_MIN_EXCLUSIVE, "m",
+     "length of one unit of the file in metres (0.001 for a file in mm); applied first", NULL,
+     0},
+    {"rotate_axis", SLUICE_PARAM_VECTOR, OFF(wall_config, rotate_axis), "[0, 0, 1]", 0, 0, 0,
+     "1", "axis of the rotation, through the origin; applied after the scale", NULL, 3},
+    {"rotate_angle", SLUICE_PARAM_REAL, OFF(wall_config, rotate_angle), "0", 0, 0, 0, "deg",
+     "angle of the rotation about rotate_axis (right-hand rule)", NULL, 0},
+    {"translate", SLUICE_PARAM_VECTOR, OFF(wall_config, translate), "[0, 0, 0]", 0, 0, 0, "m",
+     "translation; applied last", NULL, 3},
     WALL_COMMON,
 };
 
@@ -461,6 +493,7 @@ static const sluice_scene_table wall_tables[] = {
     TABLE_3D("polygon", wall_line_specs, wall_line_specs_3d),
     TABLE_3D("profile", wall_profile_specs, wall_profile_specs_3d),
     TABLE("channel", wall_box_specs, SLUICE_DIMS_ALL),
+    TABLE("mesh", wall_mesh_specs, SLUICE_DIMS_3),
 };
 
 /* in the order of PIECE_KINDS */
@@ -1127,6 +1160,214 @@ static int load_fluids(sluice_scene *scene, sluice_node *geometry, sluice_diag *
     return errors;
 }
 
+/* ---------------------------------------------------------- mesh walls -- */
+
+/* Where a mesh wall's messages point: the mesh file's line when the problem
+ * has one, else the wall's `file` key with the mesh file named. */
+typedef struct mesh_site {
+    sluice_scene *scene;
+    sluice_diag *diag;
+    const sluice_node *file_node;
+    const char *wall_path; /* geometry.walls.N */
+    const char *mesh_path; /* the file, resolved */
+    const sluice_mesh *mesh;
+} mesh_site;
+
+static void mesh_report(const mesh_site *site, sluice_severity severity, int line, int column,
+                        const char *format, ...) SLUICE_PRINTF(5, 6);
+static void mesh_report(const mesh_site *site, sluice_severity severity, int line, int column,
+                        const char *format, ...)
+{
+    char text[900];
+    va_list ap;
+    va_start(ap, format);
+    vsnprintf(text, sizeof text, format, ap);
+    va_end(ap);
+    if (line > 0) {
+        sluice_diag_add(site->diag, severity, site->mesh_path, line, column, "%s: %s",
+                        site->wall_path, text);
+        return;
+    }
+    const sluice_node *at = site->file_node;
+    sluice_diag_add(site->diag, severity, sluice_node_file(at, site->scene),
+                    at && at->line > 0 ? at->line : 1, at && at->line > 0 ? at->column : 1,
+                    "%s: mesh file '%s': %s", site->wall_path, site->mesh_path, text);
+}
+
+/* The line of triangle t in the mesh file (0 for binary STL). */
+static int mesh_line(const sluice_mesh *mesh, uint32_t t)
+{
+    return mesh->face_line && t < mesh->face_count ? (int)mesh->face_line[t] : 0;
+}
+
+/* "(x, y, z) to (x, y, z)", the corners of an edge. */
+static void edge_text(const sluice_mesh *mesh, const uint32_t edge[2], char *out, size_t size)
+{
+    const double *a = mesh->vertices + 3 * (size_t)edge[0],
+                 *b = mesh->vertices + 3 * (size_t)edge[1];
+    /* + 0.0: a negative zero prints as 0 */
+    snprintf(out, size, "(%g, %g, %g) to (%g, %g, %g)", a[0] + 0.0, a[1] + 0.0, a[2] + 0.0,
+             b[0] + 0.0, b[1] + 0.0, b[2] + 0.0);
+}
+
+/* The surface checks: non-manifold and misoriented edges are refused; open
+ * edges are refused when the fluid is inside or outside (a closed surface),
+ * else reported as a warning. Returns the number of errors. */
+static int check_mesh_surface(const mesh_site *site, int closed, const char *side)
+{
+    const sluice_mesh *mesh = site->mesh;
+    sluice_mesh_edges edges;
+    if (sluice_mesh_check_edges(mesh, &edges) != 0) {
+        mesh_report(site, SLUICE_SEVERITY_ERROR, 0, 0, "out of memory");
+        return 1;
+    }
+    char where[200];
+    if (edges.nonmanifold) {
+        uint32_t t = edges.nonmanifold_triangle;
+        edge_text(mesh, edges.nonmanifold_edge, where, sizeof where);
+        mesh_report(site, SLUICE_SEVERITY_ERROR, mesh_line(mesh, t), 1,
+                    "non-manifold surface: the edge %s of triangle %u is shared by %u triangles "
+                    "(an edge of a surface joins two at most; %llu such edges)",
+                    where, t + 1, edges.nonmanifold_uses, (unsigned long long)edges.nonmanifold);
+        return 1;
+    }
+    if (edges.misoriented) {
+        uint32_t t = edges.misoriented_triangle;
+        edge_text(mesh, edges.misoriented_edge, where, sizeof where);
+        mesh_report(site, SLUICE_SEVERITY_ERROR, mesh_line(mesh, t), 1,
+                    "triangles %u and %u run along their shared edge %s in the same direction: "
+                    "their windings disagree (%llu such edges); the file's triangles must be "
+                    "wound consistently",
+                    t + 1, edges.misoriented_other + 1, where,
+                    (unsigned long long)edges.misoriented);
+        return 1;
+    }
+    if (edges.open) {
+        uint32_t t = edges.open_triangle;
+        edge_text(mesh, edges.open_edge, where, sizeof where);
+        if (closed) {
+            mesh_report(site, SLUICE_SEVERITY_ERROR, mesh_line(mesh, t), 1,
+                        "open surface: the edge %s of triangle %u belongs to no other triangle "
+                        "(%llu open edges); 'fluid: %s' needs a closed surface (an open one "
+                        "takes 'fluid: front' or 'fluid: back')",
+                        where, t + 1, (unsigned long long)edges.open, side);
+            return 1;
+        }
+        mesh_report(site, SLUICE_SEVERITY_WARNING, mesh_line(mesh, t), 1,
+                    "open surface (%llu edges belong to one triangle only, the first %s of "
+                    "triangle %u): the fluid is on the %s side of every triangle, and a point "
+                    "beyond the rim is not behind the wall",
+                    (unsigned long long)edges.open, where, t + 1, side);
+    }
+    return 0;
+}
+
+/* The mesh's triangles as the wall, after the transform and with the
+ * winding turned so that every normal points into the fluid. */
+static int build_mesh_geometry(const mesh_site *site, sluice_mesh *mesh, const wall_config *c,
+                               const sluice_node *item, sluice_wall_geometry *wall)
+{
+    const double axis[3] = {c->rotate_axis[0], c->rotate_axis[1], c->rotate_axis[2]};
+    const double shift[3] = {c->translate[0], c->translate[1], c->translate[2]};
+    if (sluice_mesh_transform(mesh, c->scale, axis, c->rotate_angle, shift) != 0) {
+        error_at(site->diag, site->scene, sluice_node_get(item, "rotate_axis"),
+                 "%s.rotate_axis must not be zero when rotate_angle is not", site->wall_path);
+        return 1;
+    }
+    if (c->fluid == MESH_FLUID_INSIDE || c->fluid == MESH_FLUID_OUTSIDE) {
+        /* closed: the signed volume tells whether the normals point out */
+        double volume = sluice_mesh_volume(mesh);
+        if (!(fabs(volume) > 0)) {
+            mesh_report(site, SLUICE_SEVERITY_ERROR, 0, 0, "the closed surface encloses no volume");
+            return 1;
+        }
+        if ((volume > 0) != (c->fluid == MESH_FLUID_OUTSIDE))
+            sluice_mesh_reverse(mesh);
+    } else if (c->fluid == MESH_FLUID_BACK) {
+        sluice_mesh_reverse(mesh);
+    }
+    sluice_real *vertices = malloc(((size_t)mesh->vertex_count * 3 + 1) * sizeof *vertices);
+    if (!vertices) {
+        mesh_report(site, SLUICE_SEVERITY_ERROR, 0, 0, "out of memory");
+        return 1;
+    }
+    for (size_t k = 0; k < 3 * (size_t)mesh->vertex_count; k++)
+        vertices[k] = (sluice_real)mesh->vertices[k];
+    const char *reason = NULL;
+    int rc = sluice_wall_build_triangles(wall, vertices, mesh->vertex_count, mesh->faces,
+                                         mesh->face_count, &reason);
+    free(vertices);
+    if (rc != 0) {
+        mesh_report(site, SLUICE_SEVERITY_ERROR, 0, 0, "%s",
+                    reason ? reason : "out of memory");
+        sluice_wall_geometry_free(wall);
+        return 1;
+    }
+    return 0;
+}
+
+/* A wall read from a mesh file: geometry.walls[i] with shape mesh. Returns
+ * the number of errors; on success scene->wall_count grows by one. */
+static int load_mesh_wall(sluice_scene *scene, sluice_node *list, size_t i, const char *path,
+                          sluice_diag *diag)
+{
+    if (scene->dimensions != 3) {
+        error_at(diag, scene, sluice_node_get(list->items[i], "shape"),
+                 "shape 'mesh' in %s is only available in 3D", path);
+        return 1;
+    }
+    wall_config c;
+    memset(&c, 0, sizeof c);
+    int e = sluice_schema_bind(wall_mesh_specs, SLUICE_COUNT(wall_mesh_specs), &list->items[i],
+                               list->items[i], path, scene->dimensions, &c, scene->arena, diag);
+    if (e)
+        return e;
+    const sluice_node *item = list->items[i];
+    char *mesh_path = NULL;
+    if (c.file[0] == '/')
+        mesh_path = strdup(c.file);
+    else if (asprintf(&mesh_path, "%s/%s", scene->directory, c.file) < 0)
+        mesh_path = NULL;
+    if (!mesh_path) {
+        error_at(diag, scene, item, "out of memory");
+        return 1;
+    }
+    sluice_mesh mesh;
+    sluice_mesh_problem problem;
+    mesh_site site = {scene, diag, sluice_node_get(item, "file"), path, mesh_path, &mesh};
+    int errors = 0;
+    if (sluice_mesh_read(mesh_path, &mesh, &problem) != 0) {
+        mesh_report(&site, SLUICE_SEVERITY_ERROR, problem.line, problem.column, "%s",
+                    problem.message);
+        errors = 1;
+    }
+    const char *side = MESH_FLUID_SIDES; /* the name of c.fluid */
+    char sides[64];
+    const char *names[4];
+    if (split_choices(side, sides, sizeof sides, names, 4) == 4)
+        side = names[c.fluid];
+    int closed = c.fluid == MESH_FLUID_INSIDE || c.fluid == MESH_FLUID_OUTSIDE;
+    sluice_scene_wall *w = &scene->walls[scene->wall_count];
+    memset(w, 0, sizeof *w);
+    if (!errors)
+        errors = check_mesh_surface(&site, closed, side);
+    if (!errors)
+        errors = build_mesh_geometry(&site, &mesh, &c, item, &w->geometry);
+    sluice_mesh_free(&mesh);
+    free(mesh_path);
+    if (errors)
+        return errors;
+    w->node = item;
+    memcpy(w->lattice_origin,
+           sluice_node_get(item, "lattice_origin") ? c.lattice_origin
+                                                   : scene->particles.lattice_origin,
+           sizeof w->lattice_origin);
+    w->scheme = c.scheme;
+    w->name = c.name ? c.name : "";
+    scene->wall_count++;
+    return 0;
+}
+
 static int load_walls(sluice_scene *scene, sluice_node *geometry, sluice_diag *diag)
 {
     int errors;
@@ -1146,6 +1387,10 @@ static int load_walls(sluice_scene *scene, sluice_node *geometry, sluice_diag *d
         }
         char path[64];
         snprintf(path, sizeof path, "geometry.walls.%zu", i);
+        if (shape == 6) {
+            errors += load_mesh_wall(scene, list, i, path, diag);
+            continue;
+        }
         wall_config c;
         memset(&c, 0, sizeof c);
         int boxlike = shape <= 1 || shape == 5, profile = shape == 4,
