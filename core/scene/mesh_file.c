@@ -181,8 +181,8 @@ static const char *next_token(cursor *c, size_t *length, int *line, int *column)
     return start;
 }
 
-/* A finite real from a token of `length` bytes; 0 or -1. */
-static int parse_real(const char *token, size_t length, double *value)
+/* A real from a token of `length` bytes, finite unless any_value; 0 or -1. */
+static int parse_real(const char *token, size_t length, double *value, int any_value)
 {
     char buffer[64];
     if (length == 0 || length >= sizeof buffer)
@@ -192,7 +192,7 @@ static int parse_real(const char *token, size_t length, double *value)
     char *end = NULL;
     errno = 0;
     double v = strtod(buffer, &end);
-    if (end != buffer + length || !isfinite(v))
+    if (end != buffer + length || (!any_value && !isfinite(v)))
         return -1;
     *value = v;
     return 0;
@@ -221,10 +221,10 @@ static int read_coordinates(cursor *c, double v[3], const char *what, uint32_t t
         if (n == 0)
             return fail(problem, line, column, triangle,
                         "the file ends inside a %s (truncated?): %c is missing", what, "xyz"[d]);
-        if (parse_real(t, n, &v[d]) != 0)
+        if (parse_real(t, n, &v[d], strcmp(what, "normal") == 0) != 0)
             return fail(problem, line, column, triangle,
-                        "%s coordinate %c is '%.*s', not a finite number", what, "xyz"[d],
-                        n > 40 ? 40 : (int)n, t);
+                        "%s coordinate %c is '%.*s', not a %snumber", what, "xyz"[d],
+                        n > 40 ? 40 : (int)n, t, strcmp(what, "normal") == 0 ? "" : "finite ");
     }
     return 0;
 }
@@ -284,8 +284,21 @@ static int read_stl_ascii(const unsigned char *data, size_t size, builder *b,
         if (n == 0)
             return fail(problem, line, column, UINT32_MAX,
                         "the file ends without 'endsolid' (truncated?)");
-        if (token_is(t, n, "endsolid"))
-            break;
+        if (token_is(t, n, "endsolid")) {
+            while (c.at < c.end && *c.at != '\n') /* the solid's name */
+                c.at++;
+            t = next_token(&c, &n, &line, &column);
+            if (n == 0)
+                break;
+            if (!token_is(t, n, "solid")) /* files that join several solids */
+                return fail(problem, line, column, UINT32_MAX,
+                            "expected 'solid' or the end of the file after 'endsolid', found "
+                            "'%.*s'",
+                            n > 40 ? 40 : (int)n, t);
+            while (c.at < c.end && *c.at != '\n')
+                c.at++;
+            continue;
+        }
         if (!token_is(t, n, "facet"))
             return fail(problem, line, column, UINT32_MAX,
                         "expected 'facet' or 'endsolid', found '%.*s'", n > 40 ? 40 : (int)n, t);
@@ -318,7 +331,7 @@ static int read_stl_binary(const unsigned char *data, size_t size, builder *b,
     for (uint32_t t = 0; t < count; t++) {
         const unsigned char *record = data + 84 + 50 * (size_t)t;
         uint32_t first = (uint32_t)b->vertex_count;
-        for (int k = 0; k < 4; k++) {
+        for (int k = 1; k < 4; k++) { /* the stored normal (k = 0) is not read */
             double v[3];
             for (int d = 0; d < 3; d++) {
                 v[d] = little_float(record + 12 * k + 4 * d);
@@ -327,9 +340,9 @@ static int read_stl_binary(const unsigned char *data, size_t size, builder *b,
                                 "triangle %u (bytes %zu-%zu): %s coordinate %c is not finite "
                                 "(NaN or infinite)",
                                 t + 1, 84 + 50 * (size_t)t, 84 + 50 * (size_t)t + 49,
-                                k == 0 ? "normal" : "vertex", "xyz"[d]);
+                                "vertex", "xyz"[d]);
             }
-            if (k > 0 && add_vertex(b, v) != 0)
+            if (add_vertex(b, v) != 0)
                 return fail(problem, 0, 0, UINT32_MAX, "out of memory reading the mesh file");
         }
         if (add_face(b, first, first + 1, first + 2, 0) != 0)
@@ -455,7 +468,8 @@ static int compare_keyed(const void *x, const void *y)
 }
 
 /* Merges the vertices with equal coordinates (STL stores each triangle's
- * corners apart), keeping them in the order of their first use. */
+ * corners apart; OBJ exporters repeat a vertex where its texture or normal
+ * changes), keeping them in the order of the file. */
 static int weld(builder *b)
 {
     const size_t n = b->vertex_count;
@@ -620,7 +634,7 @@ int sluice_mesh_read(const char *path, sluice_mesh *mesh, sluice_mesh_problem *p
     free(data);
     if (rc == 0 && b.face_count == 0)
         rc = fail(problem, 0, 0, UINT32_MAX, "the mesh file holds no triangles");
-    if (rc == 0 && format != SLUICE_MESH_OBJ && weld(&b) != 0)
+    if (rc == 0 && weld(&b) != 0)
         rc = fail(problem, 0, 0, UINT32_MAX, "out of memory reading the mesh file");
     if (rc == 0)
         rc = check_degenerate(&b, format != SLUICE_MESH_STL_BINARY, problem);

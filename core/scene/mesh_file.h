@@ -14,10 +14,11 @@ typedef enum sluice_mesh_format {
     SLUICE_MESH_OBJ = 2
 } sluice_mesh_format;
 
-/* A triangulated surface. STL vertices are merged where their coordinates
- * are equal (STL stores every triangle's three corners apart); OBJ keeps the
- * file's vertices. The winding of each triangle is the file's: its normal
- * (b - a) x (c - a). */
+/* A triangulated surface. Vertices with equal coordinates are merged into
+ * one (STL stores every triangle's three corners apart), which is how the
+ * triangles' shared edges are found. The winding of each triangle is the
+ * file's: its normal is (b - a) x (c - a); the normals an STL file stores
+ * are not read. */
 typedef struct sluice_mesh {
     sluice_mesh_format format;
     double *vertices; /* 3 per vertex */

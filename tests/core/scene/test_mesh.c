@@ -189,6 +189,54 @@ START_TEST(cube_three_formats)
 }
 END_TEST
 
+/* What files do that the readers accept: an ASCII STL of two solids, with
+ * upper-case keywords and a NaN stored normal (normals are not read); an
+ * OBJ whose faces each have their own four vertices (merged by
+ * coordinates, as an STL's corners are). Both read as the cube. */
+START_TEST(tolerated_variants)
+{
+    char *dir = test_scratch("mesh-variants");
+    char *text = cube_stl_text(0, NULL);
+    char *split = NULL;
+    char *seventh = text;
+    for (int t = 0; t < 6; t++)
+        seventh = strstr(seventh, "endfacet\n") + strlen("endfacet\n");
+    ck_assert_int_ge(asprintf(&split, "%.*sendsolid first\nSOLID second\n%s",
+                              (int)(seventh - text), text, seventh),
+                     0);
+    char *normal = strstr(split, "facet normal 0 0 0\n"), *edited = NULL;
+    ck_assert_int_ge(asprintf(&edited, "%.*sFACET NORMAL nan inf 0%s", (int)(normal - split), split,
+                              normal + strlen("facet normal 0 0 0")),
+                     0);
+    char *stl = test_write_file(dir, "two_solids.stl", edited);
+    free(edited);
+    char *obj_text = NULL;
+    size_t size = 0;
+    FILE *f = open_memstream(&obj_text, &size);
+    for (int q = 0; q < 6; q++) {
+        for (int k = 0; k < 4; k++)
+            fprintf(f, "v %g %g %g\n", corner[quad[q][k]][0], corner[quad[q][k]][1],
+                    corner[quad[q][k]][2]);
+        fprintf(f, "f -4 -3 -2 -1\n");
+    }
+    fclose(f);
+    char *obj = test_write_file(dir, "apart.obj", obj_text);
+    sluice_mesh mesh;
+    read_ok(stl, &mesh);
+    check_cube(&mesh, 1);
+    sluice_mesh_free(&mesh);
+    read_ok(obj, &mesh);
+    check_cube(&mesh, 1);
+    sluice_mesh_free(&mesh);
+    free(obj);
+    free(obj_text);
+    free(stl);
+    free(split);
+    free(text);
+    free(dir);
+}
+END_TEST
+
 /* x -> R (s x) + t, against the closed forms of two rotations: 90 degrees
  * about z, (x, y, z) -> (-y, x, z); 120 degrees about (1, 1, 1), a cyclic
  * permutation (x, y, z) -> (z, x, y). */
@@ -650,6 +698,7 @@ int main(void)
     Suite *s = suite_create("mesh");
     TCase *readers = tcase_create("readers");
     tcase_add_test(readers, cube_three_formats);
+    tcase_add_test(readers, tolerated_variants);
     tcase_add_test(readers, transforms_in_order);
     tcase_add_test(readers, fluid_side_of_closed_surface);
     tcase_add_test(readers, mesh_wall_needs_3d);
