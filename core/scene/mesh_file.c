@@ -276,7 +276,7 @@ static int read_stl_ascii(const unsigned char *data, size_t size, builder *b,
                 (const char *)data};
     size_t n;
     int line, column;
-    next_token(&c, &n, &line, &column); /* `solid`, checked by the caller */
+    next_token(&c, &n, &line, &column);   /* `solid`, checked by the caller */
     while (c.at < c.end && *c.at != '\n') /* the solid's name */
         c.at++;
     for (;;) {
@@ -339,8 +339,8 @@ static int read_stl_binary(const unsigned char *data, size_t size, builder *b,
                     return fail(problem, 0, 0, t,
                                 "triangle %u (bytes %zu-%zu): %s coordinate %c is not finite "
                                 "(NaN or infinite)",
-                                t + 1, 84 + 50 * (size_t)t, 84 + 50 * (size_t)t + 49,
-                                "vertex", "xyz"[d]);
+                                t + 1, 84 + 50 * (size_t)t, 84 + 50 * (size_t)t + 49, "vertex",
+                                "xyz"[d]);
             }
             if (add_vertex(b, v) != 0)
                 return fail(problem, 0, 0, UINT32_MAX, "out of memory reading the mesh file");
@@ -356,8 +356,7 @@ static int read_stl_binary(const unsigned char *data, size_t size, builder *b,
 /* One vertex reference of a face: "i", "i/t", "i//n" or "i/t/n"; the
  * vertex index i (1-based, or negative: from the end of the vertices read so
  * far). *index is 0-based, or (positive references) checked at the end. */
-static int parse_reference(const char *token, size_t length, size_t vertices_so_far,
-                           int64_t *index)
+static int parse_reference(const char *token, size_t length, size_t vertices_so_far, int64_t *index)
 {
     char buffer[64];
     if (length == 0 || length >= sizeof buffer)
@@ -400,14 +399,14 @@ static int read_obj_face(cursor *c, builder *b, int line, sluice_mesh_problem *p
         if (count == 0)
             first = index;
         else if (count >= 2 && add_face(b, (uint32_t)first, (uint32_t)previous, (uint32_t)index,
-                                         (uint32_t)line) != 0)
+                                        (uint32_t)line) != 0)
             return fail(problem, 0, 0, UINT32_MAX, "out of memory reading the mesh file");
         previous = index;
         count++;
     }
     if (count < 3)
-        return fail(problem, line, 1, UINT32_MAX, "a face needs at least 3 vertices, this one has %d",
-                    count);
+        return fail(problem, line, 1, UINT32_MAX,
+                    "a face needs at least 3 vertices, this one has %d", count);
     return 0;
 }
 
@@ -530,10 +529,7 @@ static void cross(double out[3], const double a[3], const double b[3])
     out[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-static double norm(const double a[3])
-{
-    return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-}
+static double norm(const double a[3]) { return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
 
 /* Refuses the first triangle with a repeated vertex or no area (the rule of
  * sluice_wall_build_triangles: |ab x ac| <= 1e-12 |ab| |ac|). */
@@ -549,8 +545,7 @@ static int check_degenerate(const builder *b, int has_lines, sluice_mesh_problem
         cross(n, ab, ac);
         int repeated = t[0] == t[1] || t[1] == t[2] || t[2] == t[0];
         if (repeated || !(norm(n) > 1e-12 * norm(ab) * norm(ac)))
-            return fail(problem, has_lines ? (int)b->lines[f] : 0, has_lines ? 1 : 0,
-                        (uint32_t)f,
+            return fail(problem, has_lines ? (int)b->lines[f] : 0, has_lines ? 1 : 0, (uint32_t)f,
                         "triangle %zu is degenerate (%s): corners (%g, %g, %g), (%g, %g, %g), "
                         "(%g, %g, %g)",
                         f + 1, repeated ? "two corners coincide" : "zero area", p[0], p[1], p[2],
@@ -684,7 +679,8 @@ int sluice_mesh_check_edges(const sluice_mesh *mesh, sluice_mesh_edges *edges)
         return -1;
     for (uint32_t f = 0; f < mesh->face_count; f++)
         for (int j = 0; j < 3; j++) {
-            uint32_t p = mesh->faces[3 * (size_t)f + j], q = mesh->faces[3 * (size_t)f + (j + 1) % 3];
+            uint32_t p = mesh->faces[3 * (size_t)f + j],
+                     q = mesh->faces[3 * (size_t)f + (j + 1) % 3];
             mesh_edge *e = &list[3 * (size_t)f + j];
             e->lo = p < q ? p : q;
             e->hi = p < q ? q : p;
@@ -748,8 +744,8 @@ double sluice_mesh_volume(const sluice_mesh *mesh)
     return volume;
 }
 
-int sluice_mesh_transform(sluice_mesh *mesh, double scale, const double axis[3],
-                          double angle_deg, const double translate[3])
+int sluice_mesh_transform(sluice_mesh *mesh, double scale, const double axis[3], double angle_deg,
+                          const double translate[3])
 {
     if (!(scale > 0) || !isfinite(scale) || !isfinite(angle_deg))
         return -1;

@@ -77,8 +77,8 @@ double sluice_mesh_volume(const sluice_mesh *mesh);
  * angle_deg degrees about `axis` through the origin (right-hand rule), then
  * the translation. Returns -1 (mesh unchanged) when the scale is not
  * positive and finite or the axis is zero while the angle is not. */
-int sluice_mesh_transform(sluice_mesh *mesh, double scale, const double axis[3],
-                          double angle_deg, const double translate[3]);
+int sluice_mesh_transform(sluice_mesh *mesh, double scale, const double axis[3], double angle_deg,
+                          const double translate[3]);
 
 /* Reverses every triangle's winding (a, b, c) -> (a, c, b). */
 void sluice_mesh_reverse(sluice_mesh *mesh);

@@ -63,10 +63,7 @@ static char *cube_stl_text(int flip, const char *extra)
 }
 
 /* The line of the `facet` of triangle t (0-based) in cube_stl_text. */
-static int cube_stl_line(int t)
-{
-    return 2 + 7 * t;
-}
+static int cube_stl_line(int t) { return 2 + 7 * t; }
 
 static void put_u32(unsigned char *p, uint32_t v)
 {
@@ -201,8 +198,8 @@ START_TEST(tolerated_variants)
     char *seventh = text;
     for (int t = 0; t < 6; t++)
         seventh = strstr(seventh, "endfacet\n") + strlen("endfacet\n");
-    ck_assert_int_ge(asprintf(&split, "%.*sendsolid first\nSOLID second\n%s",
-                              (int)(seventh - text), text, seventh),
+    ck_assert_int_ge(asprintf(&split, "%.*sendsolid first\nSOLID second\n%s", (int)(seventh - text),
+                              text, seventh),
                      0);
     char *normal = strstr(split, "facet normal 0 0 0\n"), *edited = NULL;
     ck_assert_int_ge(asprintf(&edited, "%.*sFACET NORMAL nan inf 0%s", (int)(normal - split), split,
@@ -252,7 +249,8 @@ START_TEST(transforms_in_order)
         sluice_mesh mesh;
         read_ok(obj, &mesh);
         const double s = 2.5;
-        ck_assert_int_eq(sluice_mesh_transform(&mesh, s, rotation[r].axis, rotation[r].angle, t), 0);
+        ck_assert_int_eq(sluice_mesh_transform(&mesh, s, rotation[r].axis, rotation[r].angle, t),
+                         0);
         check_cube(&mesh, s);
         for (uint32_t v = 0; v < 8; v++) {
             const double *x = corner[v], *y = mesh.vertices + 3 * v;
@@ -289,15 +287,15 @@ static char *mesh_scene(const char *wall)
 {
     char *text = NULL;
     ck_assert_int_ge(asprintf(&text,
-                              "dimensions: 3\n"                                       /* 1 */
-                              "particles: {spacing: 0.1}\n"                           /* 2 */
-                              "time: {end: 0.01}\n"                                   /* 3 */
-                              "domain: {min: [-1, -1, -1], max: [3, 3, 3]}\n"         /* 4 */
-                              "geometry:\n"                                           /* 5 */
-                              "  fluid:\n"                                            /* 6 */
+                              "dimensions: 3\n"                               /* 1 */
+                              "particles: {spacing: 0.1}\n"                   /* 2 */
+                              "time: {end: 0.01}\n"                           /* 3 */
+                              "domain: {min: [-1, -1, -1], max: [3, 3, 3]}\n" /* 4 */
+                              "geometry:\n"                                   /* 5 */
+                              "  fluid:\n"                                    /* 6 */
                               "    - {shape: box, min: [1.5, 0, 0], max: [2, 0.5, 0.5]}\n"
-                              "  walls:\n"                                            /* 8 */
-                              "    - {shape: mesh, %s}\n"                             /* 9 */
+                              "  walls:\n"                /* 8 */
+                              "    - {shape: mesh, %s}\n" /* 9 */
                               "plugins:\n"
                               "  wendland_c2: {}\n"
                               "  tait: {speed_of_sound: 20}\n"
@@ -345,9 +343,9 @@ START_TEST(fluid_side_of_closed_surface)
     for (int f = 0; f < 2; f++)
         for (int s = 0; s < 4; s++) {
             char *wall = NULL, *tag = NULL;
-            ck_assert_int_ge(asprintf(&wall, "file: %s, fluid: %s, translate: [0.1, 0, 0]",
-                                      files[f], sides[s]),
-                             0);
+            ck_assert_int_ge(
+                asprintf(&wall, "file: %s, fluid: %s, translate: [0.1, 0, 0]", files[f], sides[s]),
+                0);
             char *text = mesh_scene(wall);
             char *scene_path = test_write_file(dir, "scene.yaml", text);
             sluice_scene scene;
@@ -361,7 +359,8 @@ START_TEST(fluid_side_of_closed_surface)
             const sluice_real centre[3] = {0.6, 0.5, 0.5}, far[3] = {2.6, 0.5, 0.5};
             int beyond;
             double d = sluice_wall_signed_distance(&scene.walls[0].geometry, centre, &beyond, NULL);
-            double d_far = sluice_wall_signed_distance(&scene.walls[0].geometry, far, &beyond, NULL);
+            double d_far =
+                sluice_wall_signed_distance(&scene.walls[0].geometry, far, &beyond, NULL);
             int normals_in = s == 1 || (s == 2 && f == 1) || (s == 3 && f == 0);
             ck_assert_double_eq_tol(d, normals_in ? 0.5 : -0.5, 1e-12);
             ck_assert_double_eq_tol(d_far, normals_in ? -1.5 : 1.5, 1e-12);
@@ -383,8 +382,7 @@ END_TEST
 /* `sluice check` on a scene whose mesh wall is `wall`: exit 2 and exactly
  * one error, at `where` (a prefix "file:line:" or the scene's position),
  * containing `needle`. */
-static void expect_refused(const char *dir, const char *wall, const char *where,
-                           const char *needle)
+static void expect_refused(const char *dir, const char *wall, const char *where, const char *needle)
 {
     char *text = mesh_scene(wall);
     char *scene_path = test_write_file(dir, "scene.yaml", text);
@@ -417,7 +415,8 @@ START_TEST(malformed_files_refused)
     char *scene_at = NULL; /* the `file` key of the wall, line 9 */
     ck_assert_int_ge(asprintf(&scene_at, "%s/scene.yaml:9:", dir), 0);
     free(test_write_file(dir, "empty.stl", ""));
-    expect_refused(dir, "file: empty.stl, fluid: outside", scene_at, "empty.stl': the mesh file is empty");
+    expect_refused(dir, "file: empty.stl, fluid: outside", scene_at,
+                   "empty.stl': the mesh file is empty");
     expect_refused(dir, "file: missing.stl, fluid: outside", scene_at,
                    "missing.stl': cannot open the mesh file: No such file");
     expect_refused(dir, "file: ., fluid: outside", scene_at, "cannot read the mesh file");
@@ -435,7 +434,8 @@ START_TEST(malformed_files_refused)
         ck_assert_int_eq(truncate(p, 60), 0);
         free(p);
     }
-    expect_refused(dir, "file: short.stl, fluid: outside", scene_at, "too short for a binary STL (60 bytes");
+    expect_refused(dir, "file: short.stl, fluid: outside", scene_at,
+                   "too short for a binary STL (60 bytes");
     free(write_cube_binary(dir, "nan.stl", 12, 12, 3));
     expect_refused(dir, "file: nan.stl, fluid: outside", scene_at,
                    "triangle 3 (bytes 184-233): vertex coordinate y is not finite");
@@ -503,8 +503,8 @@ START_TEST(malformed_files_refused)
     };
     for (size_t k = 0; k < sizeof objs / sizeof objs[0]; k++) {
         free(test_write_file(dir, objs[k].name, objs[k].text));
-        char *wall = NULL, *where = objs[k].line ? at_line(dir, objs[k].name, objs[k].line)
-                                                 : strdup(scene_at);
+        char *wall = NULL,
+             *where = objs[k].line ? at_line(dir, objs[k].name, objs[k].line) : strdup(scene_at);
         ck_assert_int_ge(asprintf(&wall, "file: %s, fluid: front", objs[k].name), 0);
         expect_refused(dir, wall, where, objs[k].needle);
         free(wall);
@@ -598,26 +598,25 @@ static char *write_tank_stl(const char *dir)
     return path;
 }
 
-static const char *tank_scene_format =
-    "dimensions: 3\n"
-    "particles: {spacing: 0.05}\n"
-    "time: {end: 0.05}\n"
-    "domain: {min: [-0.3, -0.3, -0.3], max: [0.7, 0.6, 0.6]}\n"
-    "geometry:\n"
-    "  fluid:\n"
-    "    - {shape: box, min: [0, 0, 0], max: [0.4, 0.3, 0.15]}\n"
-    "  walls:\n"
-    "    - %s\n"
-    "plugins:\n"
-    "  wendland_c2: {}\n"
-    "  tait: {speed_of_sound: 20}\n"
-    "  continuity: {}\n"
-    "  pressure_gradient: {}\n"
-    "  artificial_viscosity: {alpha: 0.1}\n"
-    "  gravity: {}\n"
-    "  %s: {}\n"
-    "  time_step: {}\n"
-    "  symplectic: {}\n";
+static const char *tank_scene_format = "dimensions: 3\n"
+                                       "particles: {spacing: 0.05}\n"
+                                       "time: {end: 0.05}\n"
+                                       "domain: {min: [-0.3, -0.3, -0.3], max: [0.7, 0.6, 0.6]}\n"
+                                       "geometry:\n"
+                                       "  fluid:\n"
+                                       "    - {shape: box, min: [0, 0, 0], max: [0.4, 0.3, 0.15]}\n"
+                                       "  walls:\n"
+                                       "    - %s\n"
+                                       "plugins:\n"
+                                       "  wendland_c2: {}\n"
+                                       "  tait: {speed_of_sound: 20}\n"
+                                       "  continuity: {}\n"
+                                       "  pressure_gradient: {}\n"
+                                       "  artificial_viscosity: {alpha: 0.1}\n"
+                                       "  gravity: {}\n"
+                                       "  %s: {}\n"
+                                       "  time_step: {}\n"
+                                       "  symplectic: {}\n";
 
 /* Loads the tank scene with `wall` and the wall scheme `scheme`, next to
  * the STL file in dir. */
@@ -668,7 +667,7 @@ static void compare_tanks(const char *scheme)
         for (int d = 0; d < 3; d++)
             ck_assert_msg(fabs((double)va->position[d][i] - (double)vb->position[d][i]) < 1e-9,
                           "%s: particle %ld differs along %c: %.17g vs %.17g", scheme, (long)i,
-                          "xyz"[d], (double)va->position[d][i], (double)vb->position[d][i]);
+                          "xyz"[d], (double)va -> position[d][i], (double)vb -> position[d][i]);
         largest = fmax(largest, hypot((double)ua[i], (double)wa[i]));
         lowest = fmin(lowest, (double)va->position[2][i]);
     }
@@ -681,16 +680,10 @@ static void compare_tanks(const char *scheme)
     free(dir);
 }
 
-START_TEST(tank_from_stl_dbc)
-{
-    compare_tanks("dbc");
-}
+START_TEST(tank_from_stl_dbc) { compare_tanks("dbc"); }
 END_TEST
 
-START_TEST(tank_from_stl_penalty_contact)
-{
-    compare_tanks("penalty_contact");
-}
+START_TEST(tank_from_stl_penalty_contact) { compare_tanks("penalty_contact"); }
 END_TEST
 
 int main(void)
