@@ -453,6 +453,16 @@ START_TEST(malformed_files_refused)
     }
     expect_refused(dir, "file: flat.stl, fluid: outside", scene_at,
                    "triangle 5 is degenerate (two corners coincide)");
+    free(scene_at);
+    free(dir);
+}
+END_TEST
+
+START_TEST(malformed_text_and_surfaces_refused)
+{
+    char *dir = test_scratch("mesh-bad-text");
+    char *scene_at = NULL; /* the `file` key of the wall, line 9 */
+    ck_assert_int_ge(asprintf(&scene_at, "%s/scene.yaml:9:", dir), 0);
     /* ASCII: bad numbers, truncation, a degenerate triangle */
     char *good = cube_stl_text(0, NULL);
     struct {
@@ -699,6 +709,7 @@ int main(void)
     TCase *refusals = tcase_create("refusals");
     tcase_set_timeout(refusals, 120);
     tcase_add_test(refusals, malformed_files_refused);
+    tcase_add_test(refusals, malformed_text_and_surfaces_refused);
     suite_add_tcase(s, refusals);
     TCase *runs = tcase_create("runs");
     tcase_set_timeout(runs, 240);
