@@ -198,6 +198,21 @@ static int parse_real(const char *token, size_t length, double *value, int any_v
     return 0;
 }
 
+/* A token as a message shows it: at most 40 bytes, a byte that is not
+ * printable ASCII as '?'. */
+static const char *shown(const char *token, size_t length, char *out, size_t size)
+{
+    size_t n = length < 40 ? length : 40;
+    if (n >= size)
+        n = size - 1;
+    for (size_t k = 0; k < n; k++) {
+        unsigned char b = (unsigned char)token[k];
+        out[k] = b >= 32 && b < 127 ? (char)b : '?';
+    }
+    out[n] = '\0';
+    return out;
+}
+
 static int token_is(const char *token, size_t length, const char *word)
 {
     return length == strlen(word) && strncasecmp(token, word, length) == 0;
@@ -208,6 +223,7 @@ static int token_is(const char *token, size_t length, const char *word)
 static int read_coordinates(cursor *c, double v[3], const char *what, uint32_t triangle,
                             int on_one_line, sluice_mesh_problem *problem)
 {
+    char text[48];
     for (int d = 0; d < 3; d++) {
         size_t n;
         int line, column;
@@ -222,9 +238,9 @@ static int read_coordinates(cursor *c, double v[3], const char *what, uint32_t t
             return fail(problem, line, column, triangle,
                         "the file ends inside a %s (truncated?): %c is missing", what, "xyz"[d]);
         if (parse_real(t, n, &v[d], strcmp(what, "normal") == 0) != 0)
-            return fail(problem, line, column, triangle,
-                        "%s coordinate %c is '%.*s', not a %snumber", what, "xyz"[d],
-                        n > 40 ? 40 : (int)n, t, strcmp(what, "normal") == 0 ? "" : "finite ");
+            return fail(problem, line, column, triangle, "%s coordinate %c is '%s', not a %snumber",
+                        what, "xyz"[d], shown(t, n, text, sizeof text),
+                        strcmp(what, "normal") == 0 ? "" : "finite ");
     }
     return 0;
 }
@@ -232,6 +248,7 @@ static int read_coordinates(cursor *c, double v[3], const char *what, uint32_t t
 /* Expects the keyword `word` next. */
 static int expect(cursor *c, const char *word, uint32_t triangle, sluice_mesh_problem *problem)
 {
+    char text[48];
     size_t n;
     int line, column;
     const char *t = next_token(c, &n, &line, &column);
@@ -239,8 +256,8 @@ static int expect(cursor *c, const char *word, uint32_t triangle, sluice_mesh_pr
         return fail(problem, line, column, triangle,
                     "the file ends where '%s' was expected (truncated?)", word);
     if (!token_is(t, n, word))
-        return fail(problem, line, column, triangle, "expected '%s', found '%.*s'", word,
-                    n > 40 ? 40 : (int)n, t);
+        return fail(problem, line, column, triangle, "expected '%s', found '%s'", word,
+                    shown(t, n, text, sizeof text));
     return 0;
 }
 
@@ -272,6 +289,7 @@ static int read_facet(cursor *c, builder *b, uint32_t line, sluice_mesh_problem 
 static int read_stl_ascii(const unsigned char *data, size_t size, builder *b,
                           sluice_mesh_problem *problem)
 {
+    char text[48];
     cursor c = {(const char *)data, (const char *)data + size, (const char *)data, 1,
                 (const char *)data};
     size_t n;
@@ -293,15 +311,16 @@ static int read_stl_ascii(const unsigned char *data, size_t size, builder *b,
             if (!token_is(t, n, "solid")) /* files that join several solids */
                 return fail(problem, line, column, UINT32_MAX,
                             "expected 'solid' or the end of the file after 'endsolid', found "
-                            "'%.*s'",
-                            n > 40 ? 40 : (int)n, t);
+                            "'%s'",
+                            shown(t, n, text, sizeof text));
             while (c.at < c.end && *c.at != '\n')
                 c.at++;
             continue;
         }
         if (!token_is(t, n, "facet"))
             return fail(problem, line, column, UINT32_MAX,
-                        "expected 'facet' or 'endsolid', found '%.*s'", n > 40 ? 40 : (int)n, t);
+                        "expected 'facet' or 'endsolid', found '%s'",
+                        shown(t, n, text, sizeof text));
         if (read_facet(&c, b, (uint32_t)line, problem) != 0)
             return -1;
     }
@@ -376,6 +395,7 @@ static int parse_reference(const char *token, size_t length, size_t vertices_so_
  * first vertex. */
 static int read_obj_face(cursor *c, builder *b, int line, sluice_mesh_problem *problem)
 {
+    char text[48];
     int64_t first = 0, previous = 0;
     int count = 0;
     for (;;) {
@@ -388,14 +408,14 @@ static int read_obj_face(cursor *c, builder *b, int line, sluice_mesh_problem *p
         int64_t index;
         if (parse_reference(t, n, b->vertex_count, &index) != 0)
             return fail(problem, l, column, UINT32_MAX,
-                        "'%.*s' is not a vertex reference (a non-zero index, optionally "
+                        "'%s' is not a vertex reference (a non-zero index, optionally "
                         "followed by /texture/normal)",
-                        n > 40 ? 40 : (int)n, t);
+                        shown(t, n, text, sizeof text));
         if (index < 0 || index >= (int64_t)UINT32_MAX)
             return fail(problem, l, column, UINT32_MAX,
-                        "the face refers to vertex %.*s, which does not exist (%zu vertices "
+                        "the face refers to vertex %s, which does not exist (%zu vertices "
                         "before this line)",
-                        n > 40 ? 40 : (int)n, t, b->vertex_count);
+                        shown(t, n, text, sizeof text), b->vertex_count);
         if (count == 0)
             first = index;
         else if (count >= 2 && add_face(b, (uint32_t)first, (uint32_t)previous, (uint32_t)index,
