@@ -1332,6 +1332,20 @@ static int load_mesh_wall(sluice_scene *scene, sluice_node *list, size_t i, cons
         error_at(diag, scene, item, "out of memory");
         return 1;
     }
+    if (c.file[0] != '/') {
+        /* the resolved scene names the file by its absolute path, so that
+         * it runs from the output directory too */
+        const sluice_node *given = sluice_node_get(item, "file");
+        sluice_node *absolute =
+            sluice_node_new_scalar(mesh_path, 0, given ? given->file : NULL,
+                                   given ? given->line : 0, given ? given->column : 0);
+        if (!absolute || sluice_node_set(list->items[i], "file", absolute) != 0) {
+            error_at(diag, scene, item, "out of memory");
+            free(mesh_path);
+            return 1;
+        }
+        sluice_node_mark_used(absolute, 1);
+    }
     sluice_mesh mesh;
     sluice_mesh_problem problem;
     mesh_site site = {scene, diag, sluice_node_get(item, "file"), path, mesh_path, &mesh};

@@ -356,6 +356,12 @@ START_TEST(fluid_side_of_closed_surface)
                 fprintf(stderr, "%s\n", sluice_diag_message(diag, k));
             ck_assert_int_eq(errors, 0);
             ck_assert_uint_eq(scene.wall_count, 1);
+            /* the resolved scene names the file by its absolute path */
+            char *absolute = NULL, *real = realpath(dir, NULL);
+            ck_assert_int_ge(asprintf(&absolute, "%s/%s", real, files[f]), 0);
+            ck_assert_str_eq(sluice_node_get(scene.walls[0].node, "file")->value, absolute);
+            free(absolute);
+            free(real);
             const sluice_real centre[3] = {0.6, 0.5, 0.5}, far[3] = {2.6, 0.5, 0.5};
             int beyond;
             double d = sluice_wall_signed_distance(&scene.walls[0].geometry, centre, &beyond, NULL);
