@@ -4,8 +4,9 @@
  * through the three formats), the transforms against their closed forms,
  * the side of the fluid, every malformed file refused by `sluice check`
  * with one message naming the file and its line or triangle, and short runs
- * of a tank read from an STL file against the same `shape: tank`, with a
- * particle wall scheme (dbc) and a force scheme (penalty_contact). */
+ * of a tank read from an STL file against the same `shape: tank`, with the
+ * particle wall schemes dbc and mdbc and the force schemes penalty_contact
+ * and repulsive_force. */
 #include "test_util.h"
 
 #include <float.h>
@@ -702,6 +703,18 @@ END_TEST
 START_TEST(tank_from_stl_penalty_contact) { compare_tanks("penalty_contact"); }
 END_TEST
 
+START_TEST(tank_from_stl_mdbc)
+{
+    compare_tanks("mdbc");
+}
+END_TEST
+
+START_TEST(tank_from_stl_repulsive_force)
+{
+    compare_tanks("repulsive_force");
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("mesh");
@@ -721,6 +734,8 @@ int main(void)
     tcase_set_timeout(runs, 240);
     tcase_add_test(runs, tank_from_stl_dbc);
     tcase_add_test(runs, tank_from_stl_penalty_contact);
+    tcase_add_test(runs, tank_from_stl_mdbc);
+    tcase_add_test(runs, tank_from_stl_repulsive_force);
     suite_add_tcase(s, runs);
     return test_run_suite(s);
 }
