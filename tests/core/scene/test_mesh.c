@@ -703,16 +703,10 @@ END_TEST
 START_TEST(tank_from_stl_penalty_contact) { compare_tanks("penalty_contact"); }
 END_TEST
 
-START_TEST(tank_from_stl_mdbc)
-{
-    compare_tanks("mdbc");
-}
+START_TEST(tank_from_stl_mdbc) { compare_tanks("mdbc"); }
 END_TEST
 
-START_TEST(tank_from_stl_repulsive_force)
-{
-    compare_tanks("repulsive_force");
-}
+START_TEST(tank_from_stl_repulsive_force) { compare_tanks("repulsive_force"); }
 END_TEST
 
 int main(void)
