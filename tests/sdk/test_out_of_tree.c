@@ -244,8 +244,9 @@ END_TEST
  * with an environment that names nothing but the installed programs (no
  * SLUICE_PLUGIN_PATH, no build directory, run outside the source tree):
  * check every installed scene, run the default one briefly, probe and
- * measure it, inspect, the help of sluice-analyze, two studies' dry runs,
- * pkg-config sluice. The run's plugins must come from the installed tree. */
+ * measure it, load it with the installed Python package (when Debian's
+ * numpy, h5py and PyYAML are there, as the README installs them), inspect,
+ * the help of sluice-analyze, two studies' dry runs, pkg-config sluice. The run's plugins must come from the installed tree. */
 static const char installed_script[] =
     "set -eu\n"
     "src=$1 stage=$2 version=$3\n"
@@ -281,6 +282,11 @@ static const char installed_script[] =
     "if grep -l '^plugin_path:' \"$data\"/configs/*.yaml; then\n"
     "  echo 'an installed scene sets plugin_path'; exit 1; fi\n"
     "cd \"$stage/..\"\n"
+    /* the Python package, and a script of it for the run below */
+    "pysite=$(dirname \"$(dirname \"$(find \"$stage\" -path '*/sluice/__init__.py' | head -1)\")\")\n"
+    "test -f \"$pysite/sluice/run.py\" || { echo 'the Python package is not installed'; exit 1; }\n"
+    "printf 'import sluice\\nr = sluice.load(\"run\")\\nassert r.info[\"status\"] == \"complete\"\\n"
+    "print(r.table(\"sections\").names[1], len(r.snapshots))\\n' >check.py\n"
     "pc=$(dirname \"$(find \"$stage\" -name sluice.pc)\")\n"
     "exec env -i PATH=\"$bin:/usr/bin:/bin\" HOME=\"$PWD\" PKG_CONFIG_PATH=\"$pc\" "
     "OMP_NUM_THREADS=2 sh -eu -c '\n"
@@ -305,7 +311,10 @@ static const char installed_script[] =
     "  test \"$(pkg-config --modversion sluice)\" = \"$version\"\n"
     "  test -d \"$(pkg-config --variable=plugindir sluice)\"\n"
     "  test -f \"$(pkg-config --variable=includedir sluice)/sluice/plugin_util.h\"\n"
-    "' sh \"$data\" \"$version\" \"$stage\"\n";
+    "  if /usr/bin/python3 -c \"import numpy, h5py, yaml\" 2>/dev/null; then\n"
+    "    PYTHONPATH=\"$4\" /usr/bin/python3 check.py >python.txt && grep -q \"^d_x0 2$\" python.txt\n"
+    "  fi\n"
+    "' sh \"$data\" \"$version\" \"$stage\" \"$pysite\"\n";
 
 START_TEST(installed_tree_runs_alone)
 {
