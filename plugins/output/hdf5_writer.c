@@ -1149,15 +1149,14 @@ static int write_walls_file(void *context, const char *temporary, char *error, s
     return 0;
 }
 
-/* Writes <prefix>_walls.h5 once per process (a restart into another
- * directory writes it there too). */
-static int write_walls_index(h5w_state *s, sluice_host *host)
+/* Writes <prefix>_<suffix>.h5 through `writer` (api->output->write_file_with),
+ * HDF5's own error printing muted: the writer's message says what failed. */
+static int write_side_file(h5w_state *s, sluice_host *host, const char *suffix,
+                           sluice_file_writer writer, void *context)
 {
     const sluice_api *api = s->api;
-    if (s->walls.written || s->walls.count == 0)
-        return SLUICE_OK;
-    char name[H5W_PREFIX_MAX + 16], path[H5W_PATH_MAX];
-    snprintf(name, sizeof name, "%s_walls.h5", s->prefix);
+    char name[H5W_PREFIX_MAX + 32], path[H5W_PATH_MAX];
+    snprintf(name, sizeof name, "%s_%s.h5", s->prefix, suffix);
     if (api->output->output_path(host, name, path, sizeof path) != SLUICE_OK) {
         api->messages->error(host, "the path of '%s' in the output directory is too long", name);
         return SLUICE_ERROR;
@@ -1166,9 +1165,19 @@ static int write_walls_index(h5w_state *s, sluice_host *host)
     void *old_data = NULL;
     H5Eget_auto2(H5E_DEFAULT, &old_func, &old_data);
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-    int rc = api->output->write_file_with(host, path, write_walls_file, &s->walls);
+    int rc = api->output->write_file_with(host, path, writer, context);
     H5Eclear2(H5E_DEFAULT);
     H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
+    return rc;
+}
+
+/* Writes <prefix>_walls.h5 once per process (a restart into another
+ * directory writes it there too). */
+static int write_walls_index(h5w_state *s, sluice_host *host)
+{
+    if (s->walls.written || s->walls.count == 0)
+        return SLUICE_OK;
+    int rc = write_side_file(s, host, "walls", write_walls_file, &s->walls);
     if (rc == SLUICE_OK)
         s->walls.written = 1;
     return rc;
@@ -1485,21 +1494,8 @@ static int write_vertex_file(void *context, const char *temporary, char *error,
 /* Writes <prefix>_vertices.h5 with /index = 0 .. capacity - 1 (int64). */
 static int write_vertex_index(h5w_state *s, sluice_host *host, uint64_t capacity)
 {
-    const sluice_api *api = s->api;
-    char name[H5W_PREFIX_MAX + 16], path[H5W_PATH_MAX];
-    snprintf(name, sizeof name, "%s_vertices.h5", s->prefix);
-    if (api->output->output_path(host, name, path, sizeof path) != SLUICE_OK) {
-        api->messages->error(host, "the path of '%s' in the output directory is too long", name);
-        return SLUICE_ERROR;
-    }
-    H5E_auto2_t old_func = NULL;
-    void *old_data = NULL;
-    H5Eget_auto2(H5E_DEFAULT, &old_func, &old_data);
-    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
     h5w_vertex_job job = {capacity, s->provenance};
-    int rc = api->output->write_file_with(host, path, write_vertex_file, &job);
-    H5Eclear2(H5E_DEFAULT);
-    H5Eset_auto2(H5E_DEFAULT, old_func, old_data);
+    int rc = write_side_file(s, host, "vertices", write_vertex_file, &job);
     if (rc == SLUICE_OK)
         s->vertex_capacity = capacity;
     return rc;
