@@ -11,7 +11,7 @@
 
 static const char *kind_names(uint32_t mask, char *buffer, size_t size)
 {
-    static const char *const names[SLUICE_KIND_COUNT] = {"fluid", "wall"};
+    static const char *const names[SLUICE_KIND_COUNT] = {"fluid", "wall", "open"};
     size_t used = 0;
     buffer[0] = '\0';
     for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++)
@@ -22,6 +22,25 @@ static const char *kind_names(uint32_t mask, char *buffer, size_t size)
         }
     if (!used)
         snprintf(buffer, size, "none");
+    return buffer;
+}
+
+/* "targets T, neighbours N", with the neighbours of the target kinds that
+ * declare their own (neighbour_kinds_by_target) after it */
+static const char *pairs_text(const sluice_component *c, char *buffer, size_t size)
+{
+    char targets[64], neighbours[64];
+    int used = snprintf(buffer, size, "targets %s, neighbours %s",
+                        kind_names(c->target_kinds, targets, sizeof targets),
+                        kind_names(c->neighbour_kinds, neighbours, sizeof neighbours));
+    for (uint32_t k = 0; k < SLUICE_KIND_COUNT && used > 0 && (size_t)used < size; k++)
+        if (c->neighbour_kinds_by_target[k] && (c->target_kinds & SLUICE_KIND_MASK(k))) {
+            int w = snprintf(
+                buffer + used, size - (size_t)used, " (of %s targets: %s)",
+                kind_names(SLUICE_KIND_MASK(k), targets, sizeof targets),
+                kind_names(c->neighbour_kinds_by_target[k], neighbours, sizeof neighbours));
+            used = w > 0 ? used + w : used;
+        }
     return buffer;
 }
 
@@ -95,7 +114,7 @@ static void describe(FILE *out, const sluice_registry *registry, const sluice_co
 {
     const sluice_component *c = e->component;
     const sluice_library_entry *lib = &registry->libraries[e->library];
-    char buf[512], buf2[128], buf3[128];
+    char buf[512], pairs[256];
     if (markdown) {
         fprintf(out, "### %s\n\n%s\n\n", c->name, c->summary ? c->summary : "");
         fprintf(out, "- library: `%s` %s\n", lib->library->name, lib->library->version);
@@ -105,9 +124,7 @@ static void describe(FILE *out, const sluice_registry *registry, const sluice_co
                     ? "2D, 3D"
                     : (c->dimensions & SLUICE_DIMS_2) ? "2D" : "3D");
         if (c->pair)
-            fprintf(out, "- pairs: targets %s, neighbours %s\n",
-                    kind_names(c->target_kinds, buf2, sizeof buf2),
-                    kind_names(c->neighbour_kinds, buf3, sizeof buf3));
+            fprintf(out, "- pairs: %s\n", pairs_text(c, pairs, sizeof pairs));
         if (c->reference)
             fprintf(out, "- reference: %s\n", c->reference);
         if (c->param_count) {
@@ -155,9 +172,7 @@ static void describe(FILE *out, const sluice_registry *registry, const sluice_co
             : (c->dimensions & SLUICE_DIMS_2)                  ? "2D"
                                                                 : "3D");
     if (c->pair)
-        fprintf(out, "  pairs       targets %s, neighbours %s\n",
-                kind_names(c->target_kinds, buf2, sizeof buf2),
-                kind_names(c->neighbour_kinds, buf3, sizeof buf3));
+        fprintf(out, "  pairs       %s\n", pairs_text(c, pairs, sizeof pairs));
     if (c->reference)
         fprintf(out, "  reference   %s\n", c->reference);
     if (c->param_count) {

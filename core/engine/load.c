@@ -38,6 +38,16 @@ static int check_descriptor(sluice_sim *sim, uint32_t k)
                in->name, in->path);
         errors++;
     }
+    for (uint32_t kind = 0; kind < SLUICE_KIND_COUNT; kind++)
+        if (c->neighbour_kinds_by_target[kind] &&
+            (!c->pair || !(c->target_kinds & SLUICE_KIND_MASK(kind)) ||
+             (c->neighbour_kinds_by_target[kind] & ~SLUICE_KINDS_ALL))) {
+            sluice_sim_report(sim, k,
+                              "plugin '%s' (%s) declares neighbour kinds for %s targets, which "
+                              "it does not act on (neighbour_kinds_by_target)",
+                              in->name, in->path, sluice_kind_name((uint8_t)kind));
+            errors++;
+        }
     if ((c->flags & SLUICE_COMPONENT_ON_DEMAND) && !c->pair) {
         sluice_sim_report(sim, k, "plugin '%s' (%s) is flagged on-demand but has no pair callback", in->name,
                in->path);
@@ -644,6 +654,7 @@ static int build_search(sluice_sim *sim)
                         reason);
         return 1;
     }
+    sluice_sim_set_list_kinds(sim);
     /* passes beyond the support must not see a cell twice across a periodic side */
     for (uint32_t v = 0; v < sim->instance_count; v++) {
         const sluice_instance *in = &sim->instances[v];

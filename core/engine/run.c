@@ -267,12 +267,18 @@ static int write_run_json(sluice_sim *sim, int status)
                                sluice_pair_engine_bytes(&sim->engine);
     struct rusage usage;
     double peak = getrusage(RUSAGE_SELF, &usage) == 0 ? (double)usage.ru_maxrss * 1024 : -1;
-    double sums[6] = {(double)sim->particles.count, (double)sim->removed,
-                      (double)sim->particle_steps,
-                      (double)sluice_pair_engine_pairs(&sim->engine), (double)state_bytes,
-                      (double)(sim->particle_steps - sim->particle_steps_at_start)};
+    enum { SUMS = 6 + 2 * SLUICE_KIND_COUNT };
+    double sums[SUMS] = {
+        (double)sim->particles.count, (double)sim->removed,
+        (double)sim->particle_steps,  (double)sluice_pair_engine_pairs(&sim->engine),
+        (double)state_bytes,          (double)(sim->particle_steps - sim->particle_steps_at_start)};
+    /* what each kind of target cost the passes within the support */
+    for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
+        sums[6 + k] = (double)sluice_pair_engine_kind_pairs(&sim->engine, k);
+        sums[6 + SLUICE_KIND_COUNT + k] = sluice_pair_engine_kind_seconds(&sim->engine, k);
+    }
     double maxima[2] = {peak, sim->max_density_deviation};
-    if (sluice_comm_reduce(&sim->comm, sums, 6, SLUICE_REDUCE_SUM) != 0 ||
+    if (sluice_comm_reduce(&sim->comm, sums, SUMS, SLUICE_REDUCE_SUM) != 0 ||
         sluice_comm_reduce(&sim->comm, maxima, 2, SLUICE_REDUCE_MAX) != 0)
         return -1;
     /* the balance of the ranks: their fewest and most particles */
@@ -334,6 +340,18 @@ static int write_run_json(sluice_sim *sim, int status)
     fprintf(f, "  \"pair_interactions\": %.0f,\n", pairs);
     fprintf(f, "  \"pair_interactions_per_second\": %.6g,\n",
             sim->wall_seconds > 0 ? pairs / sim->wall_seconds : 0.0);
+    /* per target kind: the pairs of the passes within the support and the
+     * thread-seconds they took (fill, kernel, gather, terms), this
+     * invocation's; their share of wall_seconds x threads is that kind's
+     * share of a step (docs/performance.md, "Walls") */
+    for (int what = 0; what < 2; what++) {
+        fprintf(f, "  \"%s\": {",
+                what ? "pair_seconds_by_target_kind" : "pair_interactions_by_target_kind");
+        for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++)
+            fprintf(f, what ? "%s\"%s\": %.6g" : "%s\"%s\": %.0f", k ? ", " : "",
+                    sluice_kind_name((uint8_t)k), sums[6 + (uint32_t)what * SLUICE_KIND_COUNT + k]);
+        fprintf(f, "},\n");
+    }
     fprintf(f, "  \"neighbour_list_rebuilds\": %llu,\n", (unsigned long long)sim->grid.rebuilds);
     /* memory: the particle store, the grid and the Verlet list, and the
      * pair engine's buffers, per particle at the end (over every rank); the

@@ -58,11 +58,10 @@ static int fill_pair_pass(sluice_sim *sim, sluice_pair_pass *p, const uint32_t *
         t->component = c;
         t->state = sim->instances[v].state;
         t->target_kinds = c->target_kinds;
-        t->neighbour_kinds = sluice_neighbour_kinds(c->neighbour_kinds);
         for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
             if (!(c->target_kinds & SLUICE_KIND_MASK(k)))
                 continue;
-            p->neighbour_mask[k] |= t->neighbour_kinds;
+            p->neighbour_mask[k] |= sluice_neighbour_kinds(sluice_declared_neighbour_kinds(c, k));
             if (c->flags & SLUICE_COMPONENT_NEEDS_KERNEL)
                 p->needs_kernel[k] = 1;
             for (uint32_t f = 0; f < sim->field_count; f++) {
@@ -506,6 +505,24 @@ int sluice_sim_build_schedule(sluice_sim *sim)
         return 1;
     }
     return errors;
+}
+
+void sluice_sim_set_list_kinds(sluice_sim *sim)
+{
+    uint32_t kinds[SLUICE_KIND_COUNT] = {0};
+    for (uint32_t p = 0; p < sim->pass_count; p++)
+        if (sim->passes[p].is_pair && !(sim->passes[p].pair.reach > 0))
+            for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++)
+                kinds[k] |= sim->passes[p].pair.neighbour_mask[k];
+    for (uint32_t v = 0; v < sim->instance_count; v++) {
+        const sluice_pair_pass *p = sim->instances[v].on_demand;
+        if (p && !(p->reach > 0))
+            for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++)
+                kinds[k] |= p->neighbour_mask[k];
+    }
+    sim->grid.kind_column = sim->kind.column;
+    memcpy(sim->grid.list_kinds, kinds, sizeof kinds);
+    sim->grid.valid = 0;
 }
 
 int sluice_sim_build_rates(sluice_sim *sim)

@@ -278,6 +278,16 @@ static inline uint32_t sluice_neighbour_kinds(uint32_t kinds)
                                                          : kinds;
 }
 
+/* The kinds component c declares as neighbours of a target of kind k
+ * (neighbour_kinds_by_target where set, ABI 2.3), before the open buffers are
+ * added; 0 when c does not act on kind k. */
+static inline uint32_t sluice_declared_neighbour_kinds(const sluice_component *c, uint32_t k)
+{
+    if (!(c->target_kinds & SLUICE_KIND_MASK(k)))
+        return 0;
+    return c->neighbour_kinds_by_target[k] ? c->neighbour_kinds_by_target[k] : c->neighbour_kinds;
+}
+
 static inline const char *sluice_kind_name(uint8_t kind)
 {
     return kind == SLUICE_KIND_FLUID ? "fluid"
@@ -358,6 +368,10 @@ uint32_t *sluice_sim_initialise_order(const sluice_sim *sim);
 void sluice_sim_free_pair_pass(sluice_pair_pass *p);
 int sluice_sim_evaluation_pair(const sluice_component *c);
 int sluice_sim_build_rates(sluice_sim *sim);
+/* Tells the grid (once initialised) which kinds each kind's neighbour list
+ * holds: the union of the neighbour kinds of the passes within the kernel
+ * support (the scheduled ones and the on-demand ones). */
+void sluice_sim_set_list_kinds(sluice_sim *sim);
 
 /* fill.c */
 int sluice_sim_fill_fluid(sluice_sim *sim);

@@ -15,6 +15,9 @@ int sluice_grid_init(sluice_grid *grid, uint32_t dimensions, const double lo[3],
     grid->dimensions = dimensions;
     grid->support = support;
     grid->skin = skin;
+    grid->kind_column = -1;
+    for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++)
+        grid->list_kinds[k] = SLUICE_KINDS_ALL;
     double cutoff = (double)support + (double)skin;
     size_t count = 1;
     for (int d = 0; d < 3; d++) {
@@ -55,9 +58,10 @@ int sluice_grid_init(sluice_grid *grid, uint32_t dimensions, const double lo[3],
     }
     grid->cell_count = count;
     grid->cell_start = calloc(count + 1, sizeof *grid->cell_start);
+    grid->cell_kinds = calloc(count, 1);
     grid->threads = omp_get_max_threads();
     grid->thread_counts = calloc((size_t)grid->threads + 1, sizeof *grid->thread_counts);
-    if (!grid->cell_start || !grid->thread_counts) {
+    if (!grid->cell_start || !grid->cell_kinds || !grid->thread_counts) {
         *reason = "out of memory";
         sluice_grid_free(grid);
         return -1;
@@ -68,6 +72,7 @@ int sluice_grid_init(sluice_grid *grid, uint32_t dimensions, const double lo[3],
 void sluice_grid_free(sluice_grid *grid)
 {
     free(grid->cell_start);
+    free(grid->cell_kinds);
     free(grid->order);
     free(grid->cell_of);
     for (int d = 0; d < 3; d++)
@@ -183,12 +188,20 @@ static inline int64_t cell_coordinate(const sluice_grid *grid, int d, double x)
     return c;
 }
 
+/* What visit() lists: the kinds of the neighbours it keeps (kinds, when
+ * `kind` is not NULL) */
+typedef struct list_filter {
+    const uint8_t *kind; /* NULL: every particle */
+    uint32_t kinds;
+} list_filter;
+
 /* Appends (or, with out NULL, counts) the particles j in [a, b) within the
- * cutoff of (xi, yi, zi), minimum image applied along periodic axes. */
+ * cutoff of (xi, yi, zi) and of a kind the filter keeps, minimum image
+ * applied along periodic axes. */
 static inline sluice_index scan_range(const sluice_grid *grid, sluice_real *const pos[3],
                                       sluice_index i, double xi, double yi, double zi,
                                       sluice_index a, sluice_index b, double cutoff2,
-                                      sluice_index *out, sluice_index found)
+                                      list_filter filter, sluice_index *out, sluice_index found)
 {
     const int three = grid->dimensions == 3;
     for (sluice_index j = a; j < b; j++) {
@@ -201,7 +214,8 @@ static inline sluice_index scan_range(const sluice_grid *grid, sluice_real *cons
             dy = minimum_image(dy, grid->length[1]);
         if (three && grid->periodic[2])
             dz = minimum_image(dz, grid->length[2]);
-        if (dx * dx + dy * dy + dz * dz < cutoff2 && j != i) {
+        if (dx * dx + dy * dy + dz * dz < cutoff2 && j != i &&
+            (!filter.kind || ((filter.kinds >> filter.kind[j]) & 1u))) {
             if (out)
                 out[found] = j;
             found++;
@@ -211,10 +225,20 @@ static inline sluice_index scan_range(const sluice_grid *grid, sluice_real *cons
 }
 
 /* Visits the candidate neighbours of particle i (sorted order) within the list
- * cutoff; with `out` NULL only counts them. Inlined into both passes. */
-static inline sluice_index visit(const sluice_grid *grid, sluice_real *const pos[3], sluice_index i,
-                                 double cutoff2, sluice_index *out)
+ * cutoff, of the kinds its own kind lists (grid->list_kinds; every kind when
+ * kind is NULL); with `out` NULL only counts them. Inlined into both passes. */
+static inline sluice_index visit(const sluice_grid *grid, sluice_real *const pos[3],
+                                 const uint8_t *kind, sluice_index i, double cutoff2,
+                                 sluice_index *out)
 {
+    list_filter filter = {NULL, SLUICE_KINDS_ALL};
+    if (kind) {
+        filter.kinds = grid->list_kinds[kind[i]];
+        if (!filter.kinds)
+            return 0;
+        if ((filter.kinds & SLUICE_KINDS_ALL) != SLUICE_KINDS_ALL)
+            filter.kind = kind;
+    }
     const uint32_t dims = grid->dimensions;
     const uint32_t cell = grid->cell_of[i];
     int64_t c[3];
@@ -245,21 +269,31 @@ static inline sluice_index visit(const sluice_grid *grid, sluice_real *const pos
                 /* the (up to) three x cells are contiguous in memory: one range */
                 int64_t x0 = c[0] > 0 ? c[0] - 1 : 0;
                 int64_t x1 = c[0] + 1 < grid->cells[0] ? c[0] + 1 : grid->cells[0] - 1;
-                found = scan_range(grid, pos, i, xi, yi, zi, grid->cell_start[row + (size_t)x0],
-                                   grid->cell_start[row + (size_t)x1 + 1], cutoff2, out, found);
+                if (filter.kind) {
+                    uint32_t present = 0;
+                    for (int64_t x = x0; x <= x1; x++)
+                        present |= grid->cell_kinds[row + (size_t)x];
+                    if (!(present & filter.kinds))
+                        continue;
+                }
+                found =
+                    scan_range(grid, pos, i, xi, yi, zi, grid->cell_start[row + (size_t)x0],
+                               grid->cell_start[row + (size_t)x1 + 1], cutoff2, filter, out, found);
                 if (grid->halo_count)
-                    found = scan_range(grid, pos, i, xi, yi, zi,
-                                       grid->halo_start[row + (size_t)x0],
-                                       grid->halo_start[row + (size_t)x1 + 1], cutoff2, out, found);
+                    found = scan_range(grid, pos, i, xi, yi, zi, grid->halo_start[row + (size_t)x0],
+                                       grid->halo_start[row + (size_t)x1 + 1], cutoff2, filter, out,
+                                       found);
                 continue;
             }
             for (int64_t k = -1; k <= 1; k++) {
                 size_t cx = (size_t)((c[0] + k + grid->cells[0]) % grid->cells[0]);
+                if (filter.kind && !(grid->cell_kinds[row + cx] & filter.kinds))
+                    continue;
                 found = scan_range(grid, pos, i, xi, yi, zi, grid->cell_start[row + cx],
-                                   grid->cell_start[row + cx + 1], cutoff2, out, found);
+                                   grid->cell_start[row + cx + 1], cutoff2, filter, out, found);
                 if (grid->halo_count)
                     found = scan_range(grid, pos, i, xi, yi, zi, grid->halo_start[row + cx],
-                                       grid->halo_start[row + cx + 1], cutoff2, out, found);
+                                       grid->halo_start[row + cx + 1], cutoff2, filter, out, found);
             }
         }
     }
@@ -406,6 +440,24 @@ static int sort_halo(sluice_grid *grid, sluice_particles *particles, uint32_t po
     return 0;
 }
 
+/* grid->cell_kinds from the sorted particles [0, n) and the halo after them */
+static void mark_cell_kinds(sluice_grid *grid, const uint8_t *kind, sluice_index n)
+{
+    uint8_t *present = grid->cell_kinds;
+    const sluice_index *start = grid->cell_start;
+    const sluice_index *halo = grid->halo_count ? grid->halo_start : NULL;
+#pragma omp parallel for schedule(static)
+    for (size_t c = 0; c < grid->cell_count; c++) {
+        uint32_t bits = 0;
+        for (sluice_index i = start[c]; i < start[c + 1] && i < n; i++)
+            bits |= 1u << kind[i];
+        if (halo)
+            for (sluice_index i = halo[c]; i < halo[c + 1]; i++)
+                bits |= 1u << kind[i];
+        present[c] = (uint8_t)bits;
+    }
+}
+
 int sluice_grid_build(sluice_grid *grid, sluice_particles *particles, uint32_t position_column,
                       sluice_index *bad)
 {
@@ -508,11 +560,15 @@ int sluice_grid_build_with_halo(sluice_grid *grid, sluice_particles *particles,
     const double cutoff = (double)grid->support + (double)grid->skin;
     const double cutoff2 = cutoff * cutoff;
     sluice_index *begin = grid->list_begin;
+    const uint8_t *kind =
+        grid->kind_column >= 0 ? (const uint8_t *)particles->columns[grid->kind_column] : NULL;
+    if (kind)
+        mark_cell_kinds(grid, kind, n);
 #pragma omp parallel for schedule(guided, 256)
     for (sluice_index i = 0; i < n; i++)
-        begin[i + 1] = visit(grid, pos, i, cutoff2, NULL);
-    int listed = sluice_list_offsets(begin, n, &grid->list, &grid->list_capacity,
-                                     grid->list_limit, &grid->list_needed);
+        begin[i + 1] = visit(grid, pos, kind, i, cutoff2, NULL);
+    int listed = sluice_list_offsets(begin, n, &grid->list, &grid->list_capacity, grid->list_limit,
+                                     &grid->list_needed);
     if (listed != 0) {
         grid->valid = 0;
         return listed;
@@ -520,7 +576,7 @@ int sluice_grid_build_with_halo(sluice_grid *grid, sluice_particles *particles,
     sluice_index *list = grid->list;
 #pragma omp parallel for schedule(guided, 256)
     for (sluice_index i = 0; i < n; i++)
-        (void)visit(grid, pos, i, cutoff2, list + begin[i]);
+        (void)visit(grid, pos, kind, i, cutoff2, list + begin[i]);
 
     grid->count = n;
     grid->valid = 1;

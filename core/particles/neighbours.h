@@ -40,7 +40,20 @@ typedef struct sluice_grid {
      * returns -4 with list_needed set, before allocating */
     size_t list_limit, list_needed;
     int threads;
-    size_t *thread_counts;    /* scratch */
+    size_t *thread_counts; /* scratch */
+    /* What the list holds: a particle of kind k lists its neighbours of the
+     * kinds in list_kinds[k] alone (none when 0: no pair pass targets the
+     * kind), so that kinds no term pairs cost nothing (a dry wall particle
+     * has an empty list). kind_column: the store's uint8 kind column; -1
+     * (the default): every particle lists every kind. Set by the engine from
+     * its passes (sluice_sim_set_list_kinds); a change of kind invalidates
+     * the grid. */
+    int32_t kind_column;
+    uint32_t list_kinds[SLUICE_KIND_COUNT];
+    /* the kinds present in each cell at the last build (its particles and
+     * halo; bit k for kind k), with kind_column set: a particle skips the
+     * cells that hold none of the kinds it lists */
+    uint8_t *cell_kinds;
 
     /* Halo of a distributed run (docs/scaling.md): particles [count, count +
      * halo_count) of the store, copies of other ranks' particles, sorted by

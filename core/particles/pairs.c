@@ -43,11 +43,16 @@ static int workspace_reserve(sluice_pair_workspace *w, sluice_index pairs, uint3
     sluice_index cap = w->pair_capacity > pairs ? w->pair_capacity : pairs;
     uint32_t s = w->gathered_slots > slots ? w->gathered_slots : slots;
     uint32_t columns = w->column_count;
-    uint64_t p = w->pairs, b = w->batches;
+    uint64_t p = w->pairs, b = w->batches, kind_pairs[SLUICE_KIND_COUNT];
+    double kind_seconds[SLUICE_KIND_COUNT];
+    memcpy(kind_pairs, w->kind_pairs, sizeof kind_pairs);
+    memcpy(kind_seconds, w->kind_seconds, sizeof kind_seconds);
     workspace_free(w);
     w->column_count = columns;
     w->pairs = p;
     w->batches = b;
+    memcpy(w->kind_pairs, kind_pairs, sizeof kind_pairs);
+    memcpy(w->kind_seconds, kind_seconds, sizeof kind_seconds);
     sluice_index targets = (cap > TARGET_CHUNK ? cap : TARGET_CHUNK) + 1;
     w->target = aligned_array(targets, sizeof(sluice_index));
     w->pair_begin = aligned_array(targets + 1, sizeof(sluice_index));
@@ -102,6 +107,22 @@ uint64_t sluice_pair_engine_pairs(const sluice_pair_engine *engine)
     for (int t = 0; t < engine->thread_count; t++)
         n += engine->workspaces[t].pairs;
     return n;
+}
+
+uint64_t sluice_pair_engine_kind_pairs(const sluice_pair_engine *engine, uint32_t kind)
+{
+    uint64_t n = 0;
+    for (int t = 0; t < engine->thread_count && kind < SLUICE_KIND_COUNT; t++)
+        n += engine->workspaces[t].kind_pairs[kind];
+    return n;
+}
+
+double sluice_pair_engine_kind_seconds(const sluice_pair_engine *engine, uint32_t kind)
+{
+    double s = 0;
+    for (int t = 0; t < engine->thread_count && kind < SLUICE_KIND_COUNT; t++)
+        s += engine->workspaces[t].kind_seconds[kind];
+    return s;
 }
 
 size_t sluice_pair_engine_bytes(const sluice_pair_engine *engine)
@@ -664,6 +685,8 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
                 if (!mask)
                     continue;
                 const fill_fn fill = choose_fill(dims, periodic, mask == SLUICE_KINDS_ALL);
+                const double started = omp_get_wtime();
+                const uint64_t pairs_before = w->pairs;
                 sluice_index t = 0, np = 0;
                 for (sluice_index i = a; i < b; i++) {
                     if (kind[i] != k)
@@ -680,6 +703,8 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
                     break;
                 w->pair_begin[t] = np;
                 flush(engine, pass, view, w, t, np, k);
+                w->kind_pairs[k] += w->pairs - pairs_before;
+                w->kind_seconds[k] += omp_get_wtime() - started;
             }
         }
     }

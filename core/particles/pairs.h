@@ -13,7 +13,7 @@
 typedef struct sluice_pair_term {
     const sluice_component *component;
     void *state;
-    uint32_t target_kinds, neighbour_kinds;
+    uint32_t target_kinds;
 } sluice_pair_term;
 
 /* A reach pass's own Verlet list: the neighbours of each target within
@@ -64,8 +64,12 @@ typedef struct sluice_pair_workspace {
     uint32_t gathered_slots;
     const sluice_real **gathered; /* column_count pointers */
     uint32_t column_count;
-    /* statistics */
+    /* statistics: pairs handed to terms and batches (all passes), and the
+     * pairs and thread-seconds of the passes within the support per
+     * target kind (fill, kernel, gather and terms of its batches) */
     uint64_t pairs, batches;
+    uint64_t kind_pairs[SLUICE_KIND_COUNT];
+    double kind_seconds[SLUICE_KIND_COUNT];
 } sluice_pair_workspace;
 
 typedef struct sluice_pair_engine {
@@ -105,6 +109,11 @@ int sluice_pair_reach_check(const sluice_grid *grid, sluice_real reach);
 
 /* Pairs handed to terms since the engine was created (all threads). */
 uint64_t sluice_pair_engine_pairs(const sluice_pair_engine *engine);
+/* The pairs and the thread-seconds that the passes within the support spent
+ * on targets of `kind` since the engine was created (all threads): what a
+ * kind of particle costs (the wall share of a step, docs/performance.md). */
+uint64_t sluice_pair_engine_kind_pairs(const sluice_pair_engine *engine, uint32_t kind);
+double sluice_pair_engine_kind_seconds(const sluice_pair_engine *engine, uint32_t kind);
 size_t sluice_pair_engine_bytes(const sluice_pair_engine *engine);
 
 #endif

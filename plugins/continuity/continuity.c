@@ -7,7 +7,11 @@
  * L_i grad_i W_ij (seed 004 renormalises every term but the pressure
  * gradient); it needs the kernel_correction plugin.
  * Targets fluid and wall particles (dynamic boundary particles obey it too).
- * A wall particle is compressed only by the fluid: a pair with an open
+ * A wall particle is compressed only by the fluid: its neighbours are fluid
+ * (and open) particles alone (neighbour_kinds_by_target, ABI 2.3; continuity
+ * 1.4.0), as DualSPHysics' boundary particles are, so that two walls in
+ * relative motion (a gate past its sill) do not compress each other and a
+ * wall particle out of the fluid's reach has no pairs at all. A pair with an open
  * boundary's particle (kind OPEN, whose motion is imposed) may lower its
  * density rate (a negative pair term, the particle moving away) but not
  * raise it (a positive one, the particle approaching). Under a gate at an
@@ -305,10 +309,11 @@ static const sluice_component components[] = {{
     .field_count = SLUICE_COUNT(fields),
     .target_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID) | SLUICE_KIND_MASK(SLUICE_KIND_WALL),
     .neighbour_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID) | SLUICE_KIND_MASK(SLUICE_KIND_WALL),
+    .neighbour_kinds_by_target = {[SLUICE_KIND_WALL] = SLUICE_KIND_MASK(SLUICE_KIND_FLUID)},
     .create = continuity_create,
     .destroy = continuity_destroy,
     .bind = continuity_bind,
     .pair = continuity_pair,
 }};
 
-SLUICE_DEFINE_LIBRARY("continuity", "1.3.0", "continuity equation", SLUICE_DIMS_ALL, components)
+SLUICE_DEFINE_LIBRARY("continuity", "1.4.0", "continuity equation", SLUICE_DIMS_ALL, components)

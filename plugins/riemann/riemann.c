@@ -482,8 +482,9 @@ static const sluice_component components[] = {
         .fields = continuity_fields,
         .field_count = SLUICE_COUNT(continuity_fields),
         .target_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID) | SLUICE_KIND_MASK(SLUICE_KIND_WALL),
-        .neighbour_kinds =
-            SLUICE_KIND_MASK(SLUICE_KIND_FLUID) | SLUICE_KIND_MASK(SLUICE_KIND_WALL),
+        .neighbour_kinds = SLUICE_KIND_MASK(SLUICE_KIND_FLUID) | SLUICE_KIND_MASK(SLUICE_KIND_WALL),
+        /* a wall particle sums over the fluid alone */
+        .neighbour_kinds_by_target = {[SLUICE_KIND_WALL] = SLUICE_KIND_MASK(SLUICE_KIND_FLUID)},
         .create = continuity_create,
         .destroy = riemann_destroy,
         .bind = riemann_bind,
@@ -491,7 +492,7 @@ static const sluice_component components[] = {
     },
 };
 
-SLUICE_DEFINE_LIBRARY("riemann", "1.0.0",
+SLUICE_DEFINE_LIBRARY("riemann", "1.1.0",
                       "Riemann-solver SPH: pressure force and continuity equation from a "
                       "low-dissipation Riemann solver per pair",
                       SLUICE_DIMS_ALL, components)

@@ -8,7 +8,7 @@
  * Plugins never link against the core: every service of the core is reached
  * through the sluice_api table handed to each component's create().
  *
- * ABI 2.2, frozen (docs/plugin-abi.md; its history: docs/abi-changelog.md):
+ * ABI 2.3, frozen (docs/plugin-abi.md; its history: docs/abi-changelog.md):
  *  - SLUICE_ABI_MAJOR changes when anything existing changes; the core refuses
  *    a plugin with another major version.
  *  - SLUICE_ABI_MINOR grows when members are appended at the end of a host
@@ -42,7 +42,7 @@ extern "C" {
 #endif
 
 #define SLUICE_ABI_MAJOR 2
-#define SLUICE_ABI_MINOR 2
+#define SLUICE_ABI_MINOR 3
 #define SLUICE_PLUGIN_MAGIC 0x534c4349u /* "SLCI" */
 
 #if defined(__GNUC__)
@@ -705,6 +705,17 @@ typedef struct sluice_component {
      * of the step the checkpoint holds; it must not change the state. */
     int (*save_state)(void *state, sluice_host *host);
     int (*load_state)(void *state, sluice_host *host);
+
+    /* Since ABI 2.3. Pair terms: the neighbour kinds of a target of kind k, where
+     * they differ from neighbour_kinds (0: neighbour_kinds; only for kinds
+     * in target_kinds). The neighbour list holds, for each target kind, only
+     * the kinds some term asks for, so a kind that needs few neighbours
+     * costs little: continuity declares [SLUICE_KIND_WALL] = fluid (a wall
+     * particle is compressed by the fluid alone), and a wall particle out
+     * of the fluid's reach then has no pairs at all (docs/performance.md,
+     * "Walls"). A term sharing a pass with others may still receive other
+     * kinds (batch->neighbour_kinds says which are present). */
+    uint32_t neighbour_kinds_by_target[SLUICE_KIND_COUNT];
 } sluice_component;
 
 /* Build signature: must equal the core's. */

@@ -241,8 +241,9 @@ START_TEST(abi2_rules_refused)
                 "did not publish the constant 'speed_of_sound'");
     rules_scene("late-rate", "continuity: {}, late_rate: {}, symplectic: {}",
                 "declares field 'late_rate' after create()");
-    rules_scene("busy-integrator", "busy_integrator: {}",
-                "also has a particle callback");
+    rules_scene("busy-integrator", "busy_integrator: {}", "also has a particle callback");
+    rules_scene("stray-neighbours", "stray_neighbours: {}, symplectic: {}",
+                "declares neighbour kinds for wall targets, which it does not act on");
 }
 END_TEST
 

@@ -133,9 +133,11 @@ static void free_world(world *w)
     sluice_particles_free(&w->particles);
 }
 
-/* Runs a pass and compares with brute force. neighbour_mask is for target
- * kind 0 (fluid); wall targets (kind 1) get all kinds when two_kinds. */
-static void check_against_brute_force(world *w, uint32_t fluid_neighbours, int two_kinds)
+/* Runs a pass and compares with brute force: fluid targets (kind 0) see the
+ * kinds of fluid_neighbours, wall targets (kind 1) those of wall_neighbours
+ * (0: walls are no targets). */
+static void check_kinds_against_brute_force(world *w, uint32_t fluid_neighbours,
+                                            uint32_t wall_neighbours)
 {
     if (sluice_grid_needs_rebuild(&w->grid, &w->view)) {
         sluice_index bad = 0;
@@ -145,13 +147,13 @@ static void check_against_brute_force(world *w, uint32_t fluid_neighbours, int t
     const sluice_index n = w->view.count;
     for (int c = COL_COUNT; c < NCOL; c++)
         memset(w->particles.columns[c], 0, n * sizeof(double));
-    sluice_pair_term term = {&record_component, w, SLUICE_KINDS_ALL, SLUICE_KINDS_ALL};
+    sluice_pair_term term = {&record_component, w, SLUICE_KINDS_ALL};
     sluice_pair_pass pass;
     memset(&pass, 0, sizeof pass);
     pass.term_count = 1;
     pass.terms = &term;
     pass.neighbour_mask[0] = fluid_neighbours;
-    pass.neighbour_mask[1] = two_kinds ? SLUICE_KINDS_ALL : 0;
+    pass.neighbour_mask[1] = wall_neighbours;
     ck_assert_int_eq(sluice_pair_pass_run(&w->engine, &pass, &w->grid, &w->view), 0);
 
     const double *count = w->particles.columns[COL_COUNT];
@@ -161,7 +163,7 @@ static void check_against_brute_force(world *w, uint32_t fluid_neighbours, int t
     const double s2 = w->support * w->support;
     long total = 0;
     for (sluice_index i = 0; i < n; i++) {
-        uint32_t mask = kind[i] == 0 ? fluid_neighbours : (two_kinds ? SLUICE_KINDS_ALL : 0);
+        uint32_t mask = kind[i] == 0 ? fluid_neighbours : wall_neighbours;
         double c = 0, h = 0;
         for (sluice_index j = 0; j < n && mask; j++) {
             if (j == i || !((mask >> kind[j]) & 1u))
@@ -188,6 +190,11 @@ static void check_against_brute_force(world *w, uint32_t fluid_neighbours, int t
         total += (long)c;
     }
     ck_assert_msg(total > 10 * (long)n, "too few pairs (%ld) for a meaningful test", total);
+}
+
+static void check_against_brute_force(world *w, uint32_t fluid_neighbours, int two_kinds)
+{
+    check_kinds_against_brute_force(w, fluid_neighbours, two_kinds ? SLUICE_KINDS_ALL : 0);
 }
 
 static void move(world *w, double amplitude)
@@ -251,6 +258,64 @@ START_TEST(kind_masks)
 }
 END_TEST
 
+/* Lists of kinds (grid->list_kinds): a wall particle that pairs with fluid
+ * alone lists fluid neighbours alone, one whose kind no pass targets lists
+ * nothing, and the passes still get exactly the brute-force pairs; the
+ * lists shrink accordingly, also across a rebuild. */
+static void kind_lists_scenario(int periodic_x)
+{
+    int periodic[3] = {periodic_x, 0, 0};
+    world w;
+    rng_state = 4242 + (uint64_t)periodic_x;
+    make_world(&w, 3, 4000, periodic, 0.12, 1);
+    /* a dry corner: the particles of x > 0.75 are walls, so that whole
+     * cells hold no fluid and the build skips them */
+    for (sluice_index i = 0; i < w.particles.count; i++)
+        if (((double *)w.particles.columns[COL_X])[i] > 0.75)
+            ((uint8_t *)w.particles.columns[COL_KIND])[i] = SLUICE_KIND_WALL;
+    const uint32_t fluid = SLUICE_KIND_MASK(SLUICE_KIND_FLUID);
+    check_kinds_against_brute_force(&w, SLUICE_KINDS_ALL, SLUICE_KINDS_ALL);
+    const size_t all_entries = w.grid.list_begin[w.grid.count];
+
+    w.grid.kind_column = COL_KIND;
+    w.grid.list_kinds[SLUICE_KIND_FLUID] = SLUICE_KINDS_ALL;
+    w.grid.list_kinds[SLUICE_KIND_WALL] = fluid;
+    w.grid.valid = 0;
+    check_kinds_against_brute_force(&w, SLUICE_KINDS_ALL, fluid);
+    const uint8_t *kind = w.particles.columns[COL_KIND];
+    size_t wall_entries = 0, fluid_entries = 0;
+    for (sluice_index i = 0; i < w.grid.count; i++)
+        for (sluice_index m = w.grid.list_begin[i]; m < w.grid.list_begin[i + 1]; m++) {
+            if (kind[i] == SLUICE_KIND_WALL)
+                ck_assert_msg(kind[w.grid.list[m]] == SLUICE_KIND_FLUID,
+                              "wall particle %u lists wall particle %u", i, w.grid.list[m]);
+            *(kind[i] == SLUICE_KIND_WALL ? &wall_entries : &fluid_entries) += 1;
+        }
+    /* the walls' lists lost their wall entries: every list together holds
+     * the fluid's lists and the walls' fluid neighbours */
+    const size_t mixed_entries = w.grid.list_begin[w.grid.count];
+    ck_assert_uint_eq(mixed_entries, wall_entries + fluid_entries);
+    ck_assert_msg(wall_entries < all_entries - fluid_entries, "wall lists hold %zu of %zu entries",
+                  wall_entries, all_entries - fluid_entries);
+
+    /* walls no pass targets: empty lists, across a rebuild too */
+    w.grid.list_kinds[SLUICE_KIND_WALL] = 0;
+    w.grid.valid = 0;
+    check_kinds_against_brute_force(&w, fluid, 0);
+    move(&w, 0.5 * w.support);
+    check_kinds_against_brute_force(&w, fluid, 0);
+    kind = w.particles.columns[COL_KIND]; /* the rebuild sorted the store */
+    for (sluice_index i = 0; i < w.grid.count; i++)
+        if (kind[i] == SLUICE_KIND_WALL)
+            ck_assert_uint_eq(w.grid.list_begin[i + 1], w.grid.list_begin[i]);
+    free_world(&w);
+}
+
+START_TEST(kind_lists) { kind_lists_scenario(0); }
+END_TEST
+START_TEST(kind_lists_periodic) { kind_lists_scenario(1); }
+END_TEST
+
 START_TEST(outside_domain_reported)
 {
     int periodic[3] = {0, 0, 0};
@@ -310,6 +375,8 @@ int main(void)
     tcase_add_test(tc, random_3d);
     tcase_add_test(tc, random_3d_periodic);
     tcase_add_test(tc, kind_masks);
+    tcase_add_test(tc, kind_lists);
+    tcase_add_test(tc, kind_lists_periodic);
     tcase_add_test(tc, outside_domain_reported);
     tcase_add_test(tc, short_periodic_refused);
     tcase_add_test(tc, list_growth_limited);
