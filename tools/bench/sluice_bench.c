@@ -321,7 +321,7 @@ static void fused_evaluate_batched(fused *f)
     fused_prepare(f);
     sluice_sim *s = f->sim;
     static const sluice_component term = {.name = "fused", .pair = fused_term};
-    sluice_pair_term t = {&term, f, SLUICE_KINDS_ALL, SLUICE_KINDS_ALL};
+    sluice_pair_term t = {&term, f, SLUICE_KINDS_ALL};
     uint32_t fluid_columns[6] = {(uint32_t)f->col_vx, (uint32_t)f->col_vy, (uint32_t)f->col_m,
                                  (uint32_t)f->col_rho, (uint32_t)f->col_p, (uint32_t)f->col_c};
     uint32_t wall_columns[3] = {(uint32_t)f->col_vx, (uint32_t)f->col_vy, (uint32_t)f->col_m};
