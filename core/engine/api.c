@@ -394,7 +394,7 @@ static double api_time_step(sluice_host *host)
         const sluice_index n = v->count, chunk = 4096;
         const sluice_index chunks = (n + chunk - 1) / chunk;
         double limit = INFINITY;
-#pragma omp parallel for schedule(static) reduction(min : limit)
+#pragma omp parallel for schedule(static) reduction(min : limit) if (n >= sim->parallel_min)
         for (sluice_index ch = 0; ch < chunks; ch++) {
             sluice_index a = ch * chunk, b = a + chunk < n ? a + chunk : n;
             double l = (double)c->time_step_limit(state, v, a, b);
@@ -428,7 +428,7 @@ static void api_parallel_for(sluice_host *host, sluice_index count, sluice_range
     const sluice_view *v = &sim->view;
     const sluice_index chunk = 2048;
     const sluice_index chunks = (count + chunk - 1) / chunk;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (count >= sim->parallel_min)
     for (sluice_index c = 0; c < chunks; c++) {
         sluice_index a = c * chunk, b = a + chunk < count ? a + chunk : count;
         fn(context, v, a, b);

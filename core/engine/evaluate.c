@@ -41,7 +41,7 @@ static void run_particle_pass(sluice_sim *sim, const sluice_component *component
     const sluice_view *v = &sim->view;
     const sluice_index n = v->count, chunk = 2048;
     const sluice_index chunks = (n + chunk - 1) / chunk;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= sim->parallel_min)
     for (sluice_index c = 0; c < chunks; c++) {
         sluice_index a = c * chunk, b = a + chunk < n ? a + chunk : n;
         component->particle(state, v, a, b);

@@ -2,6 +2,7 @@
  * components' create / bind / initialise, fields, constants, the schedule
  * and the initial particles (sluice_engine_load); freeing it. */
 #define _GNU_SOURCE
+#include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -21,6 +22,22 @@
 #include "yaml_tree.h"
 
 /* ---------------------------------------------------------------- load -- */
+
+/* 1 when OpenMP's threads sleep at barriers (OMP_WAIT_POLICY=passive, any
+ * case, as libgomp reads it): light loops then stay on one thread below
+ * SLUICE_PARALLEL_MIN_ITEMS particles */
+static int passive_wait_policy(void)
+{
+    const char *policy = getenv("OMP_WAIT_POLICY");
+    static const char passive[] = "passive";
+    if (!policy)
+        return 0;
+    size_t k = 0;
+    for (; policy[k] && k < sizeof passive - 1; k++)
+        if (tolower((unsigned char)policy[k]) != passive[k])
+            return 0;
+    return k == sizeof passive - 1 && !policy[k];
+}
 
 static int check_descriptor(sluice_sim *sim, uint32_t k)
 {
@@ -667,6 +684,8 @@ static int build_search(sluice_sim *sim)
         }
     }
     sim->threads = omp_get_max_threads();
+    sim->parallel_min = passive_wait_policy() ? SLUICE_PARALLEL_MIN_ITEMS : 0;
+    sim->grid.parallel_min = sim->particles.parallel_min = sim->parallel_min;
     if (sluice_pair_engine_init(&sim->engine, sim->threads,
                                 (sluice_index)scene->neighbour_search.batch_pairs,
                                 sim->column_count) != 0)

@@ -221,6 +221,9 @@ struct sluice_sim {
     /* run */
     char *output_directory;
     int threads;
+    /* light loops over particles run on one thread below this many
+     * (SLUICE_PARALLEL_MIN_ITEMS with a passive wait policy, else 0) */
+    sluice_index parallel_min;
     double wall_start, wall_seconds;
     uint64_t particle_steps;
     /* the step and particle-steps when this invocation's run began (a

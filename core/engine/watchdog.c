@@ -68,7 +68,7 @@ static void scan_non_finite(const sluice_sim *sim, watch_finding *w)
         for (uint32_t c = 0; c < e->components; c++) {
             const sluice_real *x = v->columns[e->column + (int32_t)c];
             sluice_index found = n;
-#pragma omp parallel for schedule(static) reduction(min : found)
+#pragma omp parallel for schedule(static) reduction(min : found) if (n >= sim->parallel_min)
             for (sluice_index i = 0; i < n; i++)
                 if (!isfinite(x[i]) && i < found)
                     found = i;
@@ -98,7 +98,7 @@ static void scan_density(sluice_sim *sim, watch_finding *w)
     sluice_index found = n;
     double deviation = 0; /* fluid only: wall particles' densities are a wall model's */
     const uint8_t *kind = v->kind;
-#pragma omp parallel for schedule(static) reduction(min : found) reduction(max : deviation)
+#pragma omp parallel for schedule(static) reduction(min : found) reduction(max : deviation) if (n >= sim->parallel_min)
     for (sluice_index i = 0; i < n; i++) {
         const double rest = mass ? (double)mass[i] * inverse_volume : rho0;
         double r = (double)density[i] / rest - 1.0;
@@ -127,7 +127,7 @@ static void scan_domain(const sluice_sim *sim, watch_finding *w)
         const sluice_real *x = v->position[d];
         const double lo = (double)scene->domain.min[d], hi = (double)scene->domain.max[d];
         sluice_index found = n;
-#pragma omp parallel for schedule(static) reduction(min : found)
+#pragma omp parallel for schedule(static) reduction(min : found) if (n >= sim->parallel_min)
         for (sluice_index i = 0; i < n; i++)
             if (!((double)x[i] >= lo && (double)x[i] < hi) && i < found)
                 found = i;
@@ -151,7 +151,7 @@ static void scan_walls(const sluice_sim *sim, watch_finding *w)
     const double allowed = (double)scene->watchdog.wall_penetration * (double)sim->spacing;
     const uint8_t *kind = v->kind;
     sluice_index found = n;
-#pragma omp parallel for schedule(static) reduction(min : found)
+#pragma omp parallel for schedule(static) reduction(min : found) if (n >= sim->parallel_min)
     for (sluice_index i = 0; i < n; i++) {
         if (kind[i] != SLUICE_KIND_FLUID || i >= found)
             continue;

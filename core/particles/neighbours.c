@@ -100,7 +100,7 @@ int sluice_grid_needs_rebuild(const sluice_grid *grid, const sluice_view *view)
     double worst = 0;
     const uint32_t dims = grid->dimensions;
     sluice_index n = view->count;
-#pragma omp parallel for schedule(static) reduction(max : worst)
+#pragma omp parallel for schedule(static) reduction(max : worst) if (n >= grid->parallel_min)
     for (sluice_index i = 0; i < n; i++) {
         double s = 0;
         for (uint32_t d = 0; d < dims; d++) {
@@ -160,7 +160,7 @@ void sluice_grid_wrap(const sluice_grid *grid, sluice_real *position[3], sluice_
             continue;
         sluice_real *x = position[d];
         const double lo = grid->lo[d], length = grid->length[d];
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (count >= grid->parallel_min)
         for (sluice_index i = 0; i < count; i++) {
             double v = (double)x[i];
             if (v < lo || v >= lo + length) {
@@ -446,7 +446,7 @@ static void mark_cell_kinds(sluice_grid *grid, const uint8_t *kind, sluice_index
     uint8_t *present = grid->cell_kinds;
     const sluice_index *start = grid->cell_start;
     const sluice_index *halo = grid->halo_count ? grid->halo_start : NULL;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (grid->cell_count >= grid->parallel_min)
     for (size_t c = 0; c < grid->cell_count; c++) {
         uint32_t bits = 0;
         for (sluice_index i = start[c]; i < start[c + 1] && i < n; i++)
@@ -481,7 +481,7 @@ int sluice_grid_build_with_halo(sluice_grid *grid, sluice_particles *particles,
     /* 1. cell of every particle */
     sluice_index first_bad = n;
     uint32_t *cell_of = grid->cell_of;
-#pragma omp parallel for schedule(static) reduction(min : first_bad)
+#pragma omp parallel for schedule(static) reduction(min : first_bad) if (n >= grid->parallel_min)
     for (sluice_index i = 0; i < n; i++) {
         int64_t c[3] = {0, 0, 0};
         int ok = 1;

@@ -54,6 +54,9 @@ typedef struct sluice_grid {
      * halo; bit k for kind k), with kind_column set: a particle skips the
      * cells that hold none of the kinds it lists */
     uint8_t *cell_kinds;
+    /* light loops over particles run on one thread below this many (0:
+     * never; the engine sets it, particles.h) */
+    sluice_index parallel_min;
 
     /* Halo of a distributed run (docs/scaling.md): particles [count, count +
      * halo_count) of the store, copies of other ranks' particles, sorted by

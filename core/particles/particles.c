@@ -53,9 +53,11 @@ int sluice_particles_reserve(sluice_particles *p, sluice_index capacity)
 {
     if (capacity <= p->capacity)
         return 0;
+    /* grown by a quarter: amortised appends, at most 25 % of the columns
+     * reserved beyond the particles (doubling left up to half unused) */
     sluice_index cap = p->capacity ? p->capacity : 1024;
     while (cap < capacity)
-        cap = cap > UINT32_MAX / 2 ? capacity : cap * 2;
+        cap = cap > UINT32_MAX / 5 * 4 ? capacity : cap + cap / 4;
     void **fresh = calloc(p->column_count ? p->column_count : 1, sizeof *fresh);
     if (!fresh)
         return -1;
@@ -99,7 +101,8 @@ int sluice_particles_append(sluice_particles *p, sluice_index n, sluice_index *f
     do {                                                                                        \
         const type *src = (const type *)old;                                                    \
         type *dst = (type *)fresh;                                                              \
-        _Pragma("omp parallel for schedule(static)") for (sluice_index i = 0; i < n; i++)       \
+        _Pragma("omp parallel for schedule(static) if (n >= p->parallel_min)")                 \
+        for (sluice_index i = 0; i < n; i++)                                                    \
             dst[i] = src[order[i]];                                                             \
     } while (0)
 

@@ -10,6 +10,17 @@
 
 #define SLUICE_ALIGNMENT 64
 
+/* With OpenMP's passive wait policy (threads sleep at every barrier, as a
+ * shared machine needs), loops over particles with little work per
+ * particle (particle terms, integrator updates, time-step limits, checks,
+ * reordering) run on one thread below this many items: waking the other
+ * threads costs more than the loop (docs/performance.md, "Threads"). With
+ * spinning threads they are parallel at any size, and the pair passes and
+ * the neighbour list's build always are. */
+#ifndef SLUICE_PARALLEL_MIN_ITEMS
+#define SLUICE_PARALLEL_MIN_ITEMS 32768
+#endif
+
 typedef struct sluice_particles {
     sluice_index count, capacity;
     uint32_t column_count;
@@ -17,6 +28,7 @@ typedef struct sluice_particles {
     uint8_t *element_size;   /* bytes per element of each column */
     void *scratch[4];        /* permutation scratch, one per element size class */
     sluice_index scratch_capacity[4];
+    sluice_index parallel_min; /* reordering: on one thread below this many (0: never) */
 } sluice_particles;
 
 /* element_sizes: one of 1, 4, 8 per column. 0 or -1 on OOM. */
