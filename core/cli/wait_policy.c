@@ -1,5 +1,4 @@
-/* The OpenMP wait policy (docs/performance.md, "Threads on a busy
- * machine").
+/* The OpenMP wait policy (docs/performance.md, "Threads").
  *
  * GNU libgomp's threads spin for about 300,000 rounds at every barrier
  * before they sleep. On idle processors that is the fastest; on processors
