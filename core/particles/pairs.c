@@ -210,7 +210,7 @@ static inline int batch_open(sluice_pair_engine *engine, const sluice_pair_pass 
                              sluice_index *np, sluice_index candidates, uint32_t kind,
                              sluice_index i)
 {
-    if (*np + candidates > w->pair_capacity && *t > 0) {
+    if ((*np + candidates > w->pair_capacity || *t + 1 >= w->target_capacity) && *t > 0) {
         w->pair_begin[*t] = *np;
         flush(engine, pass, view, w, *t, *np, kind);
         *t = 0;
@@ -763,6 +763,28 @@ static int pair_pass_run_reach(sluice_pair_engine *engine, const sluice_pair_pas
     return failed ? -1 : 0;
 }
 
+/* The work of a target in a pass, in list entries: its entries plus this
+ * (opening its segment, its terms' per-target work) */
+#define TARGET_WORK 4.0
+
+/* The first target of chunk c of chunks of work_per_chunk each: the first i
+ * with begin[i] + TARGET_WORK i >= c work_per_chunk (the work is monotone in
+ * i, so consecutive chunks tile [0, n)). */
+static sluice_index chunk_start(const sluice_index *begin, sluice_index n, double work_per_chunk,
+                                sluice_index c)
+{
+    const double goal = work_per_chunk * (double)c;
+    sluice_index lo = 0, hi = n;
+    while (lo < hi) {
+        const sluice_index mid = lo + (hi - lo) / 2;
+        if ((double)begin[mid] + TARGET_WORK * (double)mid < goal)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
 int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pass,
                          const sluice_grid *grid, const sluice_view *view)
 {
@@ -779,6 +801,13 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
     if (chunk_targets > TARGET_CHUNK)
         chunk_targets = TARGET_CHUNK;
     const sluice_index chunks = (n + chunk_targets - 1) / chunk_targets;
+    /* chunks of about equal work (list entries plus a few per target), not
+     * of equal target counts: a wall particle out of the fluid's reach has
+     * an empty list, and in a 3D tank the dry walls and the fluid fill
+     * distinct stretches of the sorted store, so that guided's first,
+     * largest grabs would hand one thread most of the work */
+    const double work_per_chunk =
+        ((double)grid->list_begin[n] + TARGET_WORK * (double)n) / (double)chunks;
     int failed = 0;
 
 #pragma omp parallel num_threads(engine->thread_count) reduction(| : failed)
@@ -802,8 +831,10 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
         for (sluice_index chunk = 0; chunk < chunks; chunk++) {
             if (failed)
                 continue;
-            const sluice_index a = chunk * chunk_targets;
-            const sluice_index b = a + chunk_targets < n ? a + chunk_targets : n;
+            const sluice_index a = chunk_start(begin, n, work_per_chunk, chunk);
+            const sluice_index b = chunk + 1 < chunks
+                                       ? chunk_start(begin, n, work_per_chunk, chunk + 1)
+                                       : n;
             for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
                 const uint32_t mask = pass->neighbour_mask[k];
                 if (!mask)
