@@ -258,6 +258,22 @@ static void json_string(FILE *f, const char *s)
     fputc('"', f);
 }
 
+/* Per target kind: the pairs of the passes within the support, then the
+ * thread-seconds they took (fill, kernel, gather, terms), this invocation's
+ * (2 x SLUICE_KIND_COUNT figures); their share of wall_seconds x threads is
+ * that kind's share of a step (docs/performance.md, "Walls"). */
+static void write_kind_costs(FILE *f, const double *figures)
+{
+    for (uint32_t what = 0; what < 2; what++) {
+        fprintf(f, "  \"%s\": {",
+                what ? "pair_seconds_by_target_kind" : "pair_interactions_by_target_kind");
+        for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++)
+            fprintf(f, what ? "%s\"%s\": %.6g" : "%s\"%s\": %.0f", k ? ", " : "",
+                    sluice_kind_name((uint8_t)k), figures[what * SLUICE_KIND_COUNT + k]);
+        fprintf(f, "},\n");
+    }
+}
+
 static int write_run_json(sluice_sim *sim, int status)
 {
     /* across ranks: the counts of every rank, written by rank 0 (the
@@ -340,18 +356,7 @@ static int write_run_json(sluice_sim *sim, int status)
     fprintf(f, "  \"pair_interactions\": %.0f,\n", pairs);
     fprintf(f, "  \"pair_interactions_per_second\": %.6g,\n",
             sim->wall_seconds > 0 ? pairs / sim->wall_seconds : 0.0);
-    /* per target kind: the pairs of the passes within the support and the
-     * thread-seconds they took (fill, kernel, gather, terms), this
-     * invocation's; their share of wall_seconds x threads is that kind's
-     * share of a step (docs/performance.md, "Walls") */
-    for (int what = 0; what < 2; what++) {
-        fprintf(f, "  \"%s\": {",
-                what ? "pair_seconds_by_target_kind" : "pair_interactions_by_target_kind");
-        for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++)
-            fprintf(f, what ? "%s\"%s\": %.6g" : "%s\"%s\": %.0f", k ? ", " : "",
-                    sluice_kind_name((uint8_t)k), sums[6 + (uint32_t)what * SLUICE_KIND_COUNT + k]);
-        fprintf(f, "},\n");
-    }
+    write_kind_costs(f, sums + 6);
     fprintf(f, "  \"neighbour_list_rebuilds\": %llu,\n", (unsigned long long)sim->grid.rebuilds);
     /* memory: the particle store, the grid and the Verlet list, and the
      * pair engine's buffers, per particle at the end (over every rank); the

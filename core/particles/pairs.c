@@ -326,7 +326,8 @@ static const int32_t compress_indices[16][8] = {
     {0, 1, 2, 3, 0, 0, 0, 0}};
 
 static inline sluice_index fill_target_avx2(sluice_pair_workspace *restrict w,
-                                            const sluice_view *view, sluice_index i,
+                                            const sluice_grid *grid, const sluice_view *view,
+                                            sluice_index i,
                                             const sluice_index *restrict list, sluice_index m0,
                                             sluice_index m1, sluice_index np, double support2,
                                             uint32_t mask, const int dims, const int all_kinds)
@@ -375,19 +376,8 @@ static inline sluice_index fill_target_avx2(sluice_pair_workspace *restrict w,
         _mm_storeu_si128((__m128i *)(void *)(nb + np), _mm256_castsi256_si128(picked));
         np += (sluice_index)__builtin_popcount((unsigned)keep);
     }
-    for (; m < m1; m++) {
-        const sluice_index j = list[m];
-        const double dx = x[i] - x[j], dy = y[i] - y[j], dz = dims == 3 ? z[i] - z[j] : 0.0;
-        const double s = dx * dx + dy * dy + dz * dz;
-        nb[np] = j;
-        ox[np] = dx;
-        oy[np] = dy;
-        if (dims == 3)
-            oz[np] = dz;
-        r2[np] = s;
-        np += (sluice_index)((s < support2) & (all_kinds || ((mask >> kind[j]) & 1u)));
-    }
-    return np;
+    /* the last (up to three) candidates: the scalar fill */
+    return fill_target(w, grid, view, i, list, m, m1, np, support2, mask, dims, 0, all_kinds);
 }
 #define SLUICE_FILL_AVX2 1
 #else
@@ -402,7 +392,7 @@ typedef sluice_index (*fill_fn)(sluice_pair_workspace *restrict, const sluice_gr
 #define FILL_AVX2 fill_target_avx2
 #else
 /* never called: the condition above is constant false */
-#define FILL_AVX2(w, view, i, list, m0, m1, np, support2, mask, dims, all_kinds) (np)
+#define FILL_AVX2(w, grid, view, i, list, m0, m1, np, support2, mask, dims, all_kinds) (np)
 #endif
 #define FILL_VARIANT(name, dims, periodic, all_kinds)                                            \
     static sluice_index name(sluice_pair_workspace *restrict w, const sluice_grid *grid,         \
@@ -412,7 +402,8 @@ typedef sluice_index (*fill_fn)(sluice_pair_workspace *restrict, const sluice_gr
     {                                                                                           \
         if (SLUICE_FILL_AVX2 && !(periodic) && sizeof(sluice_real) == sizeof(double) &&       \
             view->count + grid->halo_count < (sluice_index)INT32_MAX)                           \
-            return FILL_AVX2(w, view, i, list, m0, m1, np, support2, mask, dims, all_kinds);    \
+            return FILL_AVX2(w, grid, view, i, list, m0, m1, np, support2, mask, dims,          \
+                             all_kinds);                                                        \
         return fill_target(w, grid, view, i, list, m0, m1, np, support2, mask, dims, periodic,  \
                            all_kinds);                                                          \
     }
@@ -835,17 +826,22 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
             const sluice_index b = chunk + 1 < chunks
                                        ? chunk_start(begin, n, work_per_chunk, chunk + 1)
                                        : n;
+            /* the clock is read once per chunk and once per kind with
+             * targets in it (a kind's scan of a chunk without its targets
+             * counts to the next kind's) */
+            double clock = omp_get_wtime();
             for (uint32_t k = 0; k < SLUICE_KIND_COUNT; k++) {
                 const uint32_t mask = pass->neighbour_mask[k];
                 if (!mask)
                     continue;
                 const fill_fn fill = choose_fill(dims, periodic, mask == SLUICE_KINDS_ALL);
-                const double started = omp_get_wtime();
                 const uint64_t pairs_before = w->pairs;
                 sluice_index t = 0, np = 0;
+                int targets = 0;
                 for (sluice_index i = a; i < b; i++) {
                     if (kind[i] != k)
                         continue;
+                    targets = 1;
                     const sluice_index m0 = begin[i], m1 = begin[i + 1];
                     if (batch_open(engine, pass, view, w, &t, &np, m1 - m0, k, i) != 0) {
                         failed = 1;
@@ -856,10 +852,14 @@ int sluice_pair_pass_run(sluice_pair_engine *engine, const sluice_pair_pass *pas
                 }
                 if (failed)
                     break;
+                if (!targets)
+                    continue;
                 w->pair_begin[t] = np;
                 flush(engine, pass, view, w, t, np, k);
                 w->kind_pairs[k] += w->pairs - pairs_before;
-                w->kind_seconds[k] += omp_get_wtime() - started;
+                const double now = omp_get_wtime();
+                w->kind_seconds[k] += now - clock;
+                clock = now;
             }
         }
     }

@@ -637,19 +637,11 @@ static const char *tank_scene_format = "dimensions: 3\n"
 
 /* Loads the tank scene with `wall` and the wall scheme `scheme`, next to
  * the STL file in dir. */
-static sluice_sim *load_tank(const char *dir, const char *wall, const char *scheme)
+static sluice_sim *load_tank(const char *wall, const char *scheme)
 {
     char *text = NULL;
     ck_assert_int_ge(asprintf(&text, tank_scene_format, wall, scheme), 0);
-    char *path = test_write_file(dir, "tank.yaml", text);
-    sluice_diag *diag = sluice_diag_create();
-    sluice_load_options options = {0};
-    sluice_sim *sim = sluice_sim_load(path, &options, diag);
-    for (size_t i = 0; i < sluice_diag_count(diag); i++)
-        fprintf(stderr, "%s\n", sluice_diag_message(diag, i));
-    ck_assert_msg(sim != NULL, "the %s tank failed to load", scheme);
-    sluice_diag_destroy(diag);
-    free(path);
+    sluice_sim *sim = test_load("mesh-tank", text, NULL, 0);
     free(text);
     return sim;
 }
@@ -663,11 +655,16 @@ static void compare_tanks(const char *scheme)
 {
     char *dir = test_scratch("mesh-run");
     char *stl = write_tank_stl(dir);
-    const char *mesh_wall = "{shape: mesh, file: tank.stl, fluid: front, scale: 0.001, "
-                            "rotate_axis: [0, 0, 1], rotate_angle: 90, name: tank}";
+    char *mesh_wall = NULL;
+    ck_assert_int_ge(asprintf(&mesh_wall,
+                              "{shape: mesh, file: '%s', fluid: front, scale: 0.001, "
+                              "rotate_axis: [0, 0, 1], rotate_angle: 90, name: tank}",
+                              stl),
+                     0);
     const char *box_wall = "{shape: tank, min: [0, 0, 0], max: [0.4, 0.3, 0.3], name: tank}";
-    sluice_sim *a = load_tank(dir, mesh_wall, scheme);
-    sluice_sim *b = load_tank(dir, box_wall, scheme);
+    sluice_sim *a = load_tank(mesh_wall, scheme);
+    sluice_sim *b = load_tank(box_wall, scheme);
+    free(mesh_wall);
     ck_assert_int_eq(sluice_sim_begin(a, NULL), SLUICE_RUN_COMPLETE);
     ck_assert_int_eq(sluice_sim_begin(b, NULL), SLUICE_RUN_COMPLETE);
     ck_assert_int_eq(sluice_sim_view(a)->count, sluice_sim_view(b)->count);
